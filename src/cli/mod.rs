@@ -1,0 +1,131 @@
+//! The command line: clap commands, TOML configs, progress bars and exit codes.
+//!
+//! Exit status: 0 ok, 1 a check failed (a report beyond tolerance), 2 bad input or usage.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod convert;
+mod demo;
+mod feed;
+mod inspect;
+mod metrics;
+mod plot;
+mod report;
+mod resample;
+mod runout;
+mod simulate;
+mod study;
+mod synth;
+mod tool;
+
+/// crest: predict the surface a 5-axis ball-end finishing path leaves, from NX CLSF.
+#[derive(Debug, Parser)]
+#[command(name = "crest", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the whole pipeline on an embedded default path and tool.
+    Demo(demo::Args),
+    /// Summarise the tool paths of a CLSF or contact12 file.
+    Inspect(inspect::Args),
+    /// Convert CLSF to contact12 CSV, or contact12 to CLSF with contact data.
+    Convert(convert::Args),
+    /// Resample a path to even feed per tooth or a constant spindle step.
+    Resample(resample::Args),
+    /// Cutter analysis: effective radius, crest height, participating teeth.
+    Tool(tool::Args),
+    /// Run-out what-if study.
+    Runout(runout::Args),
+    /// Simulate the machined surface as a height map.
+    Simulate(simulate::Args),
+    /// Profile and ISO 25178 areal roughness parameters of a height map.
+    Metrics(metrics::Args),
+    /// Plots: trochoids, run-out, height maps, profiles, feed.
+    Plot(plot::Args),
+    /// Regression report against a measured table.
+    Report(report::Args),
+    /// Predict the actual feed from the machine's axis limits.
+    Feed(feed::Args),
+    /// Write synthetic tool paths with contact data.
+    Synth(synth::Args),
+    /// Run a designed experiment and its factor effects.
+    Study(study::Args),
+}
+
+/// How a command ended when it did not fail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Everything ran and every check passed (exit 0).
+    Ok,
+    /// A check failed, e.g. a report beyond tolerance (exit 1).
+    CheckFailed,
+}
+
+/// Parse the process arguments, run the command, print errors, return the exit code.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return match e.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    ExitCode::SUCCESS
+                }
+                _ => ExitCode::from(2),
+            };
+        }
+    };
+    match run(cli) {
+        Ok(Outcome::Ok) => ExitCode::SUCCESS,
+        Ok(Outcome::CheckFailed) => ExitCode::from(1),
+        Err(e) => {
+            if is_broken_pipe(&e) {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("{e:?}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn is_broken_pipe(e: &miette::Report) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// Run one parsed command line.
+pub fn run(cli: Cli) -> miette::Result<Outcome> {
+    match cli.command {
+        Command::Demo(a) => demo::run(a),
+        Command::Inspect(a) => inspect::run(a),
+        Command::Convert(a) => convert::run(a),
+        Command::Resample(a) => resample::run(a),
+        Command::Tool(a) => tool::run(a),
+        Command::Runout(a) => runout::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Metrics(a) => metrics::run(a),
+        Command::Plot(a) => plot::run(a),
+        Command::Report(a) => report::run(a),
+        Command::Feed(a) => feed::run(a),
+        Command::Synth(a) => synth::run(a),
+        Command::Study(a) => study::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_is_consistent() {
+        Cli::command().debug_assert();
+    }
+}

@@ -1,0 +1,40 @@
+//! crest: from Siemens NX CLSF tool paths to predicted 5-axis ball-end machined surfaces.
+//!
+//! The library is a pipeline of stages, one module each, in this order:
+//!
+//! ```text
+//!  .cls / contact12 ──parse──▶ records ──toolpath──▶ Toolpath ──resample──▶ Samples(s, θ, t, pose, frame)
+//!                                                     │                        │
+//!                                   machine.toml ──kinematics──▶ actual feed per pose
+//!                                                                              │
+//!  tool.toml ──tool──▶ Cutter (dome, edges, run-out) ──────────────▶ surface (z-map / N-buffer)
+//!                                                                              │
+//!                                                       HeightMap ──metrics──▶ Rz, Sa, Sq, Sz, …
+//!                                                                              │
+//!                                       measured table ──report──▶ Markdown + SVG/PNG, exit status
+//! ```
+//!
+//! A stage imports only earlier stages and [`math`]. Only [`cli`], [`io`], [`plot`] and
+//! [`report`] touch files or the terminal; every other stage is pure. See `ARCHITECTURE.md`.
+//!
+//! ```
+//! use crest::tool::crest_height_mm;
+//! // 002 Eq 14: fz = 0.05 mm on a ball of R = 5 mm leaves a 0.0625 µm crest.
+//! let hc_um = crest_height_mm(5.0, 0.05) * 1000.0;
+//! assert!((hc_um - 0.0625004).abs() < 1e-6);
+//! ```
+
+pub mod math;
+
+pub mod kinematics;
+pub mod metrics;
+pub mod parse;
+pub mod resample;
+pub mod surface;
+pub mod tool;
+pub mod toolpath;
+
+pub mod cli;
+pub mod io;
+pub mod plot;
+pub mod report;

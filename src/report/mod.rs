@@ -1,0 +1,2 @@
+//! Studies and reports: run-out what-if studies, regression reports against measured
+//! confocal tables (Markdown and HTML), and their writers.

@@ -1,0 +1,176 @@
+//! The tool-path model: what the machine is asked to do, in mm and radians.
+//!
+//! Lowering (from `parse` records) resolves the modal state of CLSF (feed, spindle, tool,
+//! one-shot RAPID, tool axis carried over), converts inches to mm, keeps or applies MSYS,
+//! and turns arcs and NURBS into postures. Everything after this stage sees only
+//! [`Program`], [`Toolpath`] and [`Posture`].
+
+use crate::math::{Point3, Vec3};
+
+/// A whole file: one or more tool paths and the warnings met while reading it.
+#[derive(Debug, Clone, Default)]
+pub struct Program {
+    /// Tool paths in file order (`TOOL PATH/ … END-OF-PATH` blocks; a contact12 file gives one).
+    pub paths: Vec<Toolpath>,
+    /// Non-fatal findings (unknown records, derived normals, …), in file order.
+    pub warnings: Vec<Warning>,
+}
+
+/// A non-fatal finding, with the 1-based line (and column) it refers to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Warning {
+    /// 1-based line in the source file (0 when not tied to a line).
+    pub line: u32,
+    /// 1-based column (0 when not tied to a column).
+    pub column: u32,
+    /// What was found, lower case.
+    pub message: String,
+}
+
+/// Milling tool data from `TLDATA/MILL` (lengths in mm, angles in radians).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ToolData {
+    /// Tool kind word (`MILL`, `DRILL`, …).
+    pub kind: String,
+    /// Tool diameter, mm.
+    pub diameter_mm: f64,
+    /// Lower (corner) radius, mm: equal to the radius for a ball end.
+    pub corner_radius_mm: f64,
+    /// Tool length, mm.
+    pub length_mm: f64,
+    /// Taper angle, rad.
+    pub taper_rad: f64,
+    /// Tip angle, rad.
+    pub tip_rad: f64,
+}
+
+/// How the tool reached a posture.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionKind {
+    /// `FROM` start point (no move into it).
+    From,
+    /// A rapid move (GOTO after `RAPID`).
+    Rapid,
+    /// A feed move: cutting, unless engage/retract hints say otherwise.
+    Cut,
+    /// A hole position inside `CYCLE/… CYCLE/OFF`.
+    Cycle,
+    /// `GOHOME` return point.
+    GoHome,
+}
+
+/// The arc that leads into a posture (`CIRCLE` followed by `GOTO`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArcMove {
+    /// Arc centre, mm.
+    pub centre: Point3,
+    /// Unit axis. The motion is **clockwise about this axis** (NX convention, clsf.md §2).
+    pub axis: Vec3,
+    /// Radius, mm.
+    pub radius_mm: f64,
+    /// Full turns added (`TIMES,n` gives n − 1 extra turns).
+    pub extra_turns: u32,
+}
+
+/// Contact data attached to a posture: the cutter-contact point and surface normal.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Contact {
+    /// CC point, mm.
+    pub point: Point3,
+    /// Unit surface normal at the CC point, out of the material.
+    pub normal: Vec3,
+    /// True when the normal was derived from the cutter rather than read from the file.
+    pub normal_derived: bool,
+}
+
+/// One posture of the tool at the end of a move.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Posture {
+    /// CL point (tool tip), mm.
+    pub position: Point3,
+    /// Unit tool axis, from the tip towards the spindle.
+    pub axis: Vec3,
+    /// How the tool got here.
+    pub motion: MotionKind,
+    /// The arc leading here, if the move was circular.
+    pub arc: Option<ArcMove>,
+    /// Contact data, when the file has it.
+    pub contact: Option<Contact>,
+    /// Modal programmed feed at this move, mm/min (None before any FEDRAT).
+    pub feed_mm_min: Option<f64>,
+    /// Modal spindle speed, rpm (None before any SPINDL).
+    pub spindle_rpm: Option<f64>,
+    /// 1-based source line of the record that produced this posture.
+    pub line: u32,
+}
+
+/// One tool path (one NX operation).
+#[derive(Debug, Clone, Default)]
+pub struct Toolpath {
+    /// Operation name from `TOOL PATH/<op>`.
+    pub name: String,
+    /// Tool name from `TOOL PATH/…,TOOL,<name>`.
+    pub tool_name: String,
+    /// Tool data from the last `TLDATA`, if any.
+    pub tool: Option<ToolData>,
+    /// MSYS frame: origin, X axis, Y axis (as written), if any.
+    pub msys: Option<[f64; 9]>,
+    /// Postures in order.
+    pub postures: Vec<Posture>,
+}
+
+impl Toolpath {
+    /// Maximal runs of consecutive cutting moves, as index ranges into `postures`.
+    ///
+    /// A run starts at the posture the first cutting move leaves from and ends at the
+    /// last posture reached by cutting, so `range.len() >= 2` and every posture after the
+    /// first in a range has `motion == MotionKind::Cut`.
+    pub fn cutting_runs(&self) -> Vec<std::ops::Range<usize>> {
+        let mut runs = Vec::new();
+        let mut start: Option<usize> = None;
+        for (i, p) in self.postures.iter().enumerate() {
+            let cut = p.motion == MotionKind::Cut && i > 0;
+            match (cut, start) {
+                (true, None) => start = Some(i - 1),
+                (false, Some(s)) => {
+                    runs.push(s..i);
+                    start = None;
+                }
+                _ => {}
+            }
+        }
+        if let Some(s) = start {
+            runs.push(s..self.postures.len());
+        }
+        runs
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn posture(motion: MotionKind) -> Posture {
+        Posture {
+            position: Point3::origin(),
+            axis: Vec3::z(),
+            motion,
+            arc: None,
+            contact: None,
+            feed_mm_min: None,
+            spindle_rpm: None,
+            line: 0,
+        }
+    }
+
+    #[test]
+    fn cutting_runs_split_at_rapids() {
+        use MotionKind::*;
+        let kinds = [From, Rapid, Cut, Cut, Rapid, Cut, GoHome];
+        let path = Toolpath {
+            postures: kinds.iter().map(|k| posture(*k)).collect(),
+            ..Default::default()
+        };
+        assert_eq!(path.cutting_runs(), vec![1..4, 4..6]);
+    }
+}
