@@ -8,6 +8,7 @@ use std::process::ExitCode;
 mod convert;
 mod demo;
 mod feed;
+mod input;
 mod inspect;
 mod metrics;
 mod plot;

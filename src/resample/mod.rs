@@ -29,3 +29,47 @@ pub struct Sample {
     /// Local feed, mm/min.
     pub feed_mm_min: f64,
 }
+
+/// How samples are spaced.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// Instantaneous positions every fz of arc length (002 §2.4.1).
+    FeedPerTooth,
+    /// Constant spindle step Δθ, rad (002 §2.4.2, Eq 13 with Z inserted).
+    SpindleStep {
+        /// Δθ, rad.
+        dtheta_rad: f64,
+    },
+}
+
+/// How the tool axis is interpolated between postures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AxisInterpolation {
+    /// Spherical linear interpolation (default).
+    #[default]
+    Slerp,
+    /// Normalised linear interpolation (the model.md reference).
+    Nlerp,
+}
+
+/// Options of a resampling.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Spacing mode.
+    pub mode: Mode,
+    /// Nominal feed per tooth, mm.
+    pub fz_mm: f64,
+    /// Number of teeth Z.
+    pub teeth: usize,
+    /// Spindle speed, rpm; `None` = from the path's SPINDL.
+    pub rpm: Option<f64>,
+    /// Feed, mm/min; `None` = from the path's FEDRAT.
+    pub feed_mm_min: Option<f64>,
+    /// Feed per posture, mm/min (e.g. predicted by `kinematics`), overriding the above;
+    /// same length as the path's postures.
+    pub posture_feed_mm_min: Option<Vec<f64>>,
+    /// Tool-axis interpolation.
+    pub axis_interpolation: AxisInterpolation,
+    /// Interpolate positions on a cubic spline through the postures instead of lines/arcs.
+    pub spline: bool,
+}
