@@ -4,6 +4,7 @@
 use crate::toolpath::Program;
 use std::path::Path;
 
+#[allow(dead_code)] // used by the commands as they land
 /// Read and lower a CLSF or contact12 file (chosen by content), MSYS not applied.
 pub fn read_program(path: &Path) -> miette::Result<Program> {
     Err(miette::miette!(

@@ -146,6 +146,25 @@ impl Toolpath {
     }
 }
 
+/// Write a program as NX-style CLSF with contact data (GOTO with 12 numbers: CL, axis, CC,
+/// normal, where the posture has contact data).
+pub fn write_clsf(program: &Program, out: &mut dyn std::io::Write) -> std::io::Result<()> {
+    let _ = (program, out);
+    Err(std::io::Error::other("CLSF writing is not built yet"))
+}
+
+/// Write one tool path as contact12 CSV with header `x,y,z,i,j,k,cx,cy,cz,nx,ny,nz`:
+/// cutting moves with contact data only, or every posture when `all_moves` (CC and normal
+/// empty where there is no contact).
+pub fn write_contact12(
+    path: &Toolpath,
+    all_moves: bool,
+    out: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    let _ = (path, all_moves, out);
+    Err(std::io::Error::other("contact12 writing is not built yet"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -173,23 +192,4 @@ mod tests {
         };
         assert_eq!(path.cutting_runs(), vec![1..4, 4..6]);
     }
-}
-
-/// Write a program as NX-style CLSF with contact data (GOTO with 12 numbers: CL, axis, CC,
-/// normal, where the posture has contact data).
-pub fn write_clsf(program: &Program, out: &mut dyn std::io::Write) -> std::io::Result<()> {
-    let _ = (program, out);
-    Err(std::io::Error::other("CLSF writing is not built yet"))
-}
-
-/// Write one tool path as contact12 CSV with header `x,y,z,i,j,k,cx,cy,cz,nx,ny,nz`:
-/// cutting moves with contact data only, or every posture when `all_moves` (CC and normal
-/// empty where there is no contact).
-pub fn write_contact12(
-    path: &Toolpath,
-    all_moves: bool,
-    out: &mut dyn std::io::Write,
-) -> std::io::Result<()> {
-    let _ = (path, all_moves, out);
-    Err(std::io::Error::other("contact12 writing is not built yet"))
 }
