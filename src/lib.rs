@@ -31,6 +31,7 @@ pub mod metrics;
 pub mod parse;
 pub mod resample;
 pub mod surface;
+pub mod synth;
 pub mod tool;
 pub mod toolpath;
 

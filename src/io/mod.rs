@@ -27,6 +27,13 @@ where
     Ok(())
 }
 
+/// Write a height map, the format chosen by the extension: `.csv` (rows = y ascending,
+/// µm), `.gsf` (Gwyddion Simple Field, metres, float32) or `.sdf` (ISO 25178-71 / BCR).
+pub fn write_heightmap(path: &Path, map: &crate::surface::HeightMap) -> std::io::Result<()> {
+    let _ = (path, map);
+    Err(std::io::Error::other("height-map writing is not built yet"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

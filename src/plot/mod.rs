@@ -43,3 +43,9 @@ impl Format {
         }
     }
 }
+
+pub mod feed;
+pub mod heightmap;
+pub mod profile;
+pub mod runout;
+pub mod trochoid;

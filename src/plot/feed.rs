@@ -1,0 +1,1 @@
+//! Plot: feed (built by its stage's owner).

@@ -1,0 +1,1 @@
+//! Plot: heightmap (built by its stage's owner).

@@ -1,0 +1,1 @@
+//! Plot: profile (built by its stage's owner).

@@ -1,0 +1,1 @@
+//! Plot: runout (built by its stage's owner).

@@ -1,0 +1,1 @@
+//! Plot: trochoid (built by its stage's owner).
