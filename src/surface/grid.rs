@@ -1,0 +1,291 @@
+//! Grid frames and the nominal surface.
+//!
+//! Every simulation runs in a grid frame (origin O, axes u, v, w): nodes sit on the plane
+//! w = 0 at `O + i du u + j dv v`, and each node carries a line along w (a "dexel").
+//! * A **window** is the WCS xy plane: u = x, v = y, w = z (a z-map, 002 §2.5).
+//! * A **patch** is the tangent plane at a contact point of the path: u = f, v = g = n × f,
+//!   w = n (the N-buffer "hedgehog" of 001 Fig 1).
+//!
+//! The nominal surface near the grid is rebuilt from the contact (CC) points and normals
+//! of the samples: the points are thinned on a spatial hash, indexed with a kiddo k-d tree,
+//! and at every node of a coarse grid a weighted local quadric w = q(u, v) is fitted to the
+//! nearest points and to the slopes their normals give. Heights are then bilinear in the
+//! coarse grid, which is far below the chord tolerance for any smooth surface.
+
+use crate::math::{Point3, Vec3};
+use crate::resample::Sample;
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use nalgebra::{SMatrix, SVector};
+use std::collections::HashSet;
+
+/// An orthonormal grid frame: nodes on the plane through `origin` spanned by `u`, `v`;
+/// heights along `w`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridFrame {
+    /// Origin (the node at u = v = 0 is `origin + x0 u + y0 v`, see [`super::HeightMap`]).
+    pub origin: Point3,
+    /// First grid axis (columns).
+    pub u: Vec3,
+    /// Second grid axis (rows).
+    pub v: Vec3,
+    /// Height axis, `u × v`.
+    pub w: Vec3,
+}
+
+impl GridFrame {
+    /// The WCS frame: u = x, v = y, w = z.
+    pub fn wcs() -> GridFrame {
+        GridFrame {
+            origin: Point3::origin(),
+            u: Vec3::x(),
+            v: Vec3::y(),
+            w: Vec3::z(),
+        }
+    }
+
+    /// Coordinates (u, v, w) of a WCS point.
+    pub fn local(&self, p: &Point3) -> Vec3 {
+        let d = p - self.origin;
+        Vec3::new(self.u.dot(&d), self.v.dot(&d), self.w.dot(&d))
+    }
+
+    /// Coordinates of a WCS direction.
+    pub fn local_dir(&self, d: &Vec3) -> Vec3 {
+        Vec3::new(self.u.dot(d), self.v.dot(d), self.w.dot(d))
+    }
+}
+
+/// The nominal surface over a grid, on a coarse lattice (every `stride` nodes) with
+/// bilinear interpolation; heights along w in mm, and the slope factor cos β of the local
+/// normal against w.
+#[derive(Debug, Clone)]
+pub(crate) struct Nominal {
+    /// Coarse lattice size.
+    cnx: usize,
+    cny: usize,
+    /// Nodes per coarse cell.
+    stride: usize,
+    /// Heights q, mm, row-major on the coarse lattice.
+    q: Vec<f64>,
+    /// cos β = 1/√(1 + |∇q|²) on the coarse lattice.
+    cos_beta: Vec<f64>,
+    /// Largest q of the whole lattice.
+    pub q_max: f64,
+}
+
+impl Nominal {
+    /// A flat nominal surface w = `level` (no contact data, or a plane).
+    pub fn flat(nx: usize, ny: usize, stride: usize, level: f64) -> Nominal {
+        let cnx = (nx.saturating_sub(1)).div_ceil(stride) + 1;
+        let cny = (ny.saturating_sub(1)).div_ceil(stride) + 1;
+        Nominal {
+            cnx,
+            cny,
+            stride,
+            q: vec![level; cnx * cny],
+            cos_beta: vec![1.0; cnx * cny],
+            q_max: level,
+        }
+    }
+
+    /// Fit the nominal surface from contact points and normals given in grid coordinates.
+    /// `node_uv(i, j)` maps fine-grid node indices to (u, v).
+    pub fn fit(
+        nx: usize,
+        ny: usize,
+        stride: usize,
+        node_uv: impl Fn(usize, usize) -> (f64, f64),
+        contacts: &[(Vec3, Vec3)],
+    ) -> Option<Nominal> {
+        if contacts.is_empty() {
+            return None;
+        }
+        let pts: Vec<[f64; 2]> = contacts.iter().map(|(p, _)| [p.x, p.y]).collect();
+        let tree: ImmutableKdTree<f64, 2> = ImmutableKdTree::new_from_slice(&pts);
+        let mut nominal = Nominal::flat(nx, ny, stride, 0.0);
+        let k = contacts.len().min(24);
+        for cj in 0..nominal.cny {
+            for ci in 0..nominal.cnx {
+                let (u, v) = node_uv((ci * stride).min(nx - 1), (cj * stride).min(ny - 1));
+                let near = tree.nearest_n::<SquaredEuclidean>(&[u, v], k);
+                let (q, grad) = fit_quadric(u, v, &near, contacts);
+                let idx = cj * nominal.cnx + ci;
+                nominal.q[idx] = q;
+                nominal.cos_beta[idx] = 1.0 / (1.0 + grad.0 * grad.0 + grad.1 * grad.1).sqrt();
+            }
+        }
+        nominal.q_max = nominal.q.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Some(nominal)
+    }
+
+    fn bilinear(&self, field: &[f64], i: usize, j: usize) -> f64 {
+        let ci = i / self.stride;
+        let cj = j / self.stride;
+        let ci1 = (ci + 1).min(self.cnx - 1);
+        let cj1 = (cj + 1).min(self.cny - 1);
+        let fx = (i - ci * self.stride) as f64 / self.stride as f64;
+        let fy = (j - cj * self.stride) as f64 / self.stride as f64;
+        let a = field[cj * self.cnx + ci];
+        let b = field[cj * self.cnx + ci1];
+        let c = field[cj1 * self.cnx + ci];
+        let d = field[cj1 * self.cnx + ci1];
+        (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy
+    }
+
+    /// Nominal height q at fine node (i, j), mm.
+    pub fn q(&self, i: usize, j: usize) -> f64 {
+        self.bilinear(&self.q, i, j)
+    }
+
+    /// cos β at fine node (i, j).
+    pub fn cos_beta(&self, i: usize, j: usize) -> f64 {
+        self.bilinear(&self.cos_beta, i, j)
+    }
+
+    /// Largest q over the fine nodes in `[i0, i1) × [j0, j1)` (via the coarse lattice, so
+    /// an upper bound of the bilinear surface).
+    pub fn q_max_in(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> f64 {
+        let ci0 = i0 / self.stride;
+        let ci1 = ((i1.saturating_sub(1)) / self.stride + 1).min(self.cnx - 1);
+        let cj0 = j0 / self.stride;
+        let cj1 = ((j1.saturating_sub(1)) / self.stride + 1).min(self.cny - 1);
+        let mut m = f64::NEG_INFINITY;
+        for cj in cj0..=cj1 {
+            for ci in ci0..=ci1 {
+                m = m.max(self.q[cj * self.cnx + ci]);
+            }
+        }
+        m
+    }
+}
+
+/// Weighted least-squares quadric w = a + b x + c y + d x² + e x y + f y² about (u, v)
+/// through the given neighbours (positions and normal slopes). Returns q(u, v) and ∇q.
+fn fit_quadric(
+    u: f64,
+    v: f64,
+    near: &[kiddo::NearestNeighbour<f64, u64>],
+    contacts: &[(Vec3, Vec3)],
+) -> (f64, (f64, f64)) {
+    let scale2 = near
+        .iter()
+        .map(|n| n.distance)
+        .fold(0.0f64, f64::max)
+        .max(1e-6);
+    let mut ata = SMatrix::<f64, 6, 6>::zeros();
+    let mut atb = SVector::<f64, 6>::zeros();
+    let mut add = |row: [f64; 6], rhs: f64, weight: f64| {
+        let r = SVector::<f64, 6>::from(row);
+        ata += r * r.transpose() * weight;
+        atb += r * rhs * weight;
+    };
+    for n in near {
+        let Some((p, nrm)) = usize::try_from(n.item).ok().and_then(|i| contacts.get(i)) else {
+            continue;
+        };
+        let x = p.x - u;
+        let y = p.y - v;
+        let wt = (-n.distance / scale2).exp();
+        add([1.0, x, y, x * x, x * y, y * y], p.z, wt);
+        if nrm.z > 0.2 {
+            // Slopes from the normal: ∂w/∂u = −n_u/n_w, ∂w/∂v = −n_v/n_w.
+            let su = -nrm.x / nrm.z;
+            let sv = -nrm.y / nrm.z;
+            let lw = wt * scale2; // slopes carry a length scale, balance them with positions
+            add([0.0, 1.0, 0.0, 2.0 * x, y, 0.0], su, lw);
+            add([0.0, 0.0, 1.0, 0.0, x, 2.0 * y], sv, lw);
+        }
+    }
+    // A small ridge on the curvature terms keeps under-determined directions flat.
+    let ridge = 1e-6 * ata.trace().max(1e-12);
+    for i in 3..6 {
+        ata[(i, i)] += ridge;
+    }
+    for i in 0..3 {
+        ata[(i, i)] += 1e-12 * ata.trace().max(1e-12);
+    }
+    match ata.cholesky() {
+        Some(ch) => {
+            let s = ch.solve(&atb);
+            (s[0], (s[1], s[2]))
+        }
+        None => near
+            .first()
+            .and_then(|n| usize::try_from(n.item).ok())
+            .and_then(|i| contacts.get(i))
+            .map(|(p, _)| (p.z, (0.0, 0.0)))
+            .unwrap_or((0.0, (0.0, 0.0))),
+    }
+}
+
+/// Contact points and normals of the samples in grid coordinates, thinned to one per
+/// `cell` × `cell` × `cell` cube, keeping only points near the grid (within `reach` of
+/// the plane w = 0 region's bounding box, given in (u, v)) whose normal faces +w.
+pub(crate) fn grid_contacts(
+    samples: &[Sample],
+    frame: &GridFrame,
+    uv_box: [f64; 4],
+    reach: f64,
+    cell: f64,
+) -> Vec<(Vec3, Vec3)> {
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    for s in samples {
+        let (Some(c), Some(n)) = (s.contact, s.normal) else {
+            continue;
+        };
+        let p = frame.local(&c);
+        let nl = frame.local_dir(&n);
+        if !(p.x >= uv_box[0] - reach
+            && p.x <= uv_box[2] + reach
+            && p.y >= uv_box[1] - reach
+            && p.y <= uv_box[3] + reach
+            && p.z.abs() <= reach
+            && nl.z > 0.3)
+        {
+            continue;
+        }
+        let key = (
+            (p.x / cell).floor() as i64,
+            (p.y / cell).floor() as i64,
+            (p.z / cell).floor() as i64,
+        );
+        if seen.insert(key) {
+            out.push((p, nl));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn quadric_fit_recovers_a_sphere_cap() {
+        // Points on a sphere of radius 50 mm with top at w = 1, normals outwards.
+        let r = 50.0;
+        let mut contacts = Vec::new();
+        for i in -5..=5 {
+            for j in -5..=5 {
+                let (x, y) = (i as f64 * 0.2, j as f64 * 0.2);
+                let z = 1.0 - r + (r * r - x * x - y * y).sqrt();
+                let n = Vec3::new(x, y, z - (1.0 - r)).normalize();
+                contacts.push((Vec3::new(x, y, z), n));
+            }
+        }
+        let nominal = Nominal::fit(
+            11,
+            11,
+            5,
+            |i, j| (-0.5 + i as f64 * 0.1, -0.5 + j as f64 * 0.1),
+            &contacts,
+        )
+        .unwrap();
+        // Node (0, 0) is at (-0.5, -0.5).
+        let exact = 1.0 - r + (r * r - 0.5f64).sqrt();
+        assert_relative_eq!(nominal.q(0, 0), exact, epsilon = 2e-6);
+        assert!(nominal.cos_beta(0, 0) < 1.0 && nominal.cos_beta(0, 0) > 0.999);
+    }
+}
