@@ -100,7 +100,18 @@ impl Nominal {
         if contacts.is_empty() {
             return None;
         }
-        let pts: Vec<[f64; 2]> = contacts.iter().map(|(p, _)| [p.x, p.y]).collect();
+        // kiddo's trees cannot split many points that share a coordinate (a pass along x
+        // has one y for all its points): index them with a tiny deterministic jitter
+        // (≤ 1 nm); the fit itself uses the exact points.
+        let jitter = |i: usize, salt: u64| {
+            let h = (i as u64 ^ salt).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40;
+            (h as f64 / (1u64 << 24) as f64 - 0.5) * 2e-6
+        };
+        let pts: Vec<[f64; 2]> = contacts
+            .iter()
+            .enumerate()
+            .map(|(i, (p, _))| [p.x + jitter(i, 0x51), p.y + jitter(i, 0xA7)])
+            .collect();
         let tree: ImmutableKdTree<f64, 2> = ImmutableKdTree::new_from_slice(&pts);
         let mut nominal = Nominal::flat(nx, ny, stride, 0.0);
         let k = contacts.len().min(24);
@@ -261,6 +272,16 @@ pub(crate) fn grid_contacts(
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn collinear_contacts_fit_a_plane() {
+        // One pass along u: every point has v = 0.
+        let contacts: Vec<(Vec3, Vec3)> = (0..500)
+            .map(|i| (Vec3::new(i as f64 * 0.01, 0.0, 0.3), Vec3::z()))
+            .collect();
+        let nominal = Nominal::fit(5, 5, 2, |i, j| (i as f64, j as f64 * 0.1), &contacts).unwrap();
+        assert_relative_eq!(nominal.q(4, 4), 0.3, epsilon = 1e-7);
+    }
 
     #[test]
     fn quadric_fit_recovers_a_sphere_cap() {
