@@ -3,11 +3,11 @@
 //! 0.2 mm, fz 0.05 mm, run-out 10 µm, ICE with Δθ = 1°; plus scaling with window area
 //! and with path length.
 
-use criterion::{Criterion, criterion_group, criterion_main};
 use crest::math::{Point3, Vec3};
 use crest::resample::Sample;
 use crest::surface::{GridSpec, Model, Options, simulate};
 use crest::tool::{Cutter, Shape};
+use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
 #[path = "../tests/surface_common/mod.rs"]
@@ -30,15 +30,38 @@ fn raster(c: &Cutter, x0: f64, x1: f64, y0: f64, y1: f64) -> Vec<Sample> {
     let mut out = Vec::new();
     for k in 0..=n {
         let y = y0 + 0.2 * k as f64;
-        out.extend(surface_common::pass(c, k, Point3::new(x0, y, 0.0), Vec3::x(), axis, x1 - x0, ds, fz, 0.0));
+        out.extend(surface_common::pass(
+            c,
+            k,
+            Point3::new(x0, y, 0.0),
+            Vec3::x(),
+            axis,
+            x1 - x0,
+            ds,
+            fz,
+            0.0,
+        ));
     }
     out
 }
 
 fn run(samples: &[Sample], c: &Cutter, side_mm: f64, grid_mm: f64) -> usize {
-    let grid = GridSpec::Window { x0_mm: 0.0, y0_mm: 0.0, x1_mm: side_mm, y1_mm: side_mm };
-    let opts = Options::new(Model::Ice { dtheta_rad: 1f64.to_radians() }, grid, grid_mm);
-    simulate(samples, c, &opts, &|_, _| {}).map(|s| s.nodes_cut).unwrap_or(0)
+    let grid = GridSpec::Window {
+        x0_mm: 0.0,
+        y0_mm: 0.0,
+        x1_mm: side_mm,
+        y1_mm: side_mm,
+    };
+    let opts = Options::new(
+        Model::Ice {
+            dtheta_rad: 1f64.to_radians(),
+        },
+        grid,
+        grid_mm,
+    );
+    simulate(samples, c, &opts, &|_, _| {})
+        .map(|s| s.nodes_cut)
+        .unwrap_or(0)
 }
 
 fn bench(cr: &mut Criterion) {
@@ -47,7 +70,9 @@ fn bench(cr: &mut Criterion) {
     g.sample_size(10);
     // B-SIM: passes reach 1.2 mm beyond the window on every side.
     let bsim = raster(&c, -1.2, 3.2, -1.2, 3.2);
-    g.bench_function("bsim_2mm_1um_ice", |b| b.iter(|| black_box(run(&bsim, &c, 2.0, 0.001))));
+    g.bench_function("bsim_2mm_1um_ice", |b| {
+        b.iter(|| black_box(run(&bsim, &c, 2.0, 0.001)))
+    });
     // Window area at a fixed path (the B-SIM raster): 0.5, 1 and 2 mm squares at 1 µm.
     for side in [0.5, 1.0] {
         g.bench_function(format!("area_{side}mm_1um_ice"), |b| {

@@ -114,7 +114,6 @@ fn ice_single_pass_with_runout_leaves_one_mark_per_revolution() {
     let max = p.iter().copied().fold(f64::MIN, f64::max);
     let min = p.iter().copied().fold(f64::MAX, f64::min);
     assert!(((max - min) - 0.9996).abs() < 0.03, "crest {}", max - min);
-    eprintln!("crest {} µm, minima {:?}", max - min, minima(&p));
     let mins = minima(&p);
     assert!(mins.len() >= 2, "{mins:?}");
     for w in mins.windows(2) {
@@ -134,7 +133,6 @@ fn ice_runout_at_45_degrees_lets_two_teeth_cut() {
     let max = p.iter().copied().fold(f64::MIN, f64::max);
     let min = p.iter().copied().fold(f64::MAX, f64::min);
     assert!(((max - min) - 0.5624).abs() < 0.03, "crest {}", max - min);
-    eprintln!("crest {} µm, minima {:?}", max - min, minima(&p));
     let mins = minima(&p);
     let gaps: Vec<f64> = mins
         .windows(2)

@@ -47,14 +47,20 @@ fn patch_on_a_convex_cylinder_gives_the_exact_scallop_along_the_normal() {
         length_mm: 0.1,
         width_mm: 0.4,
     };
-    let sim = simulate(&samples, &cutter, &Options::new(Model::Dome, grid, 0.005), &no_progress).unwrap();
+    let sim = simulate(
+        &samples,
+        &cutter,
+        &Options::new(Model::Dome, grid, 0.005),
+        &no_progress,
+    )
+    .unwrap();
     let m = &sim.map;
     assert!(sim.nominal_from_contacts);
     assert_eq!((m.nx, m.ny), (21, 81));
     assert_eq!(sim.nodes_cut, m.nx * m.ny);
     // Exact cusp: ball centres on the circle of radius ρ + R at ±φ, φ = s/(2ρ).
     let (r, phi) = (5.0, s / (2.0 * rho));
-    let d = (rho + r) * phi.cos() + (r * r - (rho + r).powi(2) * phi.sin().powi(2)).sqrt();
+    let d = (rho + r) * phi.cos() - (r * r - (rho + r).powi(2) * phi.sin().powi(2)).sqrt();
     let h_um = (d - rho) * 1e3;
     // Column 10 is x = 0, a stamp centre; rows 0 and 80 are v = ∓0.2 (passes ∓1), the
     // cusps lie at v ≈ ±0.1.
@@ -62,11 +68,20 @@ fn patch_on_a_convex_cylinder_gives_the_exact_scallop_along_the_normal() {
     let max = col.iter().copied().fold(f64::MIN, f64::max);
     let min = col.iter().copied().fold(f64::MAX, f64::min);
     assert!((h_um - 1.25).abs() < 0.01, "closed form {h_um}");
-    assert!(((max - min) - h_um).abs() < 0.02 * h_um, "scallop {} vs {h_um}", max - min);
+    assert!(
+        ((max - min) - h_um).abs() < 0.02 * h_um,
+        "scallop {} vs {h_um}",
+        max - min
+    );
     assert!(col[40].abs() < 0.01, "on the pass: {}", col[40]);
     // A plane window would instead see the cylinder's own drop: 0.2² / (2·20) mm = 1 µm
     // at the patch edge, so the normal-line heights must not show it.
-    assert!(col[0].abs() < 0.02 && col[80].abs() < 0.02, "{} {}", col[0], col[80]);
+    assert!(
+        col[0].abs() < 0.02 && col[80].abs() < 0.02,
+        "{} {}",
+        col[0],
+        col[80]
+    );
 }
 
 #[test]
@@ -82,6 +97,12 @@ fn patch_needs_contact_data() {
         length_mm: 0.1,
         width_mm: 0.1,
     };
-    let err = simulate(&samples, &cutter, &Options::new(Model::Dome, grid, 0.005), &no_progress).unwrap_err();
+    let err = simulate(
+        &samples,
+        &cutter,
+        &Options::new(Model::Dome, grid, 0.005),
+        &no_progress,
+    )
+    .unwrap_err();
     assert_eq!(err, SurfaceError::NoContactData);
 }

@@ -146,11 +146,12 @@ pub fn simulate(
     let uv_box = [x0, y0, x0 + (nx - 1) as f64 * d, y0 + (ny - 1) as f64 * d];
     let diag = ((uv_box[2] - uv_box[0]).powi(2) + (uv_box[3] - uv_box[1]).powi(2)).sqrt();
     let contacts = grid_contacts(samples, &frame, uv_box, (0.5 * diag).max(2.0), 0.05);
-    let node_uv = |i: usize, j: usize| (x0 + i as f64 * d, y0 + j as f64 * d);
-    let (nominal, from_contacts) = match Nominal::fit(nx, ny, NOMINAL_STRIDE, node_uv, &contacts) {
+    // Lattice of the nominal surface: every 32 nodes, at most 0.25 mm apart.
+    let stride = ((0.25 / d).floor() as usize).clamp(1, NOMINAL_STRIDE);
+    let (nominal, from_contacts) = match Nominal::fit(nx, ny, stride, x0, y0, d, &contacts) {
         Some(n) => (n, true),
         None if patch => return Err(SurfaceError::NoContactData),
-        None => (Nominal::flat(nx, ny, NOMINAL_STRIDE, 0.0), false),
+        None => (Nominal::flat(nx, ny, stride, d, 0.0), false),
     };
     let side = opts.depth_mm.min(cutter.radius_mm);
     let profile = Profile::new(cutter, opts.chord_tol_mm, side);
@@ -614,7 +615,13 @@ impl Setup<'_> {
     ) -> (Vec<f64>, bool) {
         let (i0, j0, w, h) = tile_rect(tid, t, ntx, self.nx, self.ny);
         let mut tile = Tile::new(i0, j0, w, h);
-        let cull = self.nominal.q_max_in(i0, i0 + w, j0, j0 + h) + band;
+        let mut qc = Vec::with_capacity(w * h);
+        for r in 0..h {
+            for c in 0..w {
+                qc.push(self.nominal.q_cos(i0 + c, j0 + r));
+            }
+        }
+        let cull = qc.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.0)) + band;
         let mut cols: Vec<[f64; 3]> = Vec::new();
         for &si in list {
             self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
@@ -625,17 +632,13 @@ impl Setup<'_> {
         for r in 0..h {
             for c in 0..w {
                 let z = tile.z[r * w + c];
-                let q = self.nominal.q(i0 + c, j0 + r);
+                let (q, cos_beta) = qc[r * w + c];
                 let above = z - q;
                 if above.is_nan() || above > band {
                     uncertain = true;
                 }
                 if above <= depth {
-                    let f = if self.patch {
-                        self.nominal.cos_beta(i0 + c, j0 + r)
-                    } else {
-                        1.0
-                    };
+                    let f = if self.patch { cos_beta } else { 1.0 };
                     out[r * w + c] = above * f * 1e3;
                 }
             }

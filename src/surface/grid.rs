@@ -55,9 +55,10 @@ impl GridFrame {
     }
 }
 
-/// The nominal surface over a grid, on a coarse lattice (every `stride` nodes) with
-/// bilinear interpolation; heights along w in mm, and the slope factor cos β of the local
-/// normal against w.
+/// The nominal surface over a grid: a local quadric w = q(u, v) fitted at every node of a
+/// coarse lattice (every `stride` nodes); between lattice nodes the four surrounding
+/// quadrics are evaluated and blended bilinearly, which is exact for quadrics and
+/// third-order accurate otherwise.
 #[derive(Debug, Clone)]
 pub(crate) struct Nominal {
     /// Coarse lattice size.
@@ -65,36 +66,40 @@ pub(crate) struct Nominal {
     cny: usize,
     /// Nodes per coarse cell.
     stride: usize,
-    /// Heights q, mm, row-major on the coarse lattice.
-    q: Vec<f64>,
-    /// cos β = 1/√(1 + |∇q|²) on the coarse lattice.
-    cos_beta: Vec<f64>,
-    /// Largest q of the whole lattice.
+    /// Node spacing, mm.
+    d: f64,
+    /// Quadric coefficients [a, b, c, d, e, f] of w = a + b x + c y + d x² + e x y + f y²
+    /// about each lattice node (x, y in mm), row-major.
+    quad: Vec<[f64; 6]>,
+    /// An upper bound of q over the whole grid, mm.
     pub q_max: f64,
 }
 
 impl Nominal {
-    /// A flat nominal surface w = `level` (no contact data, or a plane).
-    pub fn flat(nx: usize, ny: usize, stride: usize, level: f64) -> Nominal {
+    /// A flat nominal surface w = `level` (no contact data).
+    pub fn flat(nx: usize, ny: usize, stride: usize, d: f64, level: f64) -> Nominal {
         let cnx = (nx.saturating_sub(1)).div_ceil(stride) + 1;
         let cny = (ny.saturating_sub(1)).div_ceil(stride) + 1;
         Nominal {
             cnx,
             cny,
             stride,
-            q: vec![level; cnx * cny],
-            cos_beta: vec![1.0; cnx * cny],
+            d,
+            quad: vec![[level, 0.0, 0.0, 0.0, 0.0, 0.0]; cnx * cny],
             q_max: level,
         }
     }
 
     /// Fit the nominal surface from contact points and normals given in grid coordinates.
-    /// `node_uv(i, j)` maps fine-grid node indices to (u, v).
+    /// Node (i, j) is at (u, v) = (`x0` + i `d`, `y0` + j `d`).
+    #[allow(clippy::too_many_arguments)]
     pub fn fit(
         nx: usize,
         ny: usize,
         stride: usize,
-        node_uv: impl Fn(usize, usize) -> (f64, f64),
+        x0: f64,
+        y0: f64,
+        d: f64,
         contacts: &[(Vec3, Vec3)],
     ) -> Option<Nominal> {
         if contacts.is_empty() {
@@ -113,60 +118,55 @@ impl Nominal {
             .map(|(i, (p, _))| [p.x + jitter(i, 0x51), p.y + jitter(i, 0xA7)])
             .collect();
         let tree: ImmutableKdTree<f64, 2> = ImmutableKdTree::new_from_slice(&pts);
-        let mut nominal = Nominal::flat(nx, ny, stride, 0.0);
+        let mut nominal = Nominal::flat(nx, ny, stride, d, 0.0);
         let k = contacts.len().min(24);
+        let h = stride as f64 * d;
+        let mut q_max = f64::NEG_INFINITY;
         for cj in 0..nominal.cny {
             for ci in 0..nominal.cnx {
-                let (u, v) = node_uv((ci * stride).min(nx - 1), (cj * stride).min(ny - 1));
+                let u = x0 + (ci * stride) as f64 * d;
+                let v = y0 + (cj * stride) as f64 * d;
                 let near = tree.nearest_n::<SquaredEuclidean>(&[u, v], k);
-                let (q, grad) = fit_quadric(u, v, &near, contacts);
-                let idx = cj * nominal.cnx + ci;
-                nominal.q[idx] = q;
-                nominal.cos_beta[idx] = 1.0 / (1.0 + grad.0 * grad.0 + grad.1 * grad.1).sqrt();
+                let c = fit_quadric(u, v, &near, contacts);
+                let bound = c[0]
+                    + (c[1].abs() + c[2].abs()) * h
+                    + (c[3].abs() + c[4].abs() + c[5].abs()) * h * h;
+                q_max = q_max.max(bound);
+                nominal.quad[cj * nominal.cnx + ci] = c;
             }
         }
-        nominal.q_max = nominal.q.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        nominal.q_max = q_max;
         Some(nominal)
     }
 
-    fn bilinear(&self, field: &[f64], i: usize, j: usize) -> f64 {
-        let ci = i / self.stride;
-        let cj = j / self.stride;
+    /// Nominal height q (mm) and slope factor cos β = 1/√(1 + |∇q|²) at fine node (i, j).
+    pub fn q_cos(&self, i: usize, j: usize) -> (f64, f64) {
+        let ci = (i / self.stride).min(self.cnx - 1);
+        let cj = (j / self.stride).min(self.cny - 1);
         let ci1 = (ci + 1).min(self.cnx - 1);
         let cj1 = (cj + 1).min(self.cny - 1);
-        let fx = (i - ci * self.stride) as f64 / self.stride as f64;
-        let fy = (j - cj * self.stride) as f64 / self.stride as f64;
-        let a = field[cj * self.cnx + ci];
-        let b = field[cj * self.cnx + ci1];
-        let c = field[cj1 * self.cnx + ci];
-        let d = field[cj1 * self.cnx + ci1];
-        (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy
-    }
-
-    /// Nominal height q at fine node (i, j), mm.
-    pub fn q(&self, i: usize, j: usize) -> f64 {
-        self.bilinear(&self.q, i, j)
-    }
-
-    /// cos β at fine node (i, j).
-    pub fn cos_beta(&self, i: usize, j: usize) -> f64 {
-        self.bilinear(&self.cos_beta, i, j)
-    }
-
-    /// Largest q over the fine nodes in `[i0, i1) × [j0, j1)` (via the coarse lattice, so
-    /// an upper bound of the bilinear surface).
-    pub fn q_max_in(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> f64 {
-        let ci0 = i0 / self.stride;
-        let ci1 = ((i1.saturating_sub(1)) / self.stride + 1).min(self.cnx - 1);
-        let cj0 = j0 / self.stride;
-        let cj1 = ((j1.saturating_sub(1)) / self.stride + 1).min(self.cny - 1);
-        let mut m = f64::NEG_INFINITY;
-        for cj in cj0..=cj1 {
-            for ci in ci0..=ci1 {
-                m = m.max(self.q[cj * self.cnx + ci]);
+        let fx = (i as f64 - (ci * self.stride) as f64) / self.stride as f64;
+        let fy = (j as f64 - (cj * self.stride) as f64) / self.stride as f64;
+        let mut q = 0.0;
+        let mut gu = 0.0;
+        let mut gv = 0.0;
+        for (cx, cy, wgt) in [
+            (ci, cj, (1.0 - fx) * (1.0 - fy)),
+            (ci1, cj, fx * (1.0 - fy)),
+            (ci, cj1, (1.0 - fx) * fy),
+            (ci1, cj1, fx * fy),
+        ] {
+            if wgt == 0.0 {
+                continue;
             }
+            let c = &self.quad[cy * self.cnx + cx];
+            let x = (i as f64 - (cx * self.stride) as f64) * self.d;
+            let y = (j as f64 - (cy * self.stride) as f64) * self.d;
+            q += wgt * (c[0] + c[1] * x + c[2] * y + c[3] * x * x + c[4] * x * y + c[5] * y * y);
+            gu += wgt * (c[1] + 2.0 * c[3] * x + c[4] * y);
+            gv += wgt * (c[2] + c[4] * x + 2.0 * c[5] * y);
         }
-        m
+        (q, 1.0 / (1.0 + gu * gu + gv * gv).sqrt())
     }
 }
 
@@ -177,7 +177,7 @@ fn fit_quadric(
     v: f64,
     near: &[kiddo::NearestNeighbour<f64, u64>],
     contacts: &[(Vec3, Vec3)],
-) -> (f64, (f64, f64)) {
+) -> [f64; 6] {
     let scale2 = near
         .iter()
         .map(|n| n.distance)
@@ -218,14 +218,16 @@ fn fit_quadric(
     match ata.cholesky() {
         Some(ch) => {
             let s = ch.solve(&atb);
-            (s[0], (s[1], s[2]))
+            [s[0], s[1], s[2], s[3], s[4], s[5]]
         }
-        None => near
-            .first()
-            .and_then(|n| usize::try_from(n.item).ok())
-            .and_then(|i| contacts.get(i))
-            .map(|(p, _)| (p.z, (0.0, 0.0)))
-            .unwrap_or((0.0, (0.0, 0.0))),
+        None => {
+            let z = near
+                .first()
+                .and_then(|n| usize::try_from(n.item).ok())
+                .and_then(|i| contacts.get(i))
+                .map_or(0.0, |(p, _)| p.z);
+            [z, 0.0, 0.0, 0.0, 0.0, 0.0]
+        }
     }
 }
 
@@ -279,8 +281,8 @@ mod tests {
         let contacts: Vec<(Vec3, Vec3)> = (0..500)
             .map(|i| (Vec3::new(i as f64 * 0.01, 0.0, 0.3), Vec3::z()))
             .collect();
-        let nominal = Nominal::fit(5, 5, 2, |i, j| (i as f64, j as f64 * 0.1), &contacts).unwrap();
-        assert_relative_eq!(nominal.q(4, 4), 0.3, epsilon = 1e-7);
+        let nominal = Nominal::fit(5, 5, 2, 0.0, 0.0, 0.1, &contacts).unwrap();
+        assert_relative_eq!(nominal.q_cos(4, 4).0, 0.3, epsilon = 1e-7);
     }
 
     #[test]
@@ -296,17 +298,16 @@ mod tests {
                 contacts.push((Vec3::new(x, y, z), n));
             }
         }
-        let nominal = Nominal::fit(
-            11,
-            11,
-            5,
-            |i, j| (-0.5 + i as f64 * 0.1, -0.5 + j as f64 * 0.1),
-            &contacts,
-        )
-        .unwrap();
-        // Node (0, 0) is at (-0.5, -0.5).
-        let exact = 1.0 - r + (r * r - 0.5f64).sqrt();
-        assert_relative_eq!(nominal.q(0, 0), exact, epsilon = 2e-6);
-        assert!(nominal.cos_beta(0, 0) < 1.0 && nominal.cos_beta(0, 0) > 0.999);
+        let nominal = Nominal::fit(11, 11, 5, -0.5, -0.5, 0.1, &contacts).unwrap();
+        // Node (0, 0) is at (-0.5, -0.5); node (2, 3) at (-0.3, -0.2), between lattice nodes.
+        for (i, j) in [(0, 0), (2, 3)] {
+            let (x, y) = (-0.5 + 0.1 * i as f64, -0.5 + 0.1 * j as f64);
+            let exact = 1.0 - r + (r * r - x * x - y * y).sqrt();
+            let (q, cos) = nominal.q_cos(i, j);
+            assert_relative_eq!(q, exact, epsilon = 2e-6);
+            let slope2 = (x * x + y * y) / (r * r - x * x - y * y);
+            assert_relative_eq!(cos, 1.0 / (1.0 + slope2).sqrt(), epsilon = 1e-6);
+        }
+        assert!(nominal.q_max >= 1.0);
     }
 }
