@@ -150,6 +150,29 @@ pub struct MeasuredTable {
 
 const KNOWN_COLUMNS: [&str; 5] = ["lead_deg", "side", "sample", "Ra_um", "Rz_um"];
 
+/// The 1-based line where a record starts: the csv crate may place a record that follows
+/// blank or comment lines at the first of them, so skip those from its byte offset.
+fn line_of_record(text: &str, pos: &csv::Position) -> u64 {
+    let bytes = text.as_bytes();
+    let mut at = usize::try_from(pos.byte())
+        .unwrap_or(usize::MAX)
+        .min(bytes.len());
+    // Skip blank and comment lines (the record's offset may point at them).
+    while at < bytes.len() {
+        match bytes[at] {
+            b'\n' | b'\r' => at += 1,
+            b'#' => {
+                at = bytes[at..]
+                    .iter()
+                    .position(|b| *b == b'\n')
+                    .map_or(bytes.len(), |p| at + p + 1);
+            }
+            _ => break,
+        }
+    }
+    1 + bytes[..at].iter().filter(|b| **b == b'\n').count() as u64
+}
+
 /// The 1-based character column where field `index` of a raw CSV line starts.
 fn field_column(raw: &str, index: usize) -> usize {
     let mut field = 0;
@@ -196,7 +219,10 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, ReportErr
         }
     };
     let headers = reader.headers().map_err(csv_err)?.clone();
-    let header_line = headers.position().map(|p| p.line()).unwrap_or(1);
+    let header_line = headers
+        .position()
+        .map(|p| line_of_record(text, p))
+        .unwrap_or(1);
     if headers.is_empty() || headers.iter().all(|h| h.is_empty()) {
         return Err(ReportError::MissingColumns {
             file: file.to_string(),
@@ -250,7 +276,10 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, ReportErr
     let mut rows: Vec<MeasuredRow> = Vec::new();
     for record in reader.records() {
         let record = record.map_err(csv_err)?;
-        let line = record.position().map(|p| p.line()).unwrap_or(0);
+        let line = record
+            .position()
+            .map(|p| line_of_record(text, p))
+            .unwrap_or(0);
         if record.iter().all(|f| f.is_empty()) {
             continue;
         }
