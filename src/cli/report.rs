@@ -7,9 +7,8 @@
 
 use super::Outcome;
 use crate::report::regression::{self, DEFAULT_TOLERANCE_PCT, Provenance, RunoutSpec};
-use crate::tool::{Cutter, Shape};
+use crate::tool::Cutter;
 use miette::{IntoDiagnostic, WrapErr, miette};
-use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 /// Options of `crest report`.
@@ -32,59 +31,13 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The tool file as documented in the tool issue (shape, radius_mm, corner_radius_mm,
-/// teeth, helix_deg, [runout]).
-// TODO(report): switch to the shared loader `crate::tool::config` when it lands on main.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ToolFile {
-    shape: String,
-    radius_mm: f64,
-    #[serde(default)]
-    corner_radius_mm: Option<f64>,
-    teeth: usize,
-    #[serde(default)]
-    helix_deg: f64,
-    #[serde(default)]
-    runout: Option<RunoutSpec>,
-}
-
 fn load_tool(path: &Path) -> miette::Result<Cutter> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot read the tool file {name}"))?;
-    let t: ToolFile =
-        toml::from_str(&text).map_err(|e| miette!("{name}: {}", e.to_string().trim_end()))?;
-    let shape = match t.shape.as_str() {
-        "ball" => Shape::Ball,
-        "torus" => Shape::Torus {
-            corner_radius_mm: t
-                .corner_radius_mm
-                .ok_or_else(|| miette!("{name}: a torus needs corner_radius_mm"))?,
-        },
-        "flat" => Shape::Flat,
-        other => {
-            return Err(miette!(
-                "{name}: shape must be ball, torus or flat, found `{other}`"
-            ));
-        }
-    };
-    if !(t.radius_mm.is_finite() && t.radius_mm > 0.0) {
-        return Err(miette!("{name}: radius_mm must be positive"));
-    }
-    if t.teeth == 0 {
-        return Err(miette!("{name}: teeth must be at least 1"));
-    }
-    if !(t.helix_deg.is_finite() && t.helix_deg.abs() < 90.0) {
-        return Err(miette!("{name}: helix_deg must lie in (-90, 90)"));
-    }
-    let mut cutter = Cutter::new(shape, t.radius_mm, t.teeth, t.helix_deg.to_radians());
-    if let Some(r) = &t.runout {
-        check_runout(r, t.teeth).map_err(|e| miette!("{name}: [runout] {e}"))?;
-        cutter.runout = r.to_runout();
-    }
-    Ok(cutter)
+    crate::tool::load_tool_toml(&text)
+        .map_err(|e| miette!("{name}:{}:{}: {}", e.line(), e.column(), e.message()))
 }
 
 fn check_runout(r: &RunoutSpec, teeth: usize) -> Result<(), String> {

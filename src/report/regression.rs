@@ -486,6 +486,34 @@ impl Model {
     }
 }
 
+/// Which rule decides the participating teeth (model.md §3.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Rule {
+    /// 002 Eq 8: r_j(z_c) > max r − hc(nominal fz) (reproduces 002's fz_eff = 0.2 mm).
+    #[default]
+    Paper,
+    /// The exact one-dimensional envelope of the teeth's marks.
+    Exact,
+}
+
+impl Rule {
+    /// The name used in studies.
+    pub fn name(self) -> &'static str {
+        match self {
+            Rule::Paper => "paper",
+            Rule::Exact => "exact",
+        }
+    }
+
+    fn to_tool(self) -> crate::tool::Rule {
+        match self {
+            Rule::Paper => crate::tool::Rule::Paper,
+            Rule::Exact => crate::tool::Rule::Exact,
+        }
+    }
+}
+
 /// Run-out as written in TOML (the `[runout]` table of a tool file), interface units.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -559,9 +587,11 @@ pub struct Study {
     pub model: Model,
     /// Programmed feed per tooth, mm.
     pub fz_mm: f64,
-    /// Depth of cut, mm (informative).
+    /// Rule for the participating teeth (`paper` by default, or `exact`).
     #[serde(default)]
-    pub ap_mm: Option<f64>,
+    pub rule: Rule,
+    /// Depth of cut along the normal, mm (for the effective radius, 002 Table 3).
+    pub ap_mm: f64,
     /// Nominal cutting speed, m/min (informative).
     #[serde(default)]
     pub cutting_speed_m_min: Option<f64>,
@@ -591,6 +621,12 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ReportError> {
         return Err(err(format!(
             "fz_mm must be positive, found {}",
             study.fz_mm
+        )));
+    }
+    if !(study.ap_mm.is_finite() && study.ap_mm >= 0.0) {
+        return Err(err(format!(
+            "ap_mm must be a non-negative number, found {}",
+            study.ap_mm
         )));
     }
     if study.cases.is_empty() {
@@ -642,7 +678,9 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ReportError> {
 /// What the `crest` model predicts for one case.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CrestPrediction {
-    /// Height of the generating point above the tip, mm: R(1 − cos β) on a plane.
+    /// Rule that decided the participating teeth.
+    pub rule: String,
+    /// Height of the generating point above the tip, mm: R(1 − cos β) for a ball on a plane.
     pub generating_height_mm: f64,
     /// Local radius of every tooth at the generating height, mm (tooth 1 first).
     pub tooth_radius_mm: Vec<f64>,
@@ -652,13 +690,12 @@ pub struct CrestPrediction {
     pub zc: usize,
     /// Nominal crest (Eq 14 with the programmed fz), µm: the threshold of Eq 8.
     pub nominal_crest_um: f64,
-    /// Effective feed mark spacing fz·Z/zc along the tool-centre path, mm.
+    /// Effective (mean) feed mark spacing fz·Z/zc, mm.
     pub fz_eff_mm: f64,
-    /// Mark spacing on the surface, mm (fz_eff on a plane).
-    pub spacing_mm: f64,
-    /// Radius of the profile arcs, mm (R on a plane; the osculating radius when curved).
+    /// Radius of the profile arcs of a ball end, mm (R on a plane; R·Rs/(Rs ± R) when curved).
     pub arc_radius_mm: f64,
-    /// Crest height between two marks, µm (Eq 14 on a plane).
+    /// Crest height between marks, µm: Eq 14 at fz_eff (paper rule) or the exact
+    /// envelope's crest (exact rule), on the curved profile when a surface radius is given.
     pub crest_um: f64,
     /// Rz of the simulated profile, µm (mean of 5 sampling lengths).
     pub rz_um: f64,
@@ -666,20 +703,12 @@ pub struct CrestPrediction {
     pub ra_um: f64,
     /// Sampling length λc used for the profile, mm.
     pub sampling_length_mm: f64,
-}
-
-/// Participating teeth by 002 Eq 8 (model.md §3.2, the paper's rule): the largest local
-/// radius r_1 at the generating height `z_mm`, and every tooth with r_j > r_1 − hc, where
-/// hc is Eq 14 at the nominal `fz_mm`. Returns 0-based indices in cutting order.
-pub fn participating_teeth(cutter: &Cutter, z_mm: f64, fz_mm: f64) -> Vec<usize> {
-    let radii: Vec<f64> = (0..cutter.teeth())
-        .map(|j| cutter.tooth_radius(j, z_mm))
-        .collect();
-    let r1 = radii.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let hc = crest_height_mm(cutter.radius_mm, fz_mm);
-    (0..radii.len())
-        .filter(|&j| radii[j] == r1 || radii[j] > r1 - hc)
-        .collect()
+    /// R_ef,max of the nominal tool for the lead and ap (002 Table 3), mm.
+    pub effective_radius_mm: f64,
+    /// Radius of the generating point (R sin β for a ball), mm.
+    pub contact_radius_mm: f64,
+    /// Cutting-speed ratio R_ef,max / R (002 Table 3 "Vc,ef max" / 100).
+    pub cutting_speed_ratio: f64,
 }
 
 /// ISO 4288 sampling length (λc) for a periodic profile of mean spacing `rsm_mm`, mm.
@@ -693,104 +722,201 @@ pub fn sampling_length_mm(rsm_mm: f64) -> f64 {
     }
 }
 
+/// Rz and Ra (µm) of a profile sampled every `dx_mm`, evaluated over 5 sampling lengths
+/// of `lc_mm` (the samples must cover 5·λc): Ra = mean |z − z̄|, Rz = mean of the five
+/// peak-to-valley heights (002 Eq 15). No filter: the caller's profile has no form.
+pub fn rz_ra(heights_um: &[f64], dx_mm: f64, lc_mm: f64) -> (f64, f64) {
+    let n = heights_um.len();
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = heights_um.iter().sum::<f64>() / n as f64;
+    let ra = heights_um.iter().map(|h| (h - mean).abs()).sum::<f64>() / n as f64;
+    let per_len = ((lc_mm / dx_mm).round() as usize).max(1);
+    let mut rz_sum = 0.0;
+    for part in 0..5 {
+        let lo = (part * per_len).min(n - 1);
+        let hi = ((part + 1) * per_len).min(n - 1);
+        let seg = &heights_um[lo..=hi];
+        let max = seg.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let min = seg.iter().copied().fold(f64::INFINITY, f64::min);
+        rz_sum += max - min;
+    }
+    (rz_sum / 5.0, ra)
+}
+
+/// A periodic feed-direction profile: period `period_mm`, one height (mm) per position in
+/// the period. Returns (Rz µm, Ra µm, λc mm, peak-to-valley over one period µm).
+///
+/// The period is sampled in an even number of steps of at most [`PROFILE_STEP_MM`] (so
+/// that the crest between two evenly spaced marks is a sample), and the profile repeated
+/// over 5 sampling lengths λc chosen by ISO 4288 from `rsm_mm`.
+fn periodic_roughness(
+    period_mm: f64,
+    rsm_mm: f64,
+    height_mm: &dyn Fn(f64) -> f64,
+) -> (f64, f64, f64, f64) {
+    let lc = sampling_length_mm(rsm_mm);
+    let total = 5.0 * lc;
+    let mut steps = 2.0 * (0.5 * period_mm / PROFILE_STEP_MM).ceil().max(1.0);
+    // Keep the evaluation under ~2 M points even for tiny periods.
+    while total / (period_mm / steps) > 2.0e6 && steps > 2.0 {
+        steps = 2.0 * (0.25 * steps).ceil();
+    }
+    let dx = period_mm / steps;
+    let m = steps as usize;
+    let one: Vec<f64> = (0..m).map(|i| height_mm(i as f64 * dx)).collect();
+    let lo = one.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = one.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let n = (total / dx).round().max(1.0) as usize;
+    let heights: Vec<f64> = (0..=n).map(|i| (one[i % m] - lo) * 1e3).collect();
+    let (rz, ra) = rz_ra(&heights, dx, lc);
+    (rz, ra, lc, (hi - lo) * 1e3)
+}
+
 /// Rz and Ra (µm) of the periodic profile of circular arcs of radius `radius_mm` whose
 /// lowest points are `spacing_mm` apart, and the sampling length used (mm).
 ///
 /// The profile is sampled every [`PROFILE_STEP_MM`] or finer (so that every crest and every
 /// valley is a sample) over 5 sampling lengths λc chosen by ISO 4288 from RSm = spacing. It
 /// has no form and no waviness, so no filter is applied: Ra is the mean |z − z̄| over the
-/// evaluation length and Rz the mean of the 5 peak-to-valley heights (002 Eq 15). For a
-/// whole number of periods per sampling length Rz equals the crest of Eq 14, and Ra tends to
+/// evaluation length and Rz the mean of the 5 peak-to-valley heights (002 Eq 15). For
+/// sampling lengths that hold a whole crest Rz equals the crest of Eq 14, and Ra tends to
 /// 4/(9√3) = 0.2566 times it for small spacing.
 pub fn profile_roughness(radius_mm: f64, spacing_mm: f64) -> (f64, f64, f64) {
-    let lc = sampling_length_mm(spacing_mm);
-    // Points per half period so that crests (half periods) fall on samples.
-    let mut half_steps = (0.5 * spacing_mm / PROFILE_STEP_MM).ceil().max(1.0);
-    let total_len = 5.0 * lc;
-    // Keep the profile under ~2 M points even for tiny spacings.
-    while total_len / (0.5 * spacing_mm / half_steps) > 2.0e6 && half_steps > 1.0 {
-        half_steps = (half_steps / 2.0).ceil();
-    }
-    let dx = 0.5 * spacing_mm / half_steps;
-    let n = (total_len / dx).round().max(2.0) as usize;
-    let per_len = ((lc / dx).round() as usize).max(1);
-    let z = |i: usize| -> f64 {
-        let x = i as f64 * dx;
-        let k = (x / spacing_mm).round();
-        let u = x - k * spacing_mm;
-        crest_height_mm(radius_mm, 2.0 * u.abs()) * 1e3
+    let arc = |u: f64| {
+        let d = if u > 0.5 * spacing_mm {
+            spacing_mm - u
+        } else {
+            u
+        };
+        crest_height_mm(radius_mm, 2.0 * d)
     };
-    let heights: Vec<f64> = (0..=n).map(z).collect();
-    let mean = heights.iter().sum::<f64>() / heights.len() as f64;
-    let ra = heights.iter().map(|h| (h - mean).abs()).sum::<f64>() / heights.len() as f64;
-    let mut rz_sum = 0.0;
-    for part in 0..5 {
-        let lo = part * per_len;
-        let hi = ((part + 1) * per_len).min(n);
-        let seg = &heights[lo.min(n)..=hi];
-        let max = seg.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let min = seg.iter().copied().fold(f64::INFINITY, f64::min);
-        rz_sum += max - min;
-    }
-    (rz_sum / 5.0, ra, lc)
+    let (rz, ra, lc, _) = periodic_roughness(spacing_mm, spacing_mm, &arc);
+    (rz, ra, lc)
 }
 
-/// The `crest` model for one case: a ball-end `cutter` (with its run-out) at lead
-/// `lead_deg` on a plane or on a surface of local radius `surface_radius_mm` (feed
-/// direction) on `side`, fed at `fz_mm` per tooth.
+/// The `crest` model for one case: `cutter` (with its run-out) at lead `lead_deg`, depth of
+/// cut `ap_mm` and `fz_mm` per tooth, on a plane or on a surface of local radius
+/// `surface_radius_mm` (feed direction) on `side`; teeth by `rule`.
 ///
-/// * The generating point of a ball end at lead β lies at polar angle β from the axis, at
-///   height z_c = R(1 − cos β); the tooth radii are compared there (Eq 8).
-/// * fz_eff = fz·Z/zc (Eq 7) is the mark spacing on the surface (feed at the contact point).
-/// * On a curved surface of radius Rs the profile is approximated by arcs of the relative
-///   (osculating) radius R·Rs/(Rs ± R) (+ convex, − concave) spaced fz_eff, so that
-///   hc ≈ fz_eff²/8·(1/R ± 1/Rs), the curved-surface correction of model.md §7 (second order
-///   in the spacing; exact on a plane).
+/// * [`crate::tool::analyse`] gives the generating height, the local tooth radii, the
+///   participating teeth, fz_eff = fz·Z/zc (Eq 7) and the crest (Eq 14 at fz_eff for the
+///   paper rule, the exact envelope for the exact rule), and the effective radius.
+/// * The feed-direction profile: paper rule, the nominal profile repeated every fz_eff;
+///   exact rule, the lower envelope of every tooth's profile (its normal deviation included)
+///   at its own mark positions, period Z·fz. Rz and Ra are computed on it (see
+///   [`profile_roughness`]).
+/// * On a curved surface of radius Rs (ball end only) the arcs take the relative radius
+///   R·Rs/(Rs ± R) (+ convex, − concave), so hc ≈ fz_eff²/8·(1/R ± 1/Rs), the curved-surface
+///   correction of model.md §7, with the marks fz_eff apart on the surface (second order in
+///   the spacing; exact on a plane).
 pub fn crest_model(
     cutter: &Cutter,
     lead_deg: f64,
+    ap_mm: f64,
     fz_mm: f64,
+    rule: Rule,
     side: Side,
     surface_radius_mm: Option<f64>,
 ) -> Result<CrestPrediction, String> {
-    if !matches!(cutter.shape, crate::tool::Shape::Ball) {
-        return Err("the crest model supports ball-end tools only".to_string());
-    }
+    use crate::tool::{FeedProfile, feed_profile, mark_positions_mm, normal_deviation_mm};
+    let a = crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule.to_tool())
+        .map_err(|e| e.to_string())?;
     let r = cutter.radius_mm;
-    let beta = lead_deg.to_radians();
-    let z = r * (1.0 - beta.cos());
-    let teeth = participating_teeth(cutter, z, fz_mm);
-    let zc = teeth.len().max(1);
-    let fz_eff = fz_mm * cutter.teeth() as f64 / zc as f64;
-    let (spacing, arc_radius) = match (side, surface_radius_mm) {
-        (Side::Convex, Some(rs)) => (fz_eff, r * rs / (rs + r)),
+    let is_ball = matches!(cutter.shape, crate::tool::Shape::Ball);
+    let arc_radius = match (side, surface_radius_mm) {
+        (Side::Plane, _) | (_, None) => r,
+        (_, Some(_)) if !is_ball => {
+            return Err("the curvature correction needs a ball-end tool".to_string());
+        }
+        (Side::Convex, Some(rs)) => r * rs / (rs + r),
         (Side::Concave, Some(rs)) => {
             if rs <= r {
                 return Err(format!(
                     "a concave surface of radius {rs} mm is tighter than the tool radius {r} mm"
                 ));
             }
-            (fz_eff, r * rs / (rs - r))
+            r * rs / (rs - r)
         }
-        _ => (fz_eff, r),
     };
-    let crest_um = crest_height_mm(arc_radius, spacing) * 1e3;
-    let (rz_um, ra_um, lc) = profile_roughness(arc_radius, spacing);
+    let lead = lead_deg.to_radians();
+    let profile = if is_ball {
+        FeedProfile::Circle {
+            radius_mm: arc_radius,
+        }
+    } else {
+        feed_profile(r, cutter.corner_radius_mm(), lead)
+    };
+    let fz_eff = a.fz_effective_mm;
+    let (rz, ra, lc, crest_mm) = match rule {
+        Rule::Paper => {
+            let h = |u: f64| {
+                (-1..=2)
+                    .map(|k| profile.height(u - f64::from(k) * fz_eff))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(fz_eff, fz_eff, &h);
+            let crest = if arc_radius == r {
+                a.crest_height_corrected_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+        Rule::Exact => {
+            let period = cutter.teeth() as f64 * fz_mm;
+            let pos = mark_positions_mm(cutter, fz_mm);
+            let dev: Vec<f64> = (0..cutter.teeth())
+                .map(|j| normal_deviation_mm(cutter, j, a.generating_height_mm, lead))
+                .collect();
+            let h = |u: f64| {
+                let mut best = f64::INFINITY;
+                for (p, d) in pos.iter().zip(&dev) {
+                    for k in [-1.0, 0.0, 1.0] {
+                        let x = u - p.rem_euclid(period) - k * period;
+                        let v = match profile {
+                            FeedProfile::Circle { radius_mm } => FeedProfile::Circle {
+                                radius_mm: (radius_mm + d).max(0.0),
+                            }
+                            .height(x),
+                            _ => profile.height(x),
+                        } - d;
+                        best = best.min(v);
+                    }
+                }
+                best
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(period, fz_eff, &h);
+            let crest = if arc_radius == r {
+                a.crest_height_exact_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+    };
     Ok(CrestPrediction {
-        generating_height_mm: z,
-        tooth_radius_mm: (0..cutter.teeth())
-            .map(|j| cutter.tooth_radius(j, z))
+        rule: rule.name().to_string(),
+        generating_height_mm: a.generating_height_mm,
+        tooth_radius_mm: a.teeth.iter().map(|t| t.local_radius_mm).collect(),
+        teeth: a
+            .teeth
+            .iter()
+            .filter(|t| t.participates)
+            .map(|t| t.index)
             .collect(),
-        teeth: teeth.iter().map(|j| j + 1).collect(),
-        zc,
-        nominal_crest_um: crest_height_mm(r, fz_mm) * 1e3,
+        zc: a.zc,
+        nominal_crest_um: a.crest_height_mm * 1e3,
         fz_eff_mm: fz_eff,
-        spacing_mm: spacing,
         arc_radius_mm: arc_radius,
-        crest_um,
-        rz_um,
-        ra_um,
+        crest_um: crest_mm * 1e3,
+        rz_um: rz,
+        ra_um: ra,
         sampling_length_mm: lc,
+        effective_radius_mm: a.effective_radius_mm,
+        contact_radius_mm: a.contact_radius_mm,
+        cutting_speed_ratio: a.cutting_speed_ratio,
     })
 }
 
@@ -880,7 +1006,7 @@ pub struct Regression {
     /// Run-out description (one line).
     pub runout: String,
     /// Depth of cut, mm.
-    pub ap_mm: Option<f64>,
+    pub ap_mm: f64,
     /// Nominal cutting speed, m/min.
     pub cutting_speed_m_min: Option<f64>,
     /// Tolerance, percent of the measured mean.
@@ -951,8 +1077,16 @@ pub fn regress(
         let fz = c.fz_mm.unwrap_or(study.fz_mm);
         let model = c.model.unwrap_or(study.model);
         let prediction = match model {
-            Model::Crest => crest_model(cutter, c.lead_deg, fz, c.side, c.surface_radius_mm)
-                .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
+            Model::Crest => crest_model(
+                cutter,
+                c.lead_deg,
+                study.ap_mm,
+                fz,
+                study.rule,
+                c.side,
+                c.surface_radius_mm,
+            )
+            .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
         };
         let mut comparisons = Vec::new();
         if let Some(rz) = m.rz {
@@ -1113,7 +1247,7 @@ const TABLE_HEAD: [&str; 10] = [
     "result",
 ];
 
-fn model_rows(r: &Regression) -> Vec<[String; 8]> {
+fn model_rows(r: &Regression) -> Vec<[String; 10]> {
     r.cases
         .iter()
         .map(|c| {
@@ -1126,18 +1260,20 @@ fn model_rows(r: &Regression) -> Vec<[String; 8]> {
             [
                 fmt_g(c.lead_deg),
                 c.side.name().to_string(),
-                c.model.name().to_string(),
+                format!("{} ({} rule)", c.model.name(), p.rule),
                 format!("{:.4}", p.generating_height_mm),
                 radii.join(" / "),
                 format!("{} (zc = {})", teeth_list(p), p.zc),
                 format!("{} → {}", fmt_g(c.fz_mm), fmt_g(p.fz_eff_mm)),
                 format!("{:.4}", p.crest_um),
+                format!("{:.3} / {:.3}", p.contact_radius_mm, p.effective_radius_mm),
+                format!("{:.1}", 100.0 * p.cutting_speed_ratio),
             ]
         })
         .collect()
 }
 
-const MODEL_HEAD: [&str; 8] = [
+const MODEL_HEAD: [&str; 10] = [
     "lead (°)",
     "side",
     "model",
@@ -1146,6 +1282,8 @@ const MODEL_HEAD: [&str; 8] = [
     "participating teeth",
     "fz → fz_eff (mm)",
     "crest hc (µm)",
+    "R at contact / R_ef,max (mm)",
+    "Vc,ef,max (% of Vc)",
 ];
 
 /// Ranges of measured/simulated over all comparisons of one parameter.
@@ -1219,18 +1357,21 @@ fn method_text(r: &Regression) -> Vec<String> {
         "Measured: mean and sample standard deviation σ (n − 1 convention) of the samples of \
          each case, as 002 Table 2 prints them."
             .to_string(),
-        "Crest model (002 §3.3): the generating point of a ball end at lead β lies at height \
-         z = R(1 − cos β); the teeth whose local radius r_j(z) (run-out included) exceeds \
-         max r_j − hc(fz) cut (002 Eq 8, the paper's rule; hc is Eq 14 at the programmed fz); \
-         the marks are fz_eff = fz·Z/zc apart (Eq 7); the crest is Eq 14 with fz_eff."
+        "Crest model (002 §3.3, computed by `crest::tool::analyse`): the generating point of a \
+         ball end at lead β lies at height z = R(1 − cos β). Paper rule: the teeth whose local \
+         radius r_j(z) (run-out included) exceeds max r_j − hc(fz) cut (002 Eq 8; hc is Eq 14 \
+         at the programmed fz), the marks are fz_eff = fz·Z/zc apart (Eq 7) and the crest is \
+         Eq 14 with fz_eff. Exact rule: the profile is the lower envelope of every tooth's arc \
+         (radius R + Δ_j, Δ_j its run-out along the normal) at its own mark, period Z·fz, and \
+         the crest is its peak-to-valley height (model.md §3.2)."
             .to_string(),
         format!(
-            "Simulated Rz and Ra: computed on the feed-direction profile of circular arcs of the \
-             tool radius spaced fz_eff, sampled every {} µm (or finer, so that every crest and \
+            "Simulated Rz and Ra: computed on that feed-direction profile (paper rule: circular \
+             arcs of the tool radius spaced fz_eff), sampled every {} µm (or finer, so that every crest and \
              valley is a sample) over 5 sampling lengths λc chosen by ISO 4288 from RSm = fz_eff \
              (λc = 0.8 mm for 0.13 < RSm ≤ 0.4 mm). The periodic profile has no form, so no \
              filter is applied: Ra = mean |z − z̄| over the evaluation length, Rz = mean of the \
-             5 peak-to-valley heights (002 Eq 15), which equals the crest hc.",
+             5 peak-to-valley heights (002 Eq 15), which equals the crest hc for evenly spaced marks.",
             fmt_g(PROFILE_STEP_MM * 1e3)
         ),
         "Curvature: without a local surface radius a case is computed as on a plane, so the \
@@ -1245,13 +1386,16 @@ fn method_text(r: &Regression) -> Vec<String> {
             fmt_g(r.tolerance_pct)
         ),
     ];
-    if let (Some(ap), Some(vc)) = (r.ap_mm, r.cutting_speed_m_min) {
-        v.push(format!(
-            "Process (informative, not used by the crest model): ap = {} mm, nominal cutting speed {} m/min.",
-            fmt_g(ap),
-            fmt_g(vc)
-        ));
-    }
+    v.push(format!(
+        "Effective radius (002 Table 3, model.md §6): R_ef,max = R sin(β + acos((R − ap)/R)) at \
+         ap = {} mm; Vc,ef/Vc = R_ef,max/R{}. It does not enter the crest; it shows how close \
+         the slow tool centre is to the cut (plowing).",
+        fmt_g(r.ap_mm),
+        match r.cutting_speed_m_min {
+            Some(vc) => format!(" (nominal Vc = {} m/min)", fmt_g(vc)),
+            None => String::new(),
+        }
+    ));
     v
 }
 
@@ -1500,16 +1644,6 @@ pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
     Ok(svg)
 }
 
-/// The same plot as [`render_plot`] as a PNG file (for inspection; the reports use SVG).
-pub fn render_plot_png(
-    r: &Regression,
-    parameter: &str,
-    path: &std::path::Path,
-) -> Result<(), String> {
-    let root = plotters::prelude::BitMapBackend::new(path, PLOT_SIZE);
-    draw_plot(r, parameter, root)
-}
-
 const PLOT_SIZE: (u32, u32) = (760, 480);
 
 fn draw_plot<DB: plotters::prelude::DrawingBackend>(
@@ -1710,16 +1844,17 @@ mod tests {
     fn curvature_reduces_to_plane_and_orders_sides() {
         let mut c = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
         c.runout.tooth_radius_dev_mm = vec![-0.010, -0.015, -0.024, -0.025];
-        let plane = crest_model(&c, 15.0, 0.05, Side::Plane, None).unwrap();
-        let far = crest_model(&c, 15.0, 0.05, Side::Convex, Some(1e9)).unwrap();
+        let plane = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Plane, None).unwrap();
+        let far = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Convex, Some(1e9)).unwrap();
         assert_relative_eq!(plane.crest_um, far.crest_um, max_relative = 1e-6);
-        let vex = crest_model(&c, 15.0, 0.05, Side::Convex, Some(20.0)).unwrap();
-        let cave = crest_model(&c, 15.0, 0.05, Side::Concave, Some(20.0)).unwrap();
+        let vex = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Convex, Some(20.0)).unwrap();
+        let cave =
+            crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Concave, Some(20.0)).unwrap();
         // Second-order closed form: hc ≈ fz²/8·(1/R ± 1/Rs), + convex.
         let approx = |sign: f64| 0.2 * 0.2 / 8.0 * (1.0 / 5.0 + sign / 20.0) * 1e3;
         assert_relative_eq!(vex.crest_um, approx(1.0), max_relative = 1e-3);
         assert_relative_eq!(cave.crest_um, approx(-1.0), max_relative = 1e-3);
         assert!(vex.crest_um > plane.crest_um && plane.crest_um > cave.crest_um);
-        assert!(crest_model(&c, 15.0, 0.05, Side::Concave, Some(4.0)).is_err());
+        assert!(crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Concave, Some(4.0)).is_err());
     }
 }
