@@ -6,7 +6,13 @@ use super::chain::Joints;
 use super::machine::Limits;
 
 /// Floor on the block length for pure re-orientation blocks, mm (§4).
-pub const EPS_L: f64 = 1e-6;
+///
+/// kinematics.md suggests 1e-6 mm. Every limit scales with L, so the value only sets the
+/// scale of s inside such a block; at 1e-6 mm the per-cycle jerk terms of a rotation block
+/// fall to a few ULP of s (about 1e-15 mm at s ≈ 5 mm) and the feasibility tests of the
+/// interpolator lose their precision. 1e-3 mm keeps them well resolved and changes the
+/// block time by less than a microsecond.
+pub const EPS_L: f64 = 1e-3;
 
 /// The constraint that limits a block or a posture.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -116,6 +122,9 @@ impl Blocks {
         };
         let mut s = 0.0;
         b.start.push(0.0);
+        // Direction used for the junction on each side of a block: a block with no motion
+        // at all (a repeated posture) carries its predecessor's, so it is transparent.
+        let mut g_junction: Vec<Joints> = Vec::with_capacity(nb);
         for k in 0..nb {
             let (p, q) = (positions[k], positions[k + 1]);
             let dl = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
@@ -142,8 +151,11 @@ impl Blocks {
                     }
                 }
             }
+            let still = dl < EPS_L && g.iter().all(|x| x.abs() < 1e-12);
+            g_junction.push(if still && k > 0 { g_junction[k - 1] } else { g });
             let f = feed.get(k).copied().unwrap_or(f64::INFINITY);
-            let cyc = if settings.min_block_cycles > 0.0 {
+            // The NC drops blocks without motion, so the block-cycle rule skips them.
+            let cyc = if settings.min_block_cycles > 0.0 && !still {
                 l / (settings.min_block_cycles * settings.cycle_time)
             } else {
                 f64::INFINITY
@@ -159,13 +171,13 @@ impl Blocks {
             }
             if !v.is_finite() {
                 // No axis moves, no feed and no block-cycle rule: the block is free.
-                v = 1e12;
+                v = 1e9;
             }
             if !a.is_finite() {
-                a = 1e12;
+                a = 1e9;
             }
             if !j.is_finite() {
-                j = 1e15;
+                j = 1e12;
             }
             b.len.push(l);
             s += l;
@@ -180,11 +192,16 @@ impl Blocks {
         }
         for p in 1..nb {
             let mut c = b.vbar[p - 1].min(b.vbar[p]);
+            if c >= 1e9 {
+                // Between two free blocks.
+                c = 1e9;
+            }
             let lmin = b.len[p - 1].min(b.len[p]);
             let mut junction = false;
             for i in 0..5 {
-                let dg = (b.g[p][i] - b.g[p - 1][i]).abs();
-                if dg <= 1e-12 * (b.g[p][i].abs() + b.g[p - 1][i].abs()) || dg == 0.0 {
+                let (gp, gm) = (g_junction[p][i], g_junction[p - 1][i]);
+                let dg = (gp - gm).abs();
+                if dg <= 1e-12 * (gp.abs() + gm.abs()) || dg == 0.0 {
                     continue;
                 }
                 let lim = &limits[i];
@@ -258,7 +275,10 @@ mod tests {
     fn r5_inverse_time_limits() {
         // model.md R5: ΔX = 1 mm, ΔA = 0.5°, Vf = 5 m/min: v̂ ≤ 83.333 s⁻¹ (F binds),
         // â ≤ 2160 s⁻², ĵ ≤ 40000 s⁻³. With L = 1 mm, v̂ = v̄/L.
-        let b = setup(&[[0.0; 5], [1.0, 0.0, 0.0, 0.5f64.to_radians(), 0.0]], 5000.0);
+        let b = setup(
+            &[[0.0; 5], [1.0, 0.0, 0.0, 0.5f64.to_radians(), 0.0]],
+            5000.0,
+        );
         assert_relative_eq!(b.vbar[0] / b.len[0], 83.333333, max_relative = 1e-6);
         assert_eq!(b.vbar_by[0], Limit::Feed);
         assert_relative_eq!(b.abar[0] / b.len[0], 2160.0, max_relative = 1e-6);
@@ -273,7 +293,11 @@ mod tests {
         assert_eq!(b.vbar_by[0], Limit::BlockCycle);
         // 90° XY corner: 1200 mm/min.
         let b = setup(
-            &[[0.0; 5], [50.0, 0.0, 0.0, 0.0, 0.0], [50.0, 50.0, 0.0, 0.0, 0.0]],
+            &[
+                [0.0; 5],
+                [50.0, 0.0, 0.0, 0.0, 0.0],
+                [50.0, 50.0, 0.0, 0.0, 0.0],
+            ],
             5000.0,
         );
         assert_relative_eq!(b.ceil[1] * 60.0, 1200.0, max_relative = 1e-6);
@@ -326,7 +350,11 @@ mod tests {
         let dg = 2.0 * 2.5f64.to_radians().sin();
         let chord = 2.0 * r * 2.5f64.to_radians().sin();
         assert_relative_eq!(off.ceil[36], 20.0 / dg, max_relative = 1e-3);
-        assert_relative_eq!(on.ceil[36], (5000.0 * chord / dg).sqrt(), max_relative = 1e-3);
+        assert_relative_eq!(
+            on.ceil[36],
+            (5000.0 * chord / dg).sqrt(),
+            max_relative = 1e-3
+        );
         let centripetal = (5000.0f64 * r).sqrt();
         assert!((on.ceil[36] / centripetal - 1.0).abs() < 0.01);
         assert!(on.ceil.iter().zip(&off.ceil).all(|(a, b)| a <= b));

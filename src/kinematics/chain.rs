@@ -75,8 +75,12 @@ impl Machine {
 
     /// Indices of the table axes (base → part) and head axes (base → spindle).
     fn sides(&self) -> (Vec<usize>, Vec<usize>) {
-        let t = (0..2).filter(|&i| self.rotary[i].side == Side::Table).collect();
-        let h = (0..2).filter(|&i| self.rotary[i].side == Side::Head).collect();
+        let t = (0..2)
+            .filter(|&i| self.rotary[i].side == Side::Table)
+            .collect();
+        let h = (0..2)
+            .filter(|&i| self.rotary[i].side == Side::Head)
+            .collect();
         (t, h)
     }
 
@@ -266,10 +270,16 @@ impl<'m> IkTracker<'m> {
             None => Some(base),
             Some((lo, hi)) => {
                 let eps = 1e-9;
-                [base, base - TAU, base + TAU, base - 2.0 * TAU, base + 2.0 * TAU]
-                    .into_iter()
-                    .filter(|v| *v >= lo - eps && *v <= hi + eps)
-                    .min_by(|a, b| (a - reference).abs().total_cmp(&(b - reference).abs()))
+                [
+                    base,
+                    base - TAU,
+                    base + TAU,
+                    base - 2.0 * TAU,
+                    base + 2.0 * TAU,
+                ]
+                .into_iter()
+                .filter(|v| *v >= lo - eps && *v <= hi + eps)
+                .min_by(|a, b| (a - reference).abs().total_cmp(&(b - reference).abs()))
             }
         }
     }
@@ -295,7 +305,11 @@ impl<'m> IkTracker<'m> {
                     }
                 };
                 // The first posture: reference 0 so the angles come out near home.
-                let reference = if self.prev.is_some() { prev[3 + i] } else { 0.0 };
+                let reference = if self.prev.is_some() {
+                    prev[3 + i]
+                } else {
+                    0.0
+                };
                 match self.unwind(i, raw, reference) {
                     Some(v) => q[3 + i] = v,
                     None => ok = false,
@@ -312,7 +326,11 @@ impl<'m> IkTracker<'m> {
             } else {
                 // Preference on the first rotary's sign, then small angles.
                 let want_pos = self.machine.branch == BranchPreference::FirstPositive;
-                let wrong = if want_pos { q[3] < -1e-12 } else { q[3] > 1e-12 };
+                let wrong = if want_pos {
+                    q[3] < -1e-12
+                } else {
+                    q[3] > 1e-12
+                };
                 (if wrong { 1e3 } else { 0.0 }) + q[3].abs() + q[4].abs()
             };
             if best.as_ref().is_none_or(|(c, ..)| cost < *c - 1e-12) {
@@ -405,7 +423,7 @@ mod tests {
             last = q;
         }
         assert_eq!(ik.switches, 0);
-        // 1000° of azimuth unwound, no wrap.
-        assert!(last[4].to_degrees().abs() > 990.0);
+        // C = 90° − azimuth, unwound over 1000° of azimuth: no wrap.
+        assert_relative_eq!(last[4].to_degrees(), 90.0 - 1000.0, epsilon = 1e-9);
     }
 }

