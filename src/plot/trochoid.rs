@@ -176,7 +176,8 @@ impl Figure<'_> {
                 label_font(),
             )
             .margin(10)
-            .margin_right(60)
+            .margin_left(40)
+            .margin_right(70)
             // plotters' 3-D axes: x, y (up), z. We map (feed, normal, lateral).
             .build_cartesian_3d(r(0), r(2), r(1))?;
         chart.with_projection(|mut pb| {
@@ -413,14 +414,16 @@ pub fn plot_trochoids(
     }
     if o.leads_rad.is_empty()
         || o.leads_rad.len() > 4
-        || o.leads_rad.iter().any(|b| !(b.abs() < 1.5))
+        || o.leads_rad.iter().any(|b| b.is_nan() || b.abs() >= 1.5)
     {
         return bad("give one to four lead angles below 85°");
     }
-    if o.passes == 0 || o.passes > 20 || !(o.stepover_mm >= 0.0) {
+    if o.passes == 0 || o.passes > 20 || o.stepover_mm.is_nan() || o.stepover_mm < 0.0 {
         return bad("passes must be 1 to 20 and the stepover not negative");
     }
-    if !(o.fz_mm > 0.0) || o.crest_fz_mm.iter().any(|f| !(*f > 0.0)) || o.crest_fz_mm.is_empty() {
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !positive(o.fz_mm) || o.crest_fz_mm.iter().any(|f| !positive(*f)) || o.crest_fz_mm.is_empty()
+    {
         return bad("feeds per tooth must be positive");
     }
     if !(o.revolutions > 0.0 && o.revolutions <= 50.0) || o.points_per_rev < 8 {
