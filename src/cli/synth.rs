@@ -108,36 +108,7 @@ pub(super) fn load_cutter(path: &Path) -> miette::Result<Cutter> {
     let text = std::fs::read_to_string(path)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot read {}", path.display()))?;
-    shim::load_tool_toml(&text).map_err(|e| miette!("{}: {e}", path.display()))
-}
-
-// TEMPORARY until the tool helper's loader lands on main.
-mod shim {
-    use crate::tool::{Cutter, Shape};
-    #[derive(serde::Deserialize)]
-    struct T {
-        shape: String,
-        radius_mm: f64,
-        corner_radius_mm: Option<f64>,
-        teeth: usize,
-        helix_deg: f64,
-    }
-    pub fn load_tool_toml(text: &str) -> Result<Cutter, String> {
-        let t: T = toml::from_str(text).map_err(|e| e.to_string())?;
-        let shape = match t.shape.as_str() {
-            "ball" => Shape::Ball,
-            "flat" => Shape::Flat,
-            _ => Shape::Torus {
-                corner_radius_mm: t.corner_radius_mm.unwrap_or(0.0),
-            },
-        };
-        Ok(Cutter::new(
-            shape,
-            t.radius_mm,
-            t.teeth,
-            t.helix_deg.to_radians(),
-        ))
-    }
+    crate::tool::load_tool_toml(&text).map_err(|e| miette!("{}: {e}", path.display()))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
