@@ -172,3 +172,68 @@ fn unknown_picture_format_is_a_usage_error() {
         .code(2);
     assert!(!out.exists());
 }
+
+#[test]
+fn feed_and_crest_along_a_synthetic_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let cls = dir.path().join("p.cls");
+    crest()
+        .args([
+            "synth",
+            "plane",
+            "--lead-deg",
+            "15",
+            "--stepover-mm",
+            "2",
+            "--size-mm",
+            "10,4",
+        ])
+        .args(["--feed-mm-min", "4000", "--rpm", "10000", "--tool"])
+        .arg(sample("ball-r5.toml"))
+        .arg("-o")
+        .arg(&cls)
+        .assert()
+        .success();
+    let svg = dir.path().join("f.svg");
+    let out = crest()
+        .args(["plot", "feed"])
+        .arg(&cls)
+        .args(["--json", "-o"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    // 3 passes of 21 CC points, each run starting at its clearance point.
+    assert_eq!(v["points"], 3 * 22);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for t in ["Feed along p.cls", "feed [mm/min]", "path length [mm]"] {
+        assert!(text.contains(t), "missing {t}");
+    }
+    // fz = 4000 / (4 · 10000) = 0.1 mm on R = 5: 0.250006 µm (model.md R2).
+    let out = crest()
+        .args(["plot", "feed", "--crest", "--tool"])
+        .arg(sample("ball-r5.toml"))
+        .arg(&cls)
+        .args(["--json", "-o"])
+        .arg(dir.path().join("c.png"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in ["crest_um_min", "crest_um_max"] {
+        assert!(
+            (v[k].as_f64().unwrap() - 0.250006).abs() < 1e-6,
+            "{k}: {}",
+            v[k]
+        );
+    }
+}

@@ -22,7 +22,6 @@ fn synth(args: &[&str], tool: &str, out: &Path) -> std::process::Output {
         .unwrap()
 }
 
-#[allow(dead_code)] // used by the writer round-trip tests
 fn json(out: &std::process::Output) -> serde_json::Value {
     assert!(
         out.status.success(),
@@ -30,6 +29,100 @@ fn json(out: &std::process::Output) -> serde_json::Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn r6_trials_give_the_exact_steps() {
+    // model.md R6 (R = 5, rc = 1.5): exact steps 2.7850, 1.3115, 1.2385 mm.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.cls");
+    for (tilt, yaw, h, step, passes) in [
+        ("1", "0", "5", 2.7850, 5),
+        ("10", "0", "10", 1.3115, 9),
+        ("10", "20", "10", 1.2385, 10),
+    ] {
+        let o = synth(
+            &[
+                "plane",
+                "--tilt-deg",
+                tilt,
+                "--yaw-deg",
+                yaw,
+                "--scallop-um",
+                h,
+                "--feed-mm-min",
+                "4000",
+                "--rpm",
+                "15000",
+                "--size-mm",
+                "20,10",
+                "--json",
+            ],
+            "torus-r5-rc1.5.toml",
+            &out,
+        );
+        let v = json(&o);
+        let s = v["stepover_mm"].as_f64().unwrap();
+        assert!((s - step).abs() < 1e-3, "{s} vs {step}");
+        assert_eq!(v["passes"], passes);
+        let text = std::fs::read_to_string(&out).unwrap();
+        for word in [
+            "TOOL PATH/",
+            "TLDATA/MILL",
+            "FEDRAT/",
+            "SPINDL/",
+            "RAPID",
+            "GOTO/",
+        ] {
+            assert!(text.contains(word), "no {word} in the CLSF");
+        }
+        assert_eq!(text.matches("RAPID").count(), 2 * passes);
+    }
+}
+
+#[test]
+fn contact12_has_one_line_per_contact_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.txt");
+    let v = json(&synth(
+        &[
+            "extruded-parabola",
+            "--lead-deg",
+            "15",
+            "--stepover-mm",
+            "2",
+            "--pass-angle-deg",
+            "45",
+            "--zigzag",
+            "--feed-mm-min",
+            "5000",
+            "--rpm",
+            "15000",
+            "--json",
+        ],
+        "ball-r5.toml",
+        &out,
+    ));
+    // 10 × 10 mm field, 2 mm apart: 6 passes of 21 points (0.5 mm step).
+    assert_eq!(v["passes"], 6);
+    assert_eq!(v["points_per_pass"], 21);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter_map(|l| {
+            let f: Option<Vec<f64>> = l.split(',').map(|x| x.trim().parse().ok()).collect();
+            f
+        })
+        .collect();
+    assert_eq!(rows.len(), 6 * 21);
+    for r in rows {
+        assert_eq!(r.len(), 12);
+        // CC on z = −0.004 x² + 0.1; ball: CL = CC + R n − R a.
+        assert!((r[8] - (0.1 - 0.004 * r[6] * r[6])).abs() < 2e-4);
+        for k in 0..3 {
+            assert!((r[k] - (r[6 + k] + 5.0 * r[9 + k] - 5.0 * r[3 + k])).abs() < 5e-4);
+        }
+    }
 }
 
 #[test]

@@ -137,6 +137,9 @@ pub struct FeedArgs {
     /// Spindle speed, rpm (default: the path's SPINDL).
     #[arg(long)]
     pub rpm: Option<f64>,
+    /// Feed, mm/min, where the path states none (contact12 has no feed).
+    #[arg(long)]
+    pub feed_mm_min: Option<f64>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -372,7 +375,7 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             }
             let p = &tp.postures[i];
             s.push(len);
-            feed.push(p.feed_mm_min.unwrap_or(f64::NAN));
+            feed.push(p.feed_mm_min.or(a.feed_mm_min).unwrap_or(f64::NAN));
             rpm.push(a.rpm.or(p.spindle_rpm).unwrap_or(f64::NAN));
         }
     }
@@ -392,7 +395,7 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             .collect();
         if crest.iter().all(|c| !c.is_finite()) {
             return Err(miette!(
-                "{}: no feed and spindle speed to compute fz (give --rpm)",
+                "{}: no feed and spindle speed to compute fz (give --feed-mm-min and --rpm)",
                 a.path.display()
             ));
         }
@@ -403,10 +406,13 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             .unwrap_or_else(|| format!("Feed-mark crest height along {name}"));
         feed::plot_crest_along_path(&title, &s, &[("programmed feed", &crest)], &a.common.output)
             .map_err(|e| miette!("{e}"))?;
+        let finite = crest.iter().cloned().filter(|c| c.is_finite());
+        let lo = finite.clone().fold(f64::INFINITY, f64::min);
+        let hi = finite.fold(f64::NEG_INFINITY, f64::max);
         return done(
             &a.common,
             "crest",
-            serde_json::json!({ "points": len_points(&s) }),
+            serde_json::json!({ "points": len_points(&s), "crest_um_min": lo, "crest_um_max": hi }),
         );
     }
     let mut series = vec![Series::new("programmed", &s, &feed)];

@@ -179,7 +179,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let written = crate::io::write_atomic(&args.output, |w| match kind {
         OutKind::Clsf => crate::toolpath::write_clsf(program, w),
         OutKind::Contact12 => match program.paths.first() {
-            Some(p) => crate::toolpath::write_contact12(p, false, w),
+            // Every move, so that the clearance moves between passes survive.
+            Some(p) => crate::toolpath::write_contact12(p, true, w),
             None => Ok(()),
         },
     });
@@ -188,9 +189,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
 
     let postures: usize = program.paths.iter().map(|p| p.postures.len()).sum();
-    let (tilt_deg, yaw_deg) = match orientation {
-        Orientation::Lead { lead_rad } => (lead_rad.to_degrees(), 0.0),
-        Orientation::TiltYaw { tilt_rad, yaw_rad } => (tilt_rad.to_degrees(), yaw_rad.to_degrees()),
+    let (tilt_deg, yaw_deg) = match args.lead_deg {
+        Some(lead) => (lead, 0.0),
+        None => (args.tilt_deg.unwrap_or(0.0), args.yaw_deg.unwrap_or(0.0)),
     };
     if args.json {
         let report = serde_json::json!({
@@ -225,4 +226,80 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
     }
     Ok(Outcome::Ok)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synth::Surface;
+    use crate::tool::Shape;
+    use crate::toolpath::MotionKind;
+
+    /// Write a synthetic path through the CLI's writer choice and read it back with the
+    /// reader every command uses: the same postures (to the written precision).
+    fn round_trip(ext: &str) {
+        let cutter = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
+        let mut spec = PathSpec::new(
+            Surface::default_blade(),
+            cutter,
+            Orientation::TiltYaw {
+                tilt_rad: 10f64.to_radians(),
+                yaw_rad: 20f64.to_radians(),
+            },
+            Step::Scallop { height_mm: 0.002 },
+            (10.0, 4.0),
+        );
+        spec.pattern = Pattern::Zigzag;
+        spec.pass_angle_rad = 0.4;
+        spec.point_step_mm = 1.0;
+        let synth = generate(&spec).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join(format!("p.{ext}"));
+        let kind = out_kind(&out).unwrap();
+        crate::io::write_atomic(&out, |w| match kind {
+            OutKind::Clsf => crate::toolpath::write_clsf(&synth.program, w),
+            OutKind::Contact12 => {
+                crate::toolpath::write_contact12(&synth.program.paths[0], true, w)
+            }
+        })
+        .unwrap();
+        let back = super::super::input::read_program(&out).unwrap();
+        let (a, b) = (&synth.program.paths[0], &back.paths[0]);
+        assert_eq!(a.postures.len(), b.postures.len());
+        assert_eq!(a.cutting_runs(), b.cutting_runs());
+        for (p, q) in a.postures.iter().zip(&b.postures) {
+            assert_eq!(p.motion, q.motion);
+            assert!(
+                (p.position - q.position).norm() < 2e-6,
+                "{:?} {:?}",
+                p.position,
+                q.position
+            );
+            assert!((p.axis - q.axis).norm() < 1e-6);
+            match (&p.contact, &q.contact) {
+                (Some(c), Some(d)) => {
+                    assert!((c.point - d.point).norm() < 2e-6);
+                    assert!((c.normal - d.normal).norm() < 1e-6);
+                }
+                (None, None) => {}
+                _ => panic!("contact data lost at {:?}", p.position),
+            }
+            // The writer states FEDRAT before the first feed move; rapids carry no feed.
+            if kind == OutKind::Clsf && p.motion == MotionKind::Cut {
+                assert_eq!(p.feed_mm_min, q.feed_mm_min);
+                assert_eq!(p.spindle_rpm, q.spindle_rpm);
+            }
+        }
+        assert!(b.postures.iter().any(|p| p.motion == MotionKind::Cut));
+    }
+
+    #[test]
+    fn clsf_round_trip_keeps_postures() {
+        round_trip("cls");
+    }
+
+    #[test]
+    fn contact12_round_trip_keeps_postures() {
+        round_trip("txt");
+    }
 }

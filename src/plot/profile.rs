@@ -110,6 +110,15 @@ pub(crate) fn finite_range<'a>(
     Some((lo - margin, hi + margin))
 }
 
+/// Decimals for tick labels on an axis spanning `span`: about three significant digits
+/// of the tick step.
+pub(crate) fn tick_decimals(span: f64) -> usize {
+    if !(span.is_finite() && span > 0.0) {
+        return 1;
+    }
+    (1.0 - span.log10().floor()).clamp(0.0, 6.0) as usize
+}
+
 /// A title font.
 pub(crate) fn title_font() -> TextStyle<'static> {
     (FONT, 24).into_font().into()
@@ -211,8 +220,13 @@ impl Draw for LineChart {
             .x_label_area_size(55)
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)?;
+        let (dx, dy) = (tick_decimals(x1 - x0), tick_decimals(y1 - y0));
+        let fx = move |v: &f64| format!("{v:.dx$}");
+        let fy = move |v: &f64| format!("{v:.dy$}");
         chart
             .configure_mesh()
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .axis_desc_style(label_font())
@@ -297,6 +311,14 @@ mod tests {
         assert_eq!(finite_range(&[f64::NAN], 0.0), None);
         let (lo, hi) = finite_range(&[2.0, 2.0], 0.1).unwrap();
         assert!(lo < 2.0 && hi > 2.0);
+    }
+
+    #[test]
+    fn tick_decimals_follow_the_span() {
+        assert_eq!(tick_decimals(500.0), 0);
+        assert_eq!(tick_decimals(5.0), 1);
+        assert_eq!(tick_decimals(0.05), 3);
+        assert_eq!(tick_decimals(f64::NAN), 1);
     }
 
     #[test]

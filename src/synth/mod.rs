@@ -26,9 +26,12 @@
 //! and converted to a drive-plane spacing; the smallest spacing over the field is used,
 //! so the scallop nowhere exceeds the target (to the accuracy of the curvature correction).
 //!
-//! **Links.** Each pass starts with a RAPID down to its first CL point from a clearance
-//! point along the tool axis and ends with a RAPID back up; the moves along a pass are
-//! cutting moves with contact data, so every pass is one cutting run.
+//! **Links.** Each pass starts with a RAPID to a clearance point along the tool axis above
+//! its first CL point, engages at feed along the axis to that point, cuts through its CC
+//! points and ends with a RAPID back up along the axis. Every move that reaches a CC point
+//! is a cutting move with contact data, and each pass is one cutting run (starting at its
+//! clearance point), so CLSF and contact12 (with its blank non-cutting rows) read back the
+//! same.
 
 pub mod envelope;
 mod surface;
@@ -343,18 +346,13 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         let approach = first.0 + first.1 * spec.clearance_mm;
         let retract = last.0 + last.1 * spec.clearance_mm;
         postures.push(posture(approach, first.1, MotionKind::Rapid, None));
-        for (i, (tip, axis, st)) in pass.iter().enumerate() {
-            let motion = if i == 0 {
-                MotionKind::Rapid
-            } else {
-                MotionKind::Cut
-            };
+        for (tip, axis, st) in &pass {
             let contact = Contact {
                 point: st.cc,
                 normal: st.normal,
                 normal_derived: false,
             };
-            postures.push(posture(*tip, *axis, motion, Some(contact)));
+            postures.push(posture(*tip, *axis, MotionKind::Cut, Some(contact)));
         }
         postures.push(posture(retract, last.1, MotionKind::Rapid, None));
     }
@@ -373,6 +371,7 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         tool: Some(tool),
         msys: None,
         postures,
+        ..Default::default()
     };
     Ok(Synthetic {
         program: Program {
@@ -489,7 +488,7 @@ mod tests {
         let ys: Vec<f64> = path
             .cutting_runs()
             .iter()
-            .map(|r| path.postures[r.start].contact.as_ref().unwrap().point.y)
+            .map(|r| path.postures[r.start + 1].contact.as_ref().unwrap().point.y)
             .collect();
         for w in ys.windows(2) {
             assert_relative_eq!(w[1] - w[0], s.stepover_mm, epsilon = 1e-12);
@@ -617,7 +616,11 @@ mod tests {
         assert_eq!(s.passes, 5);
         let path = &s.program.paths[0];
         for (k, r) in path.cutting_runs().iter().enumerate() {
-            let a = &path.postures[r.start];
+            assert!(
+                path.postures[r.start].contact.is_none(),
+                "the run starts at clearance"
+            );
+            let a = &path.postures[r.start + 1];
             let b = &path.postures[r.end - 1];
             let dx = b.position.x - a.position.x;
             assert_eq!(dx > 0.0, k % 2 == 0);
