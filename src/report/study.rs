@@ -51,8 +51,12 @@ pub struct Effects {
 /// Eqs 7-8 for one response: `runs` as from [`full_factorial`], `response[run]`.
 /// Runs whose response is not finite are left out of every mean.
 pub fn factor_effects(factors: &[Factor], runs: &[Vec<usize>], response: &[f64]) -> Effects {
-    let finite: Vec<(usize, f64)> =
-        response.iter().copied().enumerate().filter(|(_, v)| v.is_finite()).collect();
+    let finite: Vec<(usize, f64)> = response
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|(_, v)| v.is_finite())
+        .collect();
     let mean = if finite.is_empty() {
         f64::NAN
     } else {
@@ -66,15 +70,29 @@ pub fn factor_effects(factors: &[Factor], runs: &[Vec<usize>], response: &[f64])
                 .iter()
                 .filter(|(r, _)| runs[*r][i] == j)
                 .fold((0.0, 0usize), |(s, n), (_, v)| (s + v, n + 1));
-            row.push(if n == 0 { f64::NAN } else { sum / n as f64 - mean });
+            row.push(if n == 0 {
+                f64::NAN
+            } else {
+                sum / n as f64 - mean
+            });
         }
         effects.push(row);
     }
     let relative_first = effects
         .iter()
-        .map(|row| if mean != 0.0 { row.first().copied().unwrap_or(f64::NAN) / mean } else { f64::NAN })
+        .map(|row| {
+            if mean != 0.0 {
+                row.first().copied().unwrap_or(f64::NAN) / mean
+            } else {
+                f64::NAN
+            }
+        })
         .collect();
-    Effects { mean, effects, relative_first }
+    Effects {
+        mean,
+        effects,
+        relative_first,
+    }
 }
 
 #[cfg(test)]
@@ -83,7 +101,10 @@ mod tests {
     use approx::assert_relative_eq;
 
     fn doe16() -> Vec<Factor> {
-        let f = |name: &str, levels: &[f64]| Factor { name: name.into(), levels: levels.to_vec() };
+        let f = |name: &str, levels: &[f64]| Factor {
+            name: name.into(),
+            levels: levels.to_vec(),
+        };
         vec![
             f("yaw_deg", &[0.0, 20.0]),
             f("tilt_deg", &[1.0, 10.0]),
@@ -99,7 +120,11 @@ mod tests {
         assert_eq!(runs.len(), 16);
         // Appendix rows 1, 2, 5, 9 and 16.
         let value = |r: usize| -> Vec<f64> {
-            runs[r].iter().enumerate().map(|(i, &j)| factors[i].levels[j]).collect()
+            runs[r]
+                .iter()
+                .enumerate()
+                .map(|(i, &j)| factors[i].levels[j])
+                .collect()
         };
         assert_eq!(value(0), vec![0.0, 1.0, 5.0, 2000.0]);
         assert_eq!(value(1), vec![0.0, 1.0, 5.0, 4000.0]);
@@ -113,8 +138,10 @@ mod tests {
         // y = 10 + 3·[yaw high] − 2·[feed high]: a balanced design recovers ±1.5 and ∓1.
         let factors = doe16();
         let runs = full_factorial(&factors);
-        let y: Vec<f64> =
-            runs.iter().map(|r| 10.0 + 3.0 * r[0] as f64 - 2.0 * r[3] as f64).collect();
+        let y: Vec<f64> = runs
+            .iter()
+            .map(|r| 10.0 + 3.0 * r[0] as f64 - 2.0 * r[3] as f64)
+            .collect();
         let e = factor_effects(&factors, &runs, &y);
         assert_relative_eq!(e.mean, 10.5, epsilon = 1e-12);
         assert_relative_eq!(e.effects[0][0], -1.5, epsilon = 1e-12);
