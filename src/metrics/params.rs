@@ -259,12 +259,12 @@ pub fn preprocess_map(map: &HeightMap, pp: &Preprocess) -> Result<HeightMap, Met
     let t = pp.trim_um();
     if t > 0.0 {
         let bx = if m.nx > 1 {
-            (t / m.dx_um).ceil() as usize
+            (t / m.dx_um - 1e-6).ceil() as usize
         } else {
             0
         };
         let by = if m.ny > 1 {
-            (t / m.dy_um).ceil() as usize
+            (t / m.dy_um - 1e-6).ceil() as usize
         } else {
             0
         };
@@ -309,7 +309,7 @@ pub fn preprocess_profile(p: &Profile, pp: &Preprocess) -> Result<Profile, Metri
     }
     let t = pp.trim_um();
     if t > 0.0 {
-        let b = (t / p.step_um).ceil() as usize;
+        let b = (t / p.step_um - 1e-6).ceil() as usize;
         if 2 * b >= z.len() {
             return Err(MetricsError::BadSetting(format!(
                 "trimming {t} µm at each end leaves nothing of a {} µm profile",
