@@ -75,11 +75,14 @@ fn reflect(i: isize, n: usize) -> usize {
 /// Kernels longer than this use FFT convolution.
 const DIRECT_MAX_RADIUS: usize = 48;
 
+/// FFT plans (forward, inverse), the kernel's spectrum and the transform length.
+type FftConv = (Arc<dyn Fft<f64>>, Arc<dyn Fft<f64>>, Vec<Complex64>, usize);
+
 /// A line filter reusable over many lines of one length.
 struct LineFilter {
     w: Vec<f64>,
     radius: usize,
-    fft: Option<(Arc<dyn Fft<f64>>, Arc<dyn Fft<f64>>, Vec<Complex64>, usize)>,
+    fft: Option<FftConv>,
 }
 
 impl LineFilter {
@@ -194,12 +197,12 @@ pub fn gaussian_filter_map(map: &HeightMap, cutoff_um: f64) -> HeightMap {
         let mut col = vec![0.0; ny];
         let mut res = vec![0.0; ny];
         for c in 0..nx {
-            for r in 0..ny {
-                col[r] = out.z_um[r * nx + c];
+            for (r, v) in col.iter_mut().enumerate() {
+                *v = out.z_um[r * nx + c];
             }
             f.apply(&col, &mut res);
-            for r in 0..ny {
-                out.z_um[r * nx + c] = res[r];
+            for (r, v) in res.iter().enumerate() {
+                out.z_um[r * nx + c] = *v;
             }
         }
     }

@@ -99,7 +99,7 @@ pub fn fit_remove_map(map: &mut HeightMap, degree: u32) -> bool {
     let mut valid = 0usize;
     let mut sx = vec![0.0; 2 * d + 1];
     let mut sz = vec![0.0; d + 1];
-    for r in 0..ny {
+    for (r, &y) in ys.iter().enumerate() {
         sx.iter_mut().for_each(|v| *v = 0.0);
         sz.iter_mut().for_each(|v| *v = 0.0);
         let row = &map.z_um[r * nx..(r + 1) * nx];
@@ -116,7 +116,6 @@ pub fn fit_remove_map(map: &mut HeightMap, degree: u32) -> bool {
                 *s += p[k] * z;
             }
         }
-        let y = ys[r];
         let yp: Vec<f64> = (0..=2 * d).map(|q| y.powi(q as i32)).collect();
         for (i, &(a, b)) in terms.iter().enumerate() {
             atz[i] += yp[b] * sz[a];
@@ -136,8 +135,7 @@ pub fn fit_remove_map(map: &mut HeightMap, degree: u32) -> bool {
     let Some(coef) = solve(ata, atz) else {
         return false;
     };
-    for r in 0..ny {
-        let y = ys[r];
+    for (r, &y) in ys.iter().enumerate() {
         // Coefficient of x^a in this row.
         let mut cx = vec![0.0; d + 1];
         for (i, &(a, b)) in terms.iter().enumerate() {

@@ -118,7 +118,7 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
     let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
     let (cy, cx) = (map.ny - 1, map.nx - 1);
     let r0 = r[cy * wx + cx];
-    if !(r0 > 0.0) {
+    if r0.is_nan() || r0 <= 0.0 {
         return undefined;
     }
     let thr = s * r0;
@@ -184,7 +184,7 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
             for k in 1..=steps {
                 let t = k as f64 / steps as f64;
                 let v = at(cy as f64 + t * vy, cx as f64 + t * vx);
-                if !(v > thr) {
+                if v.is_nan() || v <= thr {
                     let t_prev = (k - 1) as f64 / steps as f64;
                     let f = if v.is_finite() && prev > v {
                         (prev - thr) / (prev - v)
