@@ -13,6 +13,11 @@ use std::f64::consts::TAU;
 /// Below this length (mm) a move is treated as a zero-length move.
 pub(crate) const ZERO_LENGTH_MM: f64 = 1e-12;
 
+/// `x > limit`, false for NaN (reads better negated than `!(x > limit)`).
+pub(crate) fn above(x: f64, limit: f64) -> bool {
+    x > limit
+}
+
 /// Number of sub-intervals of the arc-length table of a Hermite segment.
 const HERMITE_TABLE: usize = 16;
 
@@ -51,7 +56,7 @@ impl Curve {
     pub(crate) fn line(p0: Point3, p1: Point3) -> Option<Curve> {
         let d = p1 - p0;
         let len = d.norm();
-        if !(len > ZERO_LENGTH_MM) {
+        if !above(len, ZERO_LENGTH_MM) {
             return None;
         }
         Some(Curve::Line {
@@ -99,7 +104,7 @@ impl Curve {
         // radius (file rounding) the mean speed is used.
         let r_mean = 0.5 * (r0 + r1);
         let len = sweep * (r_mean * r_mean + dr * dr + dh * dh).sqrt();
-        if !(len > ZERO_LENGTH_MM) || !len.is_finite() {
+        if !above(len, ZERO_LENGTH_MM) || !len.is_finite() {
             return None;
         }
         Some(Curve::Arc {
@@ -120,7 +125,7 @@ impl Curve {
     /// (scaled by the chord); `None` when the chord is shorter than [`ZERO_LENGTH_MM`].
     pub(crate) fn hermite(p0: Point3, p1: Point3, t0: Vec3, t1: Vec3) -> Option<Curve> {
         let chord = (p1 - p0).norm();
-        if !(chord > ZERO_LENGTH_MM) {
+        if !above(chord, ZERO_LENGTH_MM) {
             return None;
         }
         let m0 = t0 * chord;
@@ -138,7 +143,7 @@ impl Curve {
             let b = (j + 1) as f64 / HERMITE_TABLE as f64;
             table[j + 1] = table[j] + curve.hermite_length(a, b);
         }
-        if !(table[HERMITE_TABLE] > ZERO_LENGTH_MM) || !table[HERMITE_TABLE].is_finite() {
+        if !above(table[HERMITE_TABLE], ZERO_LENGTH_MM) || !table[HERMITE_TABLE].is_finite() {
             return None;
         }
         if let Curve::Hermite { table: t, .. } = &mut curve {
@@ -253,7 +258,7 @@ impl Curve {
         for _ in 0..4 {
             let f = sa + self.hermite_length(ua, u) - sigma;
             let speed = hermite_derivative(p0, p1, m0, m1, u).norm();
-            if !(speed > 1e-15) {
+            if !above(speed, 1e-15) {
                 break;
             }
             u = (u - f / speed).clamp(ua, ub);
@@ -308,7 +313,11 @@ mod tests {
         let (mid, tangent) = c.eval(0.5);
         let h = 10.0 / 2f64.sqrt();
         assert_relative_eq!(mid, Point3::new(h, -h, 0.0), epsilon = 1e-12);
-        assert_relative_eq!(tangent, Vec3::new(-1.0, -1.0, 0.0).normalize(), epsilon = 1e-12);
+        assert_relative_eq!(
+            tangent,
+            Vec3::new(-1.0, -1.0, 0.0).normalize(),
+            epsilon = 1e-12
+        );
         // About −z the same ends make three quarters of a turn.
         let c = Curve::arc(
             Point3::new(10.0, 0.0, 0.0),
@@ -340,8 +349,12 @@ mod tests {
         assert!(Curve::arc(Point3::origin(), Point3::new(1.0, 0.0, 0.0), &a).is_none());
         let zero_axis = arc(Point3::origin(), Vec3::zeros(), 0);
         assert!(
-            Curve::arc(Point3::new(1.0, 0.0, 0.0), Point3::new(0.0, 1.0, 0.0), &zero_axis)
-                .is_none()
+            Curve::arc(
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(0.0, 1.0, 0.0),
+                &zero_axis
+            )
+            .is_none()
         );
     }
 

@@ -5,7 +5,7 @@
 //! run is replaced by the exact end) and the last feed direction (a fallback when the
 //! tangent is degenerate).
 
-use super::curve::Curve;
+use super::curve::{Curve, above};
 use super::{AxisInterpolation, Mode, Options, ResampleError, Sample};
 use crate::math::{Point3, Vec3, any_perpendicular, nlerp, normalize_or_none};
 use crate::toolpath::{MotionKind, Posture, Toolpath};
@@ -37,10 +37,10 @@ pub struct Stats {
     pub length_mm: f64,
     /// Cutting time, s.
     pub duration_s: f64,
-    /// Spindle speed used, rpm.
-    pub spindle_rpm: f64,
+    /// Spindle speed used, rpm (`None` when the path has no cutting move).
+    pub spindle_rpm: Option<f64>,
     /// Where the spindle speed came from.
-    pub spindle_source: SpindleSource,
+    pub spindle_source: Option<SpindleSource>,
     /// Lowest feed at a sample, mm/min.
     pub feed_min_mm_min: Option<f64>,
     /// Highest feed at a sample, mm/min.
@@ -95,7 +95,12 @@ pub fn resample_with(
 ) -> Result<Stats, ResampleError> {
     validate(path, opts)?;
     let runs = path.cutting_runs();
-    let (rpm, spindle_source) = resolve_spindle(path, &runs, opts)?;
+    let (rpm, spindle_source) = if runs.is_empty() {
+        (opts.rpm, opts.rpm.map(|_| SpindleSource::Option))
+    } else {
+        let (rpm, source) = resolve_spindle(path, &runs, opts)?;
+        (Some(rpm), Some(source))
+    };
     let mut stats = Stats {
         samples: 0,
         runs: 0,
@@ -122,6 +127,7 @@ pub fn resample_with(
         non_cutting_runs: 0,
     };
     count_non_cutting(path, &mut stats);
+    let rpm = rpm.unwrap_or(0.0);
     let clock = Clock {
         omega: rpm * TAU / 60.0,
         rpm,
@@ -132,8 +138,16 @@ pub fn resample_with(
     let mut emit = |s: &Sample, stats: &mut Stats| {
         stats.samples += 1;
         let fz = s.feed_mm_min / (clock.teeth * clock.rpm);
-        stats.feed_min_mm_min = Some(stats.feed_min_mm_min.map_or(s.feed_mm_min, |m| m.min(s.feed_mm_min)));
-        stats.feed_max_mm_min = Some(stats.feed_max_mm_min.map_or(s.feed_mm_min, |m| m.max(s.feed_mm_min)));
+        stats.feed_min_mm_min = Some(
+            stats
+                .feed_min_mm_min
+                .map_or(s.feed_mm_min, |m| m.min(s.feed_mm_min)),
+        );
+        stats.feed_max_mm_min = Some(
+            stats
+                .feed_max_mm_min
+                .map_or(s.feed_mm_min, |m| m.max(s.feed_mm_min)),
+        );
         stats.fz_min_mm = Some(stats.fz_min_mm.map_or(fz, |m| m.min(fz)));
         stats.fz_max_mm = Some(stats.fz_max_mm.map_or(fz, |m| m.max(fz)));
         sink(s);
@@ -215,7 +229,9 @@ fn resolve_spindle(
         return Ok((rpm, SpindleSource::Option));
     }
     let cutting = || runs.iter().flat_map(|r| (r.start + 1)..r.end);
-    let max_of = |it: &mut dyn Iterator<Item = f64>| it.filter(|v| v.is_finite() && *v > 0.0).reduce(f64::max);
+    let max_of = |it: &mut dyn Iterator<Item = f64>| {
+        it.filter(|v| v.is_finite() && *v > 0.0).reduce(f64::max)
+    };
     let v_ref = opts
         .feed_mm_min
         .or_else(|| max_of(&mut cutting().filter_map(|i| path.postures[i].feed_mm_min)))
@@ -407,7 +423,10 @@ impl RunWalker<'_> {
         let b = &self.path.postures[i + 1];
         if let Some(feeds) = &self.opts.posture_feed_mm_min {
             let a = &self.path.postures[i];
-            return Ok((checked_feed(a.line, feeds[i])?, checked_feed(b.line, feeds[i + 1])?));
+            return Ok((
+                checked_feed(a.line, feeds[i])?,
+                checked_feed(b.line, feeds[i + 1])?,
+            ));
         }
         let v = match (self.opts.feed_mm_min, b.feed_mm_min) {
             (Some(v), _) | (None, Some(v)) => v,
@@ -456,8 +475,16 @@ impl RunWalker<'_> {
             let len = d.norm();
             normalize_or_none(&d, 1e-12).map(|d| (d, len, false))
         };
-        let incoming = if j > self.run.start { neighbour(j - 1) } else { None };
-        let outgoing = if j + 1 < self.run.end { neighbour(j) } else { None };
+        let incoming = if j > self.run.start {
+            neighbour(j - 1)
+        } else {
+            None
+        };
+        let outgoing = if j + 1 < self.run.end {
+            neighbour(j)
+        } else {
+            None
+        };
         match (incoming, outgoing) {
             (Some((t, _, true)), _) | (_, Some((t, _, true))) => Some(t),
             (Some((din, lin, _)), Some((dout, lout, _))) => {
@@ -484,7 +511,7 @@ impl RunWalker<'_> {
         };
         let len = curve.len();
         let (va, vb) = self.move_feeds(i)?;
-        if !(va + vb > 0.0) {
+        if !above(va + vb, 0.0) {
             return Err(ResampleError::ZeroFeedMove { line: b.line });
         }
         if va != vb {
@@ -660,7 +687,9 @@ impl RunWalker<'_> {
             // A grid sample within 1e-6 step of the end is the end itself.
             let at_end = match self.opts.mode {
                 Mode::FeedPerTooth => p.s_mm >= end.s_mm - 1e-6 * self.opts.fz_mm,
-                Mode::SpindleStep { dtheta_rad } => p.theta_rad >= end.theta_rad - 1e-6 * dtheta_rad,
+                Mode::SpindleStep { dtheta_rad } => {
+                    p.theta_rad >= end.theta_rad - 1e-6 * dtheta_rad
+                }
             };
             if !at_end || self.pending_is_first {
                 emit(&p, stats);
@@ -724,7 +753,8 @@ mod tests {
             assert_relative_eq!(last.theta_rad, 10.0 * PI, epsilon = 1e-9);
         }
         // fz mode: 0.05 mm a sample, 21 samples with both ends, one tooth (π/2) a step.
-        let samples = resample(&line_path(1.0), &Options::new(Mode::FeedPerTooth, 0.05, 4)).unwrap();
+        let samples =
+            resample(&line_path(1.0), &Options::new(Mode::FeedPerTooth, 0.05, 4)).unwrap();
         assert_eq!(samples.len(), 21);
         for w in samples.windows(2) {
             assert_relative_eq!(w[1].s_mm - w[0].s_mm, 0.05, epsilon = 1e-12);
@@ -794,7 +824,11 @@ mod tests {
         // Times are increasing and the spindle angle is Ω t.
         for w in samples.windows(2) {
             assert!(w[1].t_s > w[0].t_s);
-            assert_relative_eq!(w[1].theta_rad, 15000.0 * TAU / 60.0 * w[1].t_s, epsilon = 1e-9);
+            assert_relative_eq!(
+                w[1].theta_rad,
+                15000.0 * TAU / 60.0 * w[1].t_s,
+                epsilon = 1e-9
+            );
         }
     }
 
@@ -815,15 +849,19 @@ mod tests {
         assert_relative_eq!(samples[15].feed_mm_min, 500.0);
         assert_relative_eq!(stats.fz_min_mm.unwrap(), 0.05, epsilon = 1e-12);
         assert_relative_eq!(stats.fz_max_mm.unwrap(), 0.1, epsilon = 1e-12);
-        assert_eq!(stats.spindle_source, SpindleSource::Option);
+        assert_eq!(stats.spindle_source, Some(SpindleSource::Option));
     }
 
     #[test]
     fn spindle_from_fz_and_feed_or_from_path() {
-        let stats = resample_with(&line_path(1.0), &Options::new(Mode::FeedPerTooth, 0.05, 4), |_| {})
-            .unwrap();
-        assert_eq!(stats.spindle_source, SpindleSource::DerivedFromFeed);
-        assert_relative_eq!(stats.spindle_rpm, 1000.0 / 0.2, epsilon = 1e-9);
+        let stats = resample_with(
+            &line_path(1.0),
+            &Options::new(Mode::FeedPerTooth, 0.05, 4),
+            |_| {},
+        )
+        .unwrap();
+        assert_eq!(stats.spindle_source, Some(SpindleSource::DerivedFromFeed));
+        assert_relative_eq!(stats.spindle_rpm.unwrap(), 1000.0 / 0.2, epsilon = 1e-9);
         let mut path = line_path(1.0);
         for p in &mut path.postures {
             p.feed_mm_min = None;
@@ -839,7 +877,10 @@ mod tests {
         let err = resample(&path, &opts).unwrap_err();
         assert_eq!(err, ResampleError::MissingFeedAndSpindle);
         let msg = err.to_string();
-        assert!(msg.contains("--feed-mm-min") && msg.contains("--rpm"), "{msg}");
+        assert!(
+            msg.contains("--feed-mm-min") && msg.contains("--rpm"),
+            "{msg}"
+        );
         assert!(resample(&path, &opts.clone().with_feed_mm_min(600.0)).is_ok());
     }
 
@@ -851,9 +892,18 @@ mod tests {
             e(Options::new(Mode::FeedPerTooth, 0.0, 4)),
             ResampleError::InvalidFeedPerTooth(0.0)
         );
-        assert_eq!(e(Options::new(Mode::FeedPerTooth, 0.05, 0)), ResampleError::NoTeeth);
+        assert_eq!(
+            e(Options::new(Mode::FeedPerTooth, 0.05, 0)),
+            ResampleError::NoTeeth
+        );
         assert!(matches!(
-            e(Options::new(Mode::SpindleStep { dtheta_rad: f64::NAN }, 0.05, 4)),
+            e(Options::new(
+                Mode::SpindleStep {
+                    dtheta_rad: f64::NAN
+                },
+                0.05,
+                4
+            )),
             ResampleError::InvalidSpindleStep(_)
         ));
         assert_eq!(
@@ -865,13 +915,17 @@ mod tests {
         );
         let mut zero = path.clone();
         zero.postures[1].line = 7;
-        let opts = Options::default().with_rpm(1000.0).with_posture_feed_mm_min(vec![0.0, 0.0]);
+        let opts = Options::default()
+            .with_rpm(1000.0)
+            .with_posture_feed_mm_min(vec![0.0, 0.0]);
         assert_eq!(
             resample(&zero, &opts).unwrap_err(),
             ResampleError::ZeroFeedMove { line: 7 }
         );
         // Starting from rest is fine: V = 0 at one end only.
-        let opts = Options::default().with_rpm(1000.0).with_posture_feed_mm_min(vec![0.0, 600.0]);
+        let opts = Options::default()
+            .with_rpm(1000.0)
+            .with_posture_feed_mm_min(vec![0.0, 600.0]);
         let samples = resample(&path, &opts).unwrap();
         assert_relative_eq!(samples.last().unwrap().t_s, 2.0 / 10.0, epsilon = 1e-12);
         let mut bad = path.clone();
@@ -886,6 +940,20 @@ mod tests {
             resample(&neg, &Options::default().with_rpm(100.0)).unwrap_err(),
             ResampleError::InvalidFeed { value: -5.0, .. }
         ));
+    }
+
+    #[test]
+    fn a_path_without_cutting_moves_gives_no_samples() {
+        let mut path = line_path(1.0);
+        path.postures[1].motion = MotionKind::Rapid;
+        path.postures[1].feed_mm_min = None;
+        let stats =
+            resample_with(&path, &Options::default(), |_| panic!("no sample expected")).unwrap();
+        assert_eq!(
+            (stats.samples, stats.runs, stats.non_cutting_moves),
+            (0, 0, 1)
+        );
+        assert_eq!(stats.spindle_rpm, None);
     }
 
     #[test]
@@ -917,7 +985,11 @@ mod tests {
             let f = Vec3::new(s.position.y, -s.position.x, 0.0) / r;
             assert_relative_eq!(s.feed_dir, f, epsilon = 1e-9);
             let phi = s.s_mm / 10.0;
-            assert_relative_eq!(s.position, Point3::new(10.0 * phi.cos(), -10.0 * phi.sin(), 0.0), epsilon = 1e-9);
+            assert_relative_eq!(
+                s.position,
+                Point3::new(10.0 * phi.cos(), -10.0 * phi.sin(), 0.0),
+                epsilon = 1e-9
+            );
         }
     }
 
@@ -960,7 +1032,7 @@ mod tests {
         let mut ps = vec![
             posture(0.0, 0.0, 0.0, Rapid),
             posture(1.0, 0.0, 0.0, Cut),
-            posture(1.0, 0.0, 0.0, Cut), // zero length
+            posture(1.0, 0.0, 0.0, Cut),  // zero length
             posture(1.0, 0.0, -1.0, Cut), // plunge along the axis (no contact data)
             posture(2.0, 0.0, -1.0, Cut), // axis flips to −z
             posture(2.0, 0.0, -1.0, Rapid),
@@ -987,7 +1059,10 @@ mod tests {
             assert!(s.feed_dir.dot(&s.axis).abs() < 1e-9);
         }
         // During the plunge f keeps the previous feed direction (+x).
-        let plunge: Vec<_> = samples.iter().filter(|s| s.s_mm > 1.0 && s.s_mm < 2.0).collect();
+        let plunge: Vec<_> = samples
+            .iter()
+            .filter(|s| s.s_mm > 1.0 && s.s_mm < 2.0)
+            .collect();
         assert!(!plunge.is_empty());
         for s in plunge {
             assert_relative_eq!(s.feed_dir, Vec3::x(), epsilon = 1e-12);
@@ -1010,7 +1085,11 @@ mod tests {
         let samples = resample(&path, &Options::new(Mode::FeedPerTooth, 0.5, 2)).unwrap();
         assert_eq!(samples.len(), 5);
         let mid = &samples[2];
-        assert_relative_eq!(mid.contact.unwrap(), Point3::new(1.0, 0.0, -1.0), epsilon = 1e-12);
+        assert_relative_eq!(
+            mid.contact.unwrap(),
+            Point3::new(1.0, 0.0, -1.0),
+            epsilon = 1e-12
+        );
         let n = mid.normal.unwrap();
         // Slerp: half of the normal's turn of atan(0.1).
         let half = 0.5 * 0.1f64.atan();
@@ -1070,7 +1149,10 @@ mod tests {
         // It passes through the interior postures.
         for (x, y) in &pts[1..4] {
             let p = Point3::new(*x, *y, 0.0);
-            let d = samples.iter().map(|s| (s.position - p).norm()).fold(f64::MAX, f64::min);
+            let d = samples
+                .iter()
+                .map(|s| (s.position - p).norm())
+                .fold(f64::MAX, f64::min);
             assert!(d < 0.006, "{d}");
         }
     }
