@@ -90,8 +90,9 @@ impl Curve {
         if sweep < 0.0 {
             sweep += TAU;
         }
-        // Start and end on the same point of the circle: a full turn.
-        if (p1 - p0).norm() <= 1e-9 * scale || sweep <= 1e-12 {
+        // Start and end on the same point of the circle (seen along the axis): a full
+        // turn, or a full helical turn when the end is higher along the axis.
+        if (v1 - v0).norm() <= 1e-9 * scale || sweep <= 1e-12 {
             sweep = TAU;
         }
         sweep += TAU * f64::from(arc.extra_turns);

@@ -290,8 +290,10 @@ struct SphereInterp {
 impl SphereInterp {
     /// Returns the interpolator and whether the vectors are antipodal (a 180° flip).
     fn new(a: Vec3, b: Vec3, kind: AxisInterpolation) -> (SphereInterp, bool) {
-        let cos = a.dot(&b).clamp(-1.0, 1.0);
-        let angle = cos.acos();
+        let cos = a.dot(&b);
+        let cross = a.cross(&b);
+        // atan2 keeps small angles accurate (acos loses half the digits near 1).
+        let angle = cross.norm().atan2(cos);
         let flipped = PI - angle < 1e-6;
         let perp = if angle < 1e-9 {
             Vec3::zeros()
@@ -313,12 +315,25 @@ impl SphereInterp {
     /// Same values as [`crate::math::slerp`] / [`crate::math::nlerp`].
     fn eval(&self, u: f64) -> Vec3 {
         if self.slerp && self.angle >= 1e-9 {
-            let (s, c) = (self.angle * u).sin_cos();
+            let (s, c) = sin_cos(self.angle * u);
             (self.a * c + self.perp * s).normalize()
         } else {
             nlerp(&self.a, &self.b, u)
         }
     }
+}
+
+/// `x.sin_cos()`, by Taylor series for |x| ≤ 0.1 (exact to rounding there: the first
+/// omitted terms are below 3e-19), which is most of a 5-axis path's axis changes.
+fn sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() > 0.1 {
+        return x.sin_cos();
+    }
+    let x2 = x * x;
+    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
+    let c = 1.0
+        - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0))));
+    (s, c)
 }
 
 /// One cutting move ready for sampling.
@@ -733,6 +748,46 @@ mod tests {
         Mode::SpindleStep {
             dtheta_rad: deg.to_radians(),
         }
+    }
+
+    #[test]
+    fn series_sin_cos_matches_libm() {
+        for k in -1000..=1000 {
+            let x = k as f64 * 1e-4;
+            let (s, c) = sin_cos(x);
+            assert!((s - x.sin()).abs() <= 2.0 * f64::EPSILON * x.abs(), "{x}");
+            assert!((c - x.cos()).abs() <= 2.0 * f64::EPSILON, "{x}");
+        }
+        assert_eq!(sin_cos(0.3), 0.3f64.sin_cos());
+    }
+
+    #[test]
+    fn sphere_interpolation_matches_math() {
+        let a = Vec3::new(0.1, -0.3, 1.0).normalize();
+        for b in [
+            Vec3::new(0.2, 0.1, 1.0).normalize(),
+            Vec3::new(-1.0, 0.5, 0.2).normalize(),
+            Vec3::new(1e-7, 0.0, 1.0).normalize(),
+        ] {
+            for (kind, f) in [
+                (
+                    AxisInterpolation::Slerp,
+                    crate::math::slerp as fn(&Vec3, &Vec3, f64) -> Vec3,
+                ),
+                (AxisInterpolation::Nlerp, crate::math::nlerp),
+            ] {
+                let (si, flipped) = SphereInterp::new(a, b, kind);
+                assert!(!flipped);
+                for u in [0.0, 0.25, 0.5, 0.9, 1.0] {
+                    assert_relative_eq!(si.eval(u), f(&a, &b, u), epsilon = 1e-9);
+                }
+                assert_relative_eq!(si.eval(1.0), b, epsilon = 1e-12);
+            }
+        }
+        let (si, flipped) = SphereInterp::new(a, -a, AxisInterpolation::Slerp);
+        assert!(flipped);
+        assert_relative_eq!(si.eval(0.5).dot(&a), 0.0, epsilon = 1e-12);
+        assert_relative_eq!(si.eval(1.0), -a, epsilon = 1e-12);
     }
 
     #[test]
