@@ -1,8 +1,28 @@
-//! File formats and safe writing: height-map readers and writers (CSV grid, Gwyddion `.gsf`,
-//! ISO 25178-71 / BCR `.sdf`), and [`write_atomic`], which never leaves a partial file.
+//! File formats and safe writing: height-map readers and writers (CSV grid, x,y,z point
+//! lists, Gwyddion `.gsf`, ISO 25178-71 / BCR `.sdf`), and [`write_atomic`], which never
+//! leaves a partial file.
+//!
+//! Every format maps onto [`HeightMap`]: row `i` is `y = y0 + i·dy` (ascending), column `j`
+//! is `x = x0 + j·dx`, heights in µm, `NaN` for a node that was not measured or not reached.
+//! Readers never panic: a malformed file gives a [`HeightMapError::Format`] naming the file,
+//! the line (text formats) or byte offset (binary parts) and what was wrong.
+//!
+//! | extension | format | lateral | heights | missing nodes |
+//! |---|---|---|---|---|
+//! | `.csv` (grid) | one line per row, one column per x | `--dx-um`/`--dy-um` | µm | `NaN`, `nan`, `NA` or empty field |
+//! | `.csv` with an `x,y,z` header, `.xyz` | one point per line, any order | from the coordinates, µm | µm | absent line or `NaN` |
+//! | `.gsf` | Gwyddion Simple Field 1.0, float32 LE | `XReal`/`YReal` (pixels), metres | metres (`ZUnits`) | NaN |
+//! | `.sdf` | ISO 25178-71 / BCR, text (`aBCR`/`aISO`) and binary reading; text writing | `Xscale`/`Yscale`, metres | value·`Zscale`, metres | `NaN` (text) |
+
+mod csv_grid;
+mod gsf;
+mod sdf;
+mod xyz;
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+use crate::surface::HeightMap;
 
 /// Write a file through a temporary file in the same directory, renamed at the end, so that
 /// a failure never leaves a partial output behind.
@@ -27,11 +47,273 @@ where
     Ok(())
 }
 
+/// A height-map file format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HeightMapFormat {
+    /// Grid CSV: one line per row (y ascending), one column per x, µm.
+    Csv,
+    /// `x,y,z` point list on a regular grid, all µm.
+    Xyz,
+    /// Gwyddion Simple Field (`.gsf`).
+    Gsf,
+    /// ISO 25178-71 / BCR surface data file (`.sdf`).
+    Sdf,
+}
+
+impl HeightMapFormat {
+    /// The format named by a path's extension (case-insensitive): `.csv`, `.xyz`/`.txt`,
+    /// `.gsf`, `.sdf`.
+    pub fn from_path(path: &Path) -> Option<HeightMapFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "csv" => Some(HeightMapFormat::Csv),
+            "xyz" | "txt" => Some(HeightMapFormat::Xyz),
+            "gsf" => Some(HeightMapFormat::Gsf),
+            "sdf" => Some(HeightMapFormat::Sdf),
+            _ => None,
+        }
+    }
+}
+
+/// Where in a file a problem is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Location {
+    /// The whole file (e.g. a missing header key).
+    File,
+    /// 1-based line, and 1-based field (column) when known.
+    Line {
+        /// 1-based line.
+        line: usize,
+        /// 1-based field (column of the table), 0 when not known.
+        field: usize,
+    },
+    /// 0-based byte offset (binary parts).
+    Byte(u64),
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Location::File => Ok(()),
+            Location::Line { line, field: 0 } => write!(f, ":{line}"),
+            Location::Line { line, field } => write!(f, ":{line}: field {field}"),
+            Location::Byte(b) => write!(f, ": byte {b}"),
+        }
+    }
+}
+
+/// A format problem found while parsing, without the file name (added by the caller).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FormatError {
+    /// Where the problem is.
+    pub at: Location,
+    /// What was wrong, lowercase, no trailing period.
+    pub message: String,
+}
+
+impl FormatError {
+    pub(crate) fn line(line: usize, field: usize, message: impl Into<String>) -> FormatError {
+        FormatError {
+            at: Location::Line { line, field },
+            message: message.into(),
+        }
+    }
+    pub(crate) fn byte(offset: u64, message: impl Into<String>) -> FormatError {
+        FormatError {
+            at: Location::Byte(offset),
+            message: message.into(),
+        }
+    }
+    pub(crate) fn file(message: impl Into<String>) -> FormatError {
+        FormatError {
+            at: Location::File,
+            message: message.into(),
+        }
+    }
+}
+
+impl std::fmt::Display for FormatError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}", self.at, self.message)
+    }
+}
+
+/// Errors of the height-map readers.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum HeightMapError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The extension names no known format.
+    #[error("{path}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf or .sdf)")]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The content is malformed.
+    #[error("{path}{}: {}", .error.at, .error.message)]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// Where and what.
+        error: FormatError,
+    },
+}
+
+/// Options for reading height maps.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ReadOptions {
+    /// x spacing in µm; needed for grid CSV, checked against the file otherwise.
+    pub dx_um: Option<f64>,
+    /// y spacing in µm; defaults to `dx_um` for grid CSV.
+    pub dy_um: Option<f64>,
+}
+
+/// Read a height map, the format chosen by the extension (see the module table).
+///
+/// Grid CSV needs `opts.dx_um` (and `dy_um`, default = `dx_um`). For the other formats the
+/// spacing comes from the file; a spacing given in `opts` that disagrees by more than 1e-6
+/// relative is an error.
+pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, HeightMapError> {
+    let format = HeightMapFormat::from_path(path).ok_or_else(|| HeightMapError::UnknownFormat {
+        path: path.to_path_buf(),
+    })?;
+    let bytes = std::fs::read(path).map_err(|source| HeightMapError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_heightmap(&bytes, format, opts).map_err(|error| HeightMapError::Format {
+        path: path.to_path_buf(),
+        error,
+    })
+}
+
+/// Parse a height map from memory (see [`read_heightmap`]). A `.csv` whose first line is
+/// an `x,y,z` header is read as a point list.
+pub fn parse_heightmap(
+    bytes: &[u8],
+    format: HeightMapFormat,
+    opts: &ReadOptions,
+) -> Result<HeightMap, FormatError> {
+    let map = match format {
+        HeightMapFormat::Csv => {
+            let text = as_text(bytes)?;
+            if xyz::has_xyz_header(text) {
+                xyz::parse(text)?
+            } else {
+                let dx = opts.dx_um.ok_or_else(|| {
+                    FormatError::file("a grid CSV carries no spacing: give --dx-um (and --dy-um)")
+                })?;
+                let dy = opts.dy_um.unwrap_or(dx);
+                check_spacing_value("dx", dx)?;
+                check_spacing_value("dy", dy)?;
+                return csv_grid::parse(text, dx, dy);
+            }
+        }
+        HeightMapFormat::Xyz => xyz::parse(as_text(bytes)?)?,
+        HeightMapFormat::Gsf => gsf::parse(bytes)?,
+        HeightMapFormat::Sdf => sdf::parse(bytes)?,
+    };
+    check_against(opts.dx_um, map.dx_um, "dx")?;
+    check_against(opts.dy_um, map.dy_um, "dy")?;
+    Ok(map)
+}
+
+fn check_spacing_value(name: &str, v: f64) -> Result<(), FormatError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(FormatError::file(format!(
+            "{name} must be a positive number of µm, got {v}"
+        )))
+    }
+}
+
+fn check_against(given: Option<f64>, file: f64, name: &str) -> Result<(), FormatError> {
+    match given {
+        Some(g) if (g - file).abs() > 1e-6 * file.abs().max(g.abs()) => Err(FormatError::file(
+            format!("the file gives {name} = {file} µm but --{name}-um says {g}"),
+        )),
+        _ => Ok(()),
+    }
+}
+
+fn as_text(bytes: &[u8]) -> Result<&str, FormatError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        let off = e.valid_up_to();
+        let line = bytes[..off].iter().filter(|&&b| b == b'\n').count() + 1;
+        FormatError::line(line, 0, format!("not UTF-8 text (byte {off})"))
+    })
+}
+
 /// Write a height map, the format chosen by the extension: `.csv` (rows = y ascending,
-/// µm), `.gsf` (Gwyddion Simple Field, metres, float32) or `.sdf` (ISO 25178-71 / BCR).
-pub fn write_heightmap(path: &Path, map: &crate::surface::HeightMap) -> std::io::Result<()> {
-    let _ = (path, map);
-    Err(std::io::Error::other("height-map writing is not built yet"))
+/// µm), `.xyz`/`.txt` (x,y,z point list, µm), `.gsf` (Gwyddion Simple Field, metres,
+/// float32) or `.sdf` (ISO 25178-71 / BCR text, metres, float64 values).
+pub fn write_heightmap(path: &Path, map: &HeightMap) -> std::io::Result<()> {
+    let format = HeightMapFormat::from_path(path).ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "{}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf or .sdf)",
+                path.display()
+            ),
+        )
+    })?;
+    if map.z_um.len() != map.nx * map.ny {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "height map has {} heights for {}×{} nodes",
+                map.z_um.len(),
+                map.nx,
+                map.ny
+            ),
+        ));
+    }
+    write_atomic(path, |w| write_heightmap_to(w, format, map))
+}
+
+/// Write a height map in `format` to any writer (see [`write_heightmap`]).
+pub fn write_heightmap_to(
+    w: &mut dyn Write,
+    format: HeightMapFormat,
+    map: &HeightMap,
+) -> std::io::Result<()> {
+    match format {
+        HeightMapFormat::Csv => csv_grid::write(w, map),
+        HeightMapFormat::Xyz => xyz::write(w, map),
+        HeightMapFormat::Gsf => gsf::write(w, map),
+        HeightMapFormat::Sdf => sdf::write(w, map),
+    }
+}
+
+/// Parse one number of a text format; `NaN`, `nan`, `NA`, `N/A` and empty mean missing.
+pub(crate) fn parse_value(s: &str) -> Option<f64> {
+    let t = s.trim();
+    if t.is_empty()
+        || t.eq_ignore_ascii_case("nan")
+        || t.eq_ignore_ascii_case("na")
+        || t.eq_ignore_ascii_case("n/a")
+    {
+        return Some(f64::NAN);
+    }
+    t.parse::<f64>().ok()
+}
+
+/// Shortest round-trip text of a height; `NaN` for missing.
+pub(crate) fn fmt_value(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        "NaN".to_string()
+    }
 }
 
 #[cfg(test)]
@@ -50,5 +332,36 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         write_atomic(&out, |w| w.write_all(b"ok")).unwrap();
         assert_eq!(std::fs::read(&out).unwrap(), b"ok");
+    }
+
+    #[test]
+    fn format_from_extension() {
+        assert_eq!(
+            HeightMapFormat::from_path(Path::new("a/b.GSF")),
+            Some(HeightMapFormat::Gsf)
+        );
+        assert_eq!(
+            HeightMapFormat::from_path(Path::new("b.sdf")),
+            Some(HeightMapFormat::Sdf)
+        );
+        assert_eq!(HeightMapFormat::from_path(Path::new("b.png")), None);
+    }
+
+    #[test]
+    fn csv_needs_spacing() {
+        let e = parse_heightmap(b"1,2\n3,4\n", HeightMapFormat::Csv, &ReadOptions::default())
+            .unwrap_err();
+        assert!(e.message.contains("--dx-um"), "{e}");
+    }
+
+    #[test]
+    fn spacing_mismatch_is_an_error() {
+        let text = b"x,y,z\n0,0,1\n2,0,1\n0,2,1\n2,2,1\n";
+        let opts = ReadOptions {
+            dx_um: Some(1.0),
+            dy_um: None,
+        };
+        let e = parse_heightmap(text, HeightMapFormat::Xyz, &opts).unwrap_err();
+        assert!(e.message.contains("dx = 2"), "{e}");
     }
 }

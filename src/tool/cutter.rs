@@ -78,6 +78,62 @@ impl Cutter {
         }
     }
 
+    /// A cutter with teeth at the given angular positions at the tip (degrees, in cutting
+    /// order, the first 0): uneven pitch. No run-out.
+    pub fn with_pitch_deg(
+        shape: Shape,
+        radius_mm: f64,
+        pitch_deg: &[f64],
+        helix_rad: f64,
+    ) -> Cutter {
+        Cutter {
+            shape,
+            radius_mm,
+            helix_rad,
+            pitch_rad: pitch_deg.iter().map(|a| a.to_radians()).collect(),
+            runout: Runout::default(),
+        }
+    }
+
+    /// The same cutter with nominal radius `radius_mm` (a torus keeps its corner radius,
+    /// clamped to the new radius). Used for per-tooth radii (002 Table 3).
+    pub fn with_radius(&self, radius_mm: f64) -> Cutter {
+        let shape = match self.shape {
+            Shape::Torus { corner_radius_mm } => Shape::Torus {
+                corner_radius_mm: corner_radius_mm.min(radius_mm),
+            },
+            s => s,
+        };
+        Cutter {
+            shape,
+            radius_mm,
+            ..self.clone()
+        }
+    }
+
+    /// Polar angle κ(z) of the end profile at height z: the angle between the axis and the
+    /// outward normal of the corner arc (ball: κ = acos(1 − z/R)); 0 on a flat end face,
+    /// π/2 on the cylinder above the end.
+    pub fn kappa_at(&self, z_mm: f64) -> f64 {
+        let rc = self.corner_radius_mm();
+        if z_mm <= 0.0 || rc <= 0.0 {
+            return if z_mm > 0.0 {
+                std::f64::consts::FRAC_PI_2
+            } else {
+                0.0
+            };
+        }
+        if z_mm >= rc {
+            return std::f64::consts::FRAC_PI_2;
+        }
+        (1.0 - z_mm / rc).clamp(-1.0, 1.0).acos()
+    }
+
+    /// Radial run-out ρ_j(z) = r_j(z) − r(z) of tooth `j` (0-based) at height z (Eq 6).
+    pub fn runout_mm(&self, j: usize, z_mm: f64) -> f64 {
+        self.tooth_radius(j, z_mm) - self.profile_radius(z_mm)
+    }
+
     /// Number of teeth Z.
     pub fn teeth(&self) -> usize {
         self.pitch_rad.len()

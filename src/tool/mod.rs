@@ -1,10 +1,42 @@
 //! Cutters: ball-end, filleted (torus) and flat end mills; helical cutting edges of
 //! infinitesimal elements (ICE); run-out; participating teeth; effective radius.
 //!
-//! Geometry follows `model.md` §2, §3, §6 and §7. The tool frame has its origin at the tool
-//! tip, `z` along the axis towards the spindle; a spindle angle θ gives the edge direction
-//! `d(θ) = sin θ x_t + cos θ y_t`.
+//! Geometry follows `model.md` §2, §3, §4, §6 and §7. The tool frame has its origin at the
+//! tool tip, `z` along the axis towards the spindle; a spindle angle θ gives the edge
+//! direction `d(θ) = sin θ x_t + cos θ y_t`.
+//!
+//! * [`cutter`](Cutter): the body of revolution, teeth (even or uneven pitch), straight or
+//!   helical edges, run-out r_j(z) = r(z) + ρ_j(z);
+//! * [`IceElement`]: the edges discretised at chosen heights;
+//! * [`analyse`]: participating teeth ([`Rule::Paper`] or [`Rule::Exact`]), fz_eff, crest
+//!   heights, effective radius and cutting-speed ratio for one engagement on a plane;
+//! * [`load_tool_toml`]: the `tool.toml` configuration.
+//!
+//! ```
+//! use crest::tool::{Cutter, Rule, Shape, analyse};
+//! let mut c = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
+//! c.runout.tooth_radius_dev_mm = vec![-0.010, -0.015, -0.024, -0.025];
+//! let a = analyse(&c, 15.0, 0.4, 0.05, Rule::Paper).unwrap();
+//! assert_eq!(a.zc, 1);
+//! assert!((a.fz_effective_mm - 0.2).abs() < 1e-12);
+//! ```
 
+mod config;
 mod cutter;
+mod effective;
+mod ice;
+mod section;
+mod teeth;
 
+pub use config::{
+    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, line_column, load_tool_toml,
+    parse_tool_config,
+};
 pub use cutter::{Cutter, Runout, Shape, crest_height_mm, direction};
+pub use effective::{EffectiveRadius, cutting_speed_ratio, effective_radius};
+pub use ice::IceElement;
+pub use section::{Envelope, FeedProfile, envelope, feed_profile, nominal_crest_mm};
+pub use teeth::{
+    Analysis, Rule, ToolError, ToothAnalysis, analyse, generating_height_mm, mark_positions_mm,
+    normal_deviation_mm, normal_runout_spread_mm, paper_teeth,
+};

@@ -1,0 +1,241 @@
+//! Gwyddion Simple Field (`.gsf`, version 1.0).
+//!
+//! Layout: the text line `Gwyddion Simple Field 1.0`, then `Key = Value` lines (`XRes`,
+//! `YRes` required; `XReal`, `YReal` in `XYUnits`, default 1; `XOffset`, `YOffset`,
+//! `ZUnits`, `Title`, …), then 1 to 4 NUL bytes so that the header length including them is
+//! a multiple of 4, then `XRes·YRes` little-endian float32 values, row by row (row 0 first,
+//! y ascending), nothing after. Gwyddion treats samples as pixels: `dx = XReal/XRes`.
+//! Units: `m` (the default and what we write), `mm`, `um`/`µm`, `nm`; heights are written in
+//! metres. NaN marks a missing node.
+
+use std::io::Write;
+
+use super::FormatError;
+use crate::surface::HeightMap;
+
+const MAGIC: &[u8] = b"Gwyddion Simple Field 1.0";
+
+/// Factor from a unit name to µm.
+fn unit_to_um(unit: Option<&str>, line: usize) -> Result<f64, FormatError> {
+    match unit.map(str::trim) {
+        None | Some("") | Some("m") => Ok(1e6),
+        Some("mm") => Ok(1e3),
+        Some("um") | Some("µm") | Some("μm") => Ok(1.0),
+        Some("nm") => Ok(1e-3),
+        Some(u) => Err(FormatError::line(
+            line,
+            0,
+            format!("unsupported unit {u:?} (expected m, mm, um or nm)"),
+        )),
+    }
+}
+
+pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
+    if !bytes.starts_with(MAGIC) {
+        return Err(FormatError::byte(
+            0,
+            "not a Gwyddion Simple Field file (missing \"Gwyddion Simple Field 1.0\")",
+        ));
+    }
+    let Some(hlen) = bytes.iter().position(|&b| b == 0) else {
+        return Err(FormatError::file(
+            "header is not terminated by NUL padding (truncated file?)",
+        ));
+    };
+    let header = std::str::from_utf8(&bytes[..hlen])
+        .map_err(|e| FormatError::byte(e.valid_up_to() as u64, "header is not UTF-8 text"))?;
+    let mut keys: Vec<(&str, &str, usize)> = Vec::new();
+    for (idx, line) in header.lines().enumerate().skip(1) {
+        let l = line.trim();
+        if l.is_empty() {
+            continue;
+        }
+        let Some((k, v)) = l.split_once('=') else {
+            return Err(FormatError::line(
+                idx + 1,
+                0,
+                format!("header line {l:?} is not `Key = Value`"),
+            ));
+        };
+        keys.push((k.trim(), v.trim(), idx + 1));
+    }
+    let get = |name: &str| {
+        keys.iter()
+            .find(|(k, _, _)| *k == name)
+            .map(|(_, v, l)| (*v, *l))
+    };
+    let int = |name: &str| -> Result<usize, FormatError> {
+        let (v, l) = get(name).ok_or_else(|| FormatError::file(format!("header has no {name}")))?;
+        v.parse::<usize>().ok().filter(|&n| n > 0).ok_or_else(|| {
+            FormatError::line(l, 0, format!("{name} = {v:?} is not a positive integer"))
+        })
+    };
+    let real = |name: &str, default: f64, positive: bool| -> Result<f64, FormatError> {
+        match get(name) {
+            None => Ok(default),
+            Some((v, l)) => v
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && (!positive || *x > 0.0))
+                .ok_or_else(|| {
+                    FormatError::line(
+                        l,
+                        0,
+                        format!(
+                            "{name} = {v:?} is not a {}number",
+                            if positive { "positive " } else { "" }
+                        ),
+                    )
+                }),
+        }
+    };
+    let nx = int("XRes")?;
+    let ny = int("YRes")?;
+    let xreal = real("XReal", 1.0, true)?;
+    let yreal = real("YReal", 1.0, true)?;
+    let xoff = real("XOffset", 0.0, false)?;
+    let yoff = real("YOffset", 0.0, false)?;
+    let xy_um = unit_to_um(
+        get("XYUnits").map(|p| p.0),
+        get("XYUnits").map_or(0, |p| p.1),
+    )?;
+    let z_um = unit_to_um(get("ZUnits").map(|p| p.0), get("ZUnits").map_or(0, |p| p.1))? as f32;
+
+    let pad = 4 - hlen % 4;
+    let data_start = hlen + pad;
+    if bytes.len() < data_start {
+        return Err(FormatError::byte(
+            bytes.len() as u64,
+            format!("file ends inside the NUL padding (header {hlen} bytes needs {pad} NULs)"),
+        ));
+    }
+    if let Some(p) = bytes[hlen..data_start].iter().position(|&b| b != 0) {
+        return Err(FormatError::byte(
+            (hlen + p) as u64,
+            format!(
+                "header padding must be {pad} NUL bytes (header length {hlen} + padding = multiple of 4)"
+            ),
+        ));
+    }
+    let n = nx
+        .checked_mul(ny)
+        .filter(|n| *n <= (usize::MAX >> 3))
+        .ok_or_else(|| FormatError::file(format!("XRes×YRes = {nx}×{ny} is too large")))?;
+    let need = n * 4;
+    let have = bytes.len() - data_start;
+    if have != need {
+        return Err(FormatError::byte(
+            (data_start + have.min(need)) as u64,
+            format!(
+                "data has {have} bytes, XRes×YRes = {nx}×{ny} float32 needs {need} (data start at byte {data_start})"
+            ),
+        ));
+    }
+    let z: Vec<f64> = bytes[data_start..]
+        .chunks_exact(4)
+        .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]]) * z_um))
+        .collect();
+    let mut map = HeightMap::from_rows(
+        nx,
+        ny,
+        xreal * xy_um / nx as f64,
+        yreal * xy_um / ny as f64,
+        z,
+    )
+    .ok_or_else(|| FormatError::file("internal: size mismatch"))?;
+    map.x0_mm = xoff * xy_um / 1000.0;
+    map.y0_mm = yoff * xy_um / 1000.0;
+    Ok(map)
+}
+
+pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
+    let mut h = String::new();
+    h.push_str("Gwyddion Simple Field 1.0\n");
+    h.push_str(&format!("XRes = {}\n", map.nx));
+    h.push_str(&format!("YRes = {}\n", map.ny));
+    h.push_str(&format!("XReal = {:e}\n", map.nx as f64 * map.dx_um * 1e-6));
+    h.push_str(&format!("YReal = {:e}\n", map.ny as f64 * map.dy_um * 1e-6));
+    h.push_str(&format!("XOffset = {:e}\n", map.x0_mm * 1e-3));
+    h.push_str(&format!("YOffset = {:e}\n", map.y0_mm * 1e-3));
+    h.push_str("XYUnits = m\nZUnits = m\nTitle = crest height map\n");
+    let pad = 4 - h.len() % 4;
+    w.write_all(h.as_bytes())?;
+    w.write_all(&[0u8; 4][..pad])?;
+    let mut buf = Vec::with_capacity(map.nx * 4);
+    for row in 0..map.ny {
+        buf.clear();
+        for &v in map.row(row) {
+            buf.extend_from_slice(&((v * 1e-6) as f32).to_le_bytes());
+        }
+        w.write_all(&buf)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::Location;
+
+    fn file(header: &str, pad: usize, values: &[f32]) -> Vec<u8> {
+        let mut b = header.as_bytes().to_vec();
+        b.extend(std::iter::repeat_n(0u8, pad));
+        for v in values {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b
+    }
+
+    #[test]
+    fn padding_is_one_to_four_nuls() {
+        let mut out = Vec::new();
+        for nx in 1..6 {
+            let map = HeightMap::from_rows(nx, 1, 1.0, 1.0, vec![1.0; nx]).unwrap();
+            out.clear();
+            write(&mut out, &map).unwrap();
+            let hlen = out.iter().position(|&b| b == 0).unwrap();
+            let start = out.len() - 4 * nx;
+            assert_eq!(start % 4, 0);
+            assert!((1..=4).contains(&(start - hlen)));
+        }
+    }
+
+    #[test]
+    fn reads_micrometre_units_and_offsets() {
+        let h = "Gwyddion Simple Field 1.0\nXRes = 2\nYRes = 1\nXReal = 4\nYReal = 1\nXYUnits = um\nZUnits = um\nXOffset = 1000\n";
+        let pad = 4 - h.len() % 4;
+        let m = parse(&file(h, pad, &[1.5, f32::NAN])).unwrap();
+        assert_eq!((m.nx, m.ny, m.dx_um, m.dy_um), (2, 1, 2.0, 1.0));
+        assert_eq!(m.z_um[0], 1.5);
+        assert!(m.z_um[1].is_nan());
+        assert!((m.x0_mm - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn wrong_padding_and_size_give_byte_offsets() {
+        let h = "Gwyddion Simple Field 1.0\nXRes = 2\nYRes = 2\n";
+        let pad = 4 - h.len() % 4;
+        let short = file(h, pad, &[1.0, 2.0, 3.0]);
+        let e = parse(&short).unwrap_err();
+        assert!(matches!(e.at, Location::Byte(_)), "{e}");
+        assert!(e.message.contains("needs 16"), "{e}");
+        let mut bad_pad = file(h, pad, &[1.0; 4]);
+        bad_pad[h.len() + pad - 1] = b'x';
+        if pad > 1 {
+            let e = parse(&bad_pad).unwrap_err();
+            assert_eq!(e.at, Location::Byte((h.len() + pad - 1) as u64), "{e}");
+        }
+    }
+
+    #[test]
+    fn missing_key_and_bad_value() {
+        let h = "Gwyddion Simple Field 1.0\nXRes = 2\n";
+        let e = parse(&file(h, 4 - h.len() % 4, &[1.0, 2.0])).unwrap_err();
+        assert!(e.message.contains("YRes"), "{e}");
+        let h = "Gwyddion Simple Field 1.0\nXRes = 2\nYRes = -1\n";
+        let e = parse(&file(h, 4 - h.len() % 4, &[1.0, 2.0])).unwrap_err();
+        assert_eq!(e.at, Location::Line { line: 3, field: 0 });
+        let e = parse(b"Gwyddion Simple").unwrap_err();
+        assert_eq!(e.at, Location::Byte(0));
+    }
+}
