@@ -188,6 +188,9 @@ impl Figure<'_> {
         });
         chart
             .configure_axes()
+            .x_labels(5)
+            .y_labels(5)
+            .z_labels(5)
             .label_style(tick_font())
             .light_grid_style(RGBColor(238, 238, 238))
             .bold_grid_style(RGBColor(215, 215, 215))
