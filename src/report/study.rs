@@ -95,7 +95,6 @@ pub fn factor_effects(factors: &[Factor], runs: &[Vec<usize>], response: &[f64])
     }
 }
 
-
 /// Errors from design files.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum StudyError {
@@ -235,11 +234,17 @@ impl Design {
         if !matches!(design.pattern.as_str(), "one-way" | "zigzag") {
             return Err(at(
                 "pattern",
-                format!("pattern must be one-way or zigzag, got '{}'", design.pattern),
+                format!(
+                    "pattern must be one-way or zigzag, got '{}'",
+                    design.pattern
+                ),
             ));
         }
         if design.responses.is_empty() {
-            return Err(at("responses", "responses must name at least one parameter".into()));
+            return Err(at(
+                "responses",
+                "responses must name at least one parameter".into(),
+            ));
         }
         let f = &design.factors;
         match (&f.scallop_um, &f.stepover_mm) {
@@ -250,7 +255,10 @@ impl Design {
                 ));
             }
             (None, None) => {
-                return Err(at("[factors]", "factors need scallop_um or stepover_mm".into()));
+                return Err(at(
+                    "[factors]",
+                    "factors need scallop_um or stepover_mm".into(),
+                ));
             }
             _ => {}
         }
@@ -276,7 +284,10 @@ impl Design {
                     }
             });
             if !ok {
-                return Err(at(key, format!("{key} has a level out of range: {levels:?}")));
+                return Err(at(
+                    key,
+                    format!("{key} has a level out of range: {levels:?}"),
+                ));
             }
         }
         Ok(design)
@@ -482,7 +493,10 @@ pub fn effects_chart(design: &Design, effects: &[Effects]) -> crate::plot::profi
         .enumerate()
         .filter(|(_, f)| f.levels.len() > 1)
         .map(|(i, f)| {
-            let y: Vec<f64> = effects.iter().map(|e| 100.0 * e.relative_first[i]).collect();
+            let y: Vec<f64> = effects
+                .iter()
+                .map(|e| 100.0 * e.relative_first[i])
+                .collect();
             crate::plot::profile::Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
         })
         .collect();
@@ -576,7 +590,10 @@ mod tests {
         assert_eq!(d.factors(), doe16());
         let y6 = Design::parse(YAW6, "yaw6").unwrap();
         assert_eq!(y6.runs().len(), 48);
-        assert_eq!(y6.factors()[0].levels, vec![0.0, 2.0, 5.0, 10.0, 15.0, 20.0]);
+        assert_eq!(
+            y6.factors()[0].levels,
+            vec![0.0, 2.0, 5.0, 10.0, 15.0, 20.0]
+        );
     }
 
     fn design_err(text: &str) -> (usize, String) {
@@ -624,8 +641,14 @@ mod tests {
         let tick = || {
             count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         };
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
         let a = one.install(|| run_design(&d, fake, tick));
         let b = two.install(|| run_design(&d, fake, tick));
         assert_eq!(a, b);
@@ -639,7 +662,11 @@ mod tests {
         assert_relative_eq!(e[1].relative_first[1], 0.0, epsilon = 1e-12);
         // Eq 8 removes the unit: Sz = 6 Sq has the same relative effects.
         for i in 0..4 {
-            assert_relative_eq!(e[0].relative_first[i], e[1].relative_first[i], epsilon = 1e-12);
+            assert_relative_eq!(
+                e[0].relative_first[i],
+                e[1].relative_first[i],
+                epsilon = 1e-12
+            );
         }
 
         let mut runs = Vec::new();
@@ -647,13 +674,19 @@ mod tests {
         let runs = String::from_utf8(runs).unwrap();
         let lines: Vec<&str> = runs.lines().collect();
         assert_eq!(lines.len(), 17);
-        assert_eq!(lines[0], "run,yaw_deg,tilt_deg,scallop_um,feed_mm_min,Sz,Sq,error");
+        assert_eq!(
+            lines[0],
+            "run,yaw_deg,tilt_deg,scallop_um,feed_mm_min,Sz,Sq,error"
+        );
         assert_eq!(lines[16], "16,20,10,10,4000,15.000000,2.500000,");
         let mut eff = Vec::new();
         write_effects_csv(&d, &e, &mut eff).unwrap();
         let eff = String::from_utf8(eff).unwrap();
         assert_eq!(eff.lines().count(), 1 + 2 * 4 * 2);
-        assert!(eff.contains("Sq,yaw_deg,0,2.000000,-0.250000,-0.125000\n"), "{eff}");
+        assert!(
+            eff.contains("Sq,yaw_deg,0,2.000000,-0.250000,-0.125000\n"),
+            "{eff}"
+        );
         let chart = effects_chart(&d, &e);
         assert_eq!(chart.series.len(), 4);
         assert_eq!(chart.series[0].y, vec![-12.5, -12.5]);
