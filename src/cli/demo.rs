@@ -54,14 +54,19 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let mut wrote: Vec<(PathBuf, String)> = Vec::new();
 
     // 1. Tool and synthetic contact-data path.
-    let cutter = tool::load_tool_toml(DEMO_TOOL).map_err(|e| miette::miette!("embedded tool: {e}"))?;
+    let cutter =
+        tool::load_tool_toml(DEMO_TOOL).map_err(|e| miette::miette!("embedded tool: {e}"))?;
     let teeth = cutter.teeth();
     let feed_mm_min = teeth as f64 * FZ_MM * RPM;
     let mut spec = PathSpec::new(
         Surface::Plane,
         cutter.clone(),
-        Orientation::Lead { lead_rad: LEAD_DEG.to_radians() },
-        Step::Stepover { spacing_mm: STEPOVER_MM },
+        Orientation::Lead {
+            lead_rad: LEAD_DEG.to_radians(),
+        },
+        Step::Stepover {
+            spacing_mm: STEPOVER_MM,
+        },
         (3.0, 1.6),
     );
     spec.feed_mm_min = feed_mm_min;
@@ -71,7 +76,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let synthetic = synth::generate(&spec).map_err(|e| miette::miette!("demo path: {e}"))?;
     let cls = dir.join("demo.cls");
     write_file(&cls, |w| crate::toolpath::write_clsf(&synthetic.program, w))?;
-    wrote.push((cls.clone(), format!("CLSF with contact data, {} passes", synthetic.passes)));
+    wrote.push((
+        cls.clone(),
+        format!("CLSF with contact data, {} passes", synthetic.passes),
+    ));
 
     // 2. Read it back as a user's file would be read, and convert it to contact12.
     let program = super::input::read_program(&cls)?;
@@ -81,20 +89,33 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .ok_or_else(|| miette::miette!("{}: no tool path read back", cls.display()))?;
     let csv = dir.join("demo-contact12.csv");
     write_file(&csv, |w| crate::toolpath::write_contact12(path, false, w))?;
-    wrote.push((csv, "contact12 CSV (cutting moves with contact data)".into()));
+    wrote.push((
+        csv,
+        "contact12 CSV (cutting moves with contact data)".into(),
+    ));
 
     // 3. Resample at a constant spindle step.
     let opts = resample::Options::new(
-        Mode::SpindleStep { dtheta_rad: DTHETA_DEG.to_radians() },
+        Mode::SpindleStep {
+            dtheta_rad: DTHETA_DEG.to_radians(),
+        },
         FZ_MM,
         teeth,
     );
-    let samples = resample::resample(path, &opts).map_err(|e| miette::miette!("resampling: {e}"))?;
+    let samples =
+        resample::resample(path, &opts).map_err(|e| miette::miette!("resampling: {e}"))?;
 
     // 4. Simulate a window in the middle of the field (ICE model).
-    let window = GridSpec::Window { x0_mm: -0.5, y0_mm: -0.3, x1_mm: 0.5, y1_mm: 0.3 };
+    let window = GridSpec::Window {
+        x0_mm: -0.5,
+        y0_mm: -0.3,
+        x1_mm: 0.5,
+        y1_mm: 0.3,
+    };
     let sim_opts = surface::Options::new(
-        Model::Ice { dtheta_rad: DTHETA_DEG.to_radians() },
+        Model::Ice {
+            dtheta_rad: DTHETA_DEG.to_radians(),
+        },
         window,
         GRID_UM * 1e-3,
     );
@@ -108,7 +129,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         crate::io::write_heightmap(&p, map)
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", p.display()))?;
-        wrote.push((p, format!("height map {} × {} at {GRID_UM} µm", map.nx, map.ny)));
+        wrote.push((
+            p,
+            format!("height map {} × {} at {GRID_UM} µm", map.nx, map.ny),
+        ));
     }
 
     // 5. Metrics: areal parameters and the profile along the feed through the window centre.
@@ -117,7 +141,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let row = map.ny / 2;
     let profile = metrics::extract_profile(map, ProfileSpec::Row(row))
         .map_err(|e| miette::miette!("profile: {e}"))?;
-    let rz_feed = metrics::profile_values(&profile, 5).map_err(|e| miette::miette!("profile: {e}"))?;
+    let rz_feed =
+        metrics::profile_values(&profile, 5).map_err(|e| miette::miette!("profile: {e}"))?;
 
     // The closed-form model of 002: participating teeth, fz_eff and the crest (Eqs 7, 8, 14).
     let analysis = tool::analyse(&cutter, LEAD_DEG, 0.4, FZ_MM, Rule::Paper)
@@ -125,13 +150,24 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
     // 6. Plots.
     let heat = dir.join("heightmap.png");
-    crate::plot::heightmap::plot_heightmap(map, "Simulated surface (ICE model, 10 µm run-out)", &heat)
-        .map_err(|e| miette::miette!("{}: {e}", heat.display()))?;
+    crate::plot::heightmap::plot_heightmap(
+        map,
+        "Simulated surface (ICE model, 10 µm run-out)",
+        &heat,
+    )
+    .map_err(|e| miette::miette!("{}: {e}", heat.display()))?;
     wrote.push((heat, "height map plot".into()));
-    let x_mm: Vec<f64> = (0..profile.z.len()).map(|i| i as f64 * profile.step_um * 1e-3).collect();
+    let x_mm: Vec<f64> = (0..profile.z.len())
+        .map(|i| i as f64 * profile.step_um * 1e-3)
+        .collect();
     let prof = dir.join("profile-feed.svg");
-    crate::plot::profile::plot_profiles("Profile along the feed (window centre)", (&x_mm, &profile.z), None, &prof)
-        .map_err(|e| miette::miette!("{}: {e}", prof.display()))?;
+    crate::plot::profile::plot_profiles(
+        "Profile along the feed (window centre)",
+        (&x_mm, &profile.z),
+        None,
+        &prof,
+    )
+    .map_err(|e| miette::miette!("{}: {e}", prof.display()))?;
     wrote.push((prof, "profile along the feed".into()));
     let troch = dir.join("trochoids.svg");
     let troch_opts = crate::plot::trochoid::TrochoidOptions {
@@ -146,7 +182,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     // 7. Short report.
     let mut md = String::new();
     let _ = writeln!(md, "# crest demo\n");
-    let _ = writeln!(md, "Regenerate: `cargo run --release -- demo -o {}`\n", dir.display());
+    let _ = writeln!(
+        md,
+        "Regenerate: `cargo run --release -- demo -o {}`\n",
+        dir.display()
+    );
     let _ = writeln!(
         md,
         "Ball end R 5 mm, {teeth} teeth, helix 30°, run-out e0 = 10 µm; lead {LEAD_DEG}°, \
@@ -154,28 +194,41 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
          ICE model, Δθ = {DTHETA_DEG}°, grid {GRID_UM} µm, {} samples, simulated in {sim_seconds:.2} s.\n",
         samples.len()
     );
-    let _ = writeln!(md, "| quantity | closed form (002 Eqs 7, 8, 14) | simulated |\n|---|---|---|");
     let _ = writeln!(
         md,
-        "| participating teeth | {} of {teeth} | |",
-        analysis.zc
+        "| quantity | closed form (002 Eqs 7, 8, 14) | simulated |\n|---|---|---|"
     );
-    let _ = writeln!(md, "| feed-mark spacing fz_eff [mm] | {:.4} | |", analysis.fz_effective_mm);
+    let _ = writeln!(md, "| participating teeth | {} of {teeth} | |", analysis.zc);
+    let _ = writeln!(
+        md,
+        "| feed-mark spacing fz_eff [mm] | {:.4} | |",
+        analysis.fz_effective_mm
+    );
     let _ = writeln!(
         md,
         "| crest height / Rz along the feed [µm] | {:.4} | {:.4} (Rz, row {row}) |",
         analysis.crest_height_corrected_mm * 1e3,
         rz_feed.rz
     );
-    let _ = writeln!(md, "| lateral crest, stepover {STEPOVER_MM} mm [µm] | {:.4} | |", tool::crest_height_mm(5.0, STEPOVER_MM) * 1e3);
-    let _ = writeln!(md, "\nAreal parameters of the simulated window (µm, %, degrees):\n");
+    let _ = writeln!(
+        md,
+        "| lateral crest, stepover {STEPOVER_MM} mm [µm] | {:.4} | |",
+        tool::crest_height_mm(5.0, STEPOVER_MM) * 1e3
+    );
+    let _ = writeln!(
+        md,
+        "\nAreal parameters of the simulated window (µm, %, degrees):\n"
+    );
     let _ = writeln!(md, "| parameter | value |\n|---|---|");
     for (p, v) in &areal {
         let _ = writeln!(md, "| {} | {v:.4} |", p.symbol());
     }
     let _ = writeln!(md, "\nFiles:\n");
     for (p, what) in &wrote {
-        let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let _ = writeln!(md, "- `{name}`: {what}");
     }
     let report = dir.join("report.md");
