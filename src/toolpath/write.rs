@@ -32,7 +32,7 @@ pub fn push_fixed(out: &mut Vec<u8>, v: f64, (min, max): (u32, u32)) {
     let max = max.min(9);
     let min = min.min(max);
     let scaled = v * POW10[max as usize] as f64;
-    if !(scaled.abs() < 2.8e14) {
+    if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
         // Values too large for the decimals to be meaningful (beyond 2.8e8 mm), or not
         // finite: the shortest form that reads back exactly.
         let _ = write!(out, "{v}");
