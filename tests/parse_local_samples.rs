@@ -3,7 +3,9 @@
 //! and the CLSF and contact12 forms of the same path agree.
 
 use crest::parse::{ClsfReader, Contact12Reader};
-use crest::toolpath::{LowerOptions, Lowerer, MotionKind, Posture, Program, Toolpath, write_contact12};
+use crest::toolpath::{
+    LowerOptions, Lowerer, MotionKind, Posture, Program, Toolpath, write_contact12,
+};
 
 const CLS: &str = include_str!("../samples/clsf/ball_lead15_contact.cls");
 const C12: &str = include_str!("../samples/clsf/ball_lead15_contact12.txt");
@@ -22,10 +24,12 @@ fn lower_clsf(text: &str) -> Program {
 fn lower_c12(text: &str) -> Program {
     let mut low = Lowerer::new(LowerOptions::default());
     let mut sink = |_: &Toolpath, _: &Posture| Ok(());
-    low.begin_path("c12", "", &mut sink).unwrap_or_else(|e| panic!("{e}"));
+    low.begin_path("c12", "", &mut sink)
+        .unwrap_or_else(|e| panic!("{e}"));
     for r in Contact12Reader::new(text.as_bytes()) {
         let r = r.unwrap_or_else(|e| panic!("{e}"));
-        low.push_contact12(&r, &mut sink).unwrap_or_else(|e| panic!("{e}"));
+        low.push_contact12(&r, &mut sink)
+            .unwrap_or_else(|e| panic!("{e}"));
     }
     low.finish(&mut sink).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -34,16 +38,31 @@ fn lower_c12(text: &str) -> Program {
 fn cc_points_lie_on_the_ball_of_a_tip_cl_point() {
     let p = lower_clsf(CLS);
     let t = &p.paths[0];
-    let cutting: Vec<&Posture> = t.postures.iter().filter(|q| q.motion == MotionKind::Cut).collect();
+    let cutting: Vec<&Posture> = t
+        .postures
+        .iter()
+        .filter(|q| q.motion == MotionKind::Cut)
+        .collect();
     assert_eq!(cutting.len(), 3 * 41);
     for q in cutting {
-        let c = q.contact.as_ref().unwrap_or_else(|| panic!("line {}", q.line));
+        let c = q
+            .contact
+            .as_ref()
+            .unwrap_or_else(|| panic!("line {}", q.line));
         assert!(!c.normal_derived);
         let centre = q.position + q.axis * R;
         // |C − (P + R n_t)| = R: P is the tool tip (4-decimal rounding of the file).
-        assert!(((c.point - centre).norm() - R).abs() < 3e-4, "line {}", q.line);
+        assert!(
+            ((c.point - centre).norm() - R).abs() < 3e-4,
+            "line {}",
+            q.line
+        );
         // The normal points from C to the ball centre.
-        assert!((c.normal - (centre - c.point) / R).norm() < 1e-4, "line {}", q.line);
+        assert!(
+            (c.normal - (centre - c.point) / R).norm() < 1e-4,
+            "line {}",
+            q.line
+        );
     }
 }
 
