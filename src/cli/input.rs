@@ -1,14 +1,278 @@
 //! Reading tool-path files (CLSF or contact12) into a [`Program`], with errors that name
 //! the file, line and column.
+//!
+//! The kind of file is decided by content ([`crate::parse::looks_like_contact12`] on the
+//! first 64 KiB), not by extension. Reading streams: [`stream_program`] hands each posture
+//! to a callback and keeps none unless asked, so any file size reads in constant memory.
 
-use crate::toolpath::Program;
+use crate::parse::{ClsfReader, Contact12Reader, ParseError, SyntaxError, looks_like_contact12};
+use crate::toolpath::{LowerError, LowerOptions, Lowerer, Posture, PostureSink, Program, Toolpath};
+use miette::{Diagnostic, MietteError, MietteSpanContents, SourceCode, SourceSpan, SpanContents};
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-#[allow(dead_code)] // used by the commands as they land
+/// Input file kinds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InputKind {
+    /// NX CLSF (APT-style records).
+    Clsf,
+    /// The 12-column contact file.
+    Contact12,
+}
+
+/// The text of one line, reported with its real line number in code frames.
+#[derive(Debug)]
+pub struct LineSource {
+    name: String,
+    text: String,
+    /// 0-based line number of `text`'s first line.
+    first_line: usize,
+}
+
+impl SourceCode for LineSource {
+    fn read_span<'a>(
+        &'a self,
+        span: &SourceSpan,
+        context_lines_before: usize,
+        context_lines_after: usize,
+    ) -> Result<Box<dyn SpanContents<'a> + 'a>, MietteError> {
+        let inner = self
+            .text
+            .read_span(span, context_lines_before, context_lines_after)?;
+        Ok(Box::new(MietteSpanContents::new_named(
+            self.name.clone(),
+            inner.data(),
+            *inner.span(),
+            inner.line() + self.first_line,
+            inner.column(),
+            inner.line_count(),
+        )))
+    }
+}
+
+/// A bad-input error: file, line, column, what was expected and what was found, with a
+/// code frame of the offending line.
+#[derive(Debug, thiserror::Error, Diagnostic)]
+#[error("{file}:{line}:{column}: expected {expected}, found {found}")]
+#[diagnostic(code(crest::input))]
+pub struct InputError {
+    /// File name as given.
+    pub file: String,
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column.
+    pub column: u32,
+    /// What was expected.
+    pub expected: String,
+    /// What was found.
+    pub found: String,
+    #[source_code]
+    src: Option<LineSource>,
+    #[label("expected {expected}")]
+    span: Option<SourceSpan>,
+}
+
+impl InputError {
+    fn new(file: &Path, s: &SyntaxError) -> InputError {
+        let (src, span) = if s.line_text.is_empty() {
+            (None, None)
+        } else {
+            let byte = s
+                .line_text
+                .char_indices()
+                .nth(s.column.saturating_sub(1) as usize)
+                .map(|(b, _)| b)
+                .unwrap_or(s.line_text.len());
+            let len = s.line_text[byte..]
+                .find([',', ' ', '\t', '/', ';'])
+                .unwrap_or(s.line_text.len() - byte)
+                .max(usize::from(byte < s.line_text.len()));
+            (
+                Some(LineSource {
+                    name: file.display().to_string(),
+                    text: s.line_text.clone(),
+                    first_line: s.line.saturating_sub(1) as usize,
+                }),
+                Some(SourceSpan::new(byte.into(), len)),
+            )
+        };
+        InputError {
+            file: file.display().to_string(),
+            line: s.line,
+            column: s.column,
+            expected: s.expected.clone(),
+            found: s.found.clone(),
+            src,
+            span,
+        }
+    }
+}
+
+/// An I/O failure with context; the `io::Error` stays in the cause chain (so a broken
+/// pipe can be recognised).
+#[derive(Debug, thiserror::Error, Diagnostic)]
+#[error("{context}")]
+pub struct IoFailure {
+    /// What was being done.
+    pub context: String,
+    /// The cause.
+    #[source]
+    pub source: std::io::Error,
+}
+
+/// Turn a parse error into a diagnostic naming the file.
+pub fn parse_diagnostic(file: &Path, e: ParseError) -> miette::Report {
+    match e {
+        ParseError::Syntax(s) => miette::Report::new(InputError::new(file, &s)),
+        ParseError::Io(io) => miette::Report::new(IoFailure {
+            context: format!("{}: reading failed", file.display()),
+            source: io,
+        }),
+    }
+}
+
+/// Turn a lowering error into a diagnostic naming the file.
+pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
+    match e {
+        LowerError::Invalid {
+            line,
+            column,
+            expected,
+            found,
+        } => miette::Report::new(InputError::new(
+            file,
+            &SyntaxError {
+                line,
+                column,
+                expected,
+                found,
+                line_text: String::new(),
+            },
+        )),
+        LowerError::Output(io) => miette::Report::new(IoFailure {
+            context: "writing the output failed".into(),
+            source: io,
+        }),
+    }
+}
+
+fn open(path: &Path) -> miette::Result<BufReader<File>> {
+    let f =
+        File::open(path).map_err(|e| miette::miette!("{}: cannot open: {e}", path.display()))?;
+    Ok(BufReader::with_capacity(1 << 16, f))
+}
+
+/// Decide whether `path` holds CLSF or contact12, from its first 64 KiB.
+pub fn detect(path: &Path) -> miette::Result<InputKind> {
+    let mut head = Vec::with_capacity(1 << 16);
+    open(path)?
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .map_err(|e| miette::miette!("{}: cannot read: {e}", path.display()))?;
+    let text = String::from_utf8_lossy(&head);
+    Ok(if looks_like_contact12(&text) {
+        InputKind::Contact12
+    } else {
+        InputKind::Clsf
+    })
+}
+
+/// Read `path` (CLSF or contact12, by content), lowering as it goes; `sink` receives
+/// every posture with the header of its path. Postures are kept in the returned program
+/// only when `opts.keep_postures`.
+pub fn stream_program(
+    path: &Path,
+    opts: LowerOptions,
+    sink: &mut PostureSink<'_>,
+) -> miette::Result<Program> {
+    let kind = detect(path)?;
+    let reader = open(path)?;
+    stream_from(path, kind, reader, opts, sink)
+}
+
+/// [`stream_program`] on an already opened reader.
+pub fn stream_from(
+    path: &Path,
+    kind: InputKind,
+    reader: impl BufRead,
+    opts: LowerOptions,
+    sink: &mut PostureSink<'_>,
+) -> miette::Result<Program> {
+    let mut low = Lowerer::new(opts);
+    match kind {
+        InputKind::Clsf => {
+            for rec in ClsfReader::new(reader) {
+                let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
+                low.push(&rec, sink)
+                    .map_err(|e| lower_diagnostic(path, e))?;
+            }
+        }
+        InputKind::Contact12 => {
+            let name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            low.begin_path(&name, "", sink)
+                .map_err(|e| lower_diagnostic(path, e))?;
+            for row in Contact12Reader::new(reader) {
+                let row = row.map_err(|e| parse_diagnostic(path, e))?;
+                low.push_contact12(&row, sink)
+                    .map_err(|e| lower_diagnostic(path, e))?;
+            }
+        }
+    }
+    low.finish(sink).map_err(|e| lower_diagnostic(path, e))
+}
+
 /// Read and lower a CLSF or contact12 file (chosen by content), MSYS not applied.
+#[allow(dead_code)] // used by the commands of the later stages as they land
 pub fn read_program(path: &Path) -> miette::Result<Program> {
-    Err(miette::miette!(
-        "{}: reading tool paths is not built yet",
-        path.display()
-    ))
+    read_program_with(path, LowerOptions::default())
+}
+
+/// [`read_program`] with options (e.g. `apply_msys` for `--absolute`).
+#[allow(dead_code)] // used by the commands of the later stages as they land
+pub fn read_program_with(path: &Path, opts: LowerOptions) -> miette::Result<Program> {
+    let mut sink = |_: &Toolpath, _: &Posture| Ok(());
+    stream_program(path, opts, &mut sink)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn temp(text: &str, name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let p = dir.path().join(name);
+        let mut f = File::create(&p).unwrap_or_else(|e| panic!("{e}"));
+        f.write_all(text.as_bytes())
+            .unwrap_or_else(|e| panic!("{e}"));
+        (dir, p)
+    }
+
+    #[test]
+    fn reads_both_kinds() {
+        let (_d, p) = temp("TOOL PATH/A,TOOL,T\nGOTO/1,2,3\nEND-OF-PATH\n", "a.cls");
+        let prog = read_program(&p).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(prog.paths[0].postures.len(), 1);
+        let (_d, p) = temp("1 2 3 0 0 1 1 2 3 0 0 1\n", "b.txt");
+        let prog = read_program(&p).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(prog.paths[0].name, "b");
+        assert!(prog.paths[0].postures[0].contact.is_some());
+    }
+
+    #[test]
+    fn errors_name_file_line_and_column() {
+        let (_d, p) = temp("TOOL PATH/A,TOOL,T\nGOTO/1,2,zz\n", "bad.cls");
+        let e = read_program(&p)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.ends_with("bad.cls:2:10: expected a number, found `zz`"),
+            "{e}"
+        );
+    }
 }

@@ -2,3 +2,22 @@
 //! turn text into records with spans (line, column). No geometry, no units.
 //!
 //! The accepted grammars are written in `grammars/clsf.ebnf` and `grammars/contact12.ebnf`.
+//! Both readers stream: they hold one line at a time, so any file size reads in constant
+//! memory. Errors carry the 1-based line and column, what was expected and what was found.
+//!
+//! ```
+//! use crest::parse::clsf::{parse_str, RecordKind};
+//! let records = parse_str("TOOL PATH/OP,TOOL,BALL\nRAPID\nGOTO/1,2,3\nEND-OF-PATH\n").unwrap();
+//! assert_eq!(records.len(), 4);
+//! assert!(matches!(records[2].kind, RecordKind::Goto(ref n) if n.as_slice() == [1.0, 2.0, 3.0]));
+//! assert_eq!((records[2].line, records[2].column), (3, 1));
+//! ```
+
+pub mod clsf;
+pub mod contact12;
+pub mod error;
+pub mod number;
+
+pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
+pub use error::{ParseError, SyntaxError};

@@ -7,6 +7,14 @@
 
 use crate::math::{Point3, Vec3};
 
+pub mod geom;
+pub mod lower;
+pub mod write;
+
+pub use geom::Spline;
+pub use lower::{LowerError, LowerOptions, Lowerer, PostureSink, derive_normal, lower_records};
+pub use write::{ClsfWriter, Contact12Writer};
+
 /// A whole file: one or more tool paths and the warnings met while reading it.
 #[derive(Debug, Clone, Default)]
 pub struct Program {
@@ -115,8 +123,46 @@ pub struct Toolpath {
     pub tool: Option<ToolData>,
     /// MSYS frame: origin, X axis, Y axis (as written), if any.
     pub msys: Option<[f64; 9]>,
-    /// Postures in order.
+    /// Postures in order (empty when lowered with `keep_postures: false`).
     pub postures: Vec<Posture>,
+    /// True when MSYS has been applied: positions are in the absolute frame.
+    pub msys_applied: bool,
+    /// Record counts, lengths and modal values seen while lowering.
+    pub stats: PathStats,
+    /// Unknown records kept raw (at most 1000 per path).
+    pub raw_records: Vec<RawRecord>,
+}
+
+/// What lowering counted in one tool path.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PathStats {
+    /// `GOTO` records (contact12: data lines).
+    pub gotos: usize,
+    /// `RAPID` records.
+    pub rapids: usize,
+    /// `CIRCLE` records.
+    pub circles: usize,
+    /// `NURBS` blocks.
+    pub nurbs: usize,
+    /// Postures produced (NURBS blocks give several).
+    pub postures: usize,
+    /// Length of all moves, mm (arcs and splines along the curve; not into FROM).
+    pub length_mm: f64,
+    /// Length of cutting moves (`MotionKind::Cut`), mm.
+    pub cutting_length_mm: f64,
+    /// Distinct programmed feeds, mm/min, in order of appearance (at most 64).
+    pub feeds_mm_min: Vec<f64>,
+    /// Distinct spindle speeds, rpm, in order of appearance (at most 64).
+    pub spindles_rpm: Vec<f64>,
+}
+
+/// An unknown record kept as written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawRecord {
+    /// 1-based line.
+    pub line: u32,
+    /// The logical record text.
+    pub text: String,
 }
 
 impl Toolpath {
@@ -147,10 +193,17 @@ impl Toolpath {
 }
 
 /// Write a program as NX-style CLSF with contact data (GOTO with 12 numbers: CL, axis, CC,
-/// normal, where the posture has contact data).
+/// normal, where the posture has contact data; 9 numbers when the normal was derived).
 pub fn write_clsf(program: &Program, out: &mut dyn std::io::Write) -> std::io::Result<()> {
-    let _ = (program, out);
-    Err(std::io::Error::other("CLSF writing is not built yet"))
+    let mut w = ClsfWriter::new();
+    for path in &program.paths {
+        w.begin_path(path, out)?;
+        for p in &path.postures {
+            w.posture(p, out)?;
+        }
+        w.end_path(out)?;
+    }
+    Ok(())
 }
 
 /// Write one tool path as contact12 CSV with header `x,y,z,i,j,k,cx,cy,cz,nx,ny,nz`:
@@ -161,8 +214,12 @@ pub fn write_contact12(
     all_moves: bool,
     out: &mut dyn std::io::Write,
 ) -> std::io::Result<()> {
-    let _ = (path, all_moves, out);
-    Err(std::io::Error::other("contact12 writing is not built yet"))
+    let mut w = Contact12Writer::new(all_moves);
+    w.header(out)?;
+    for p in &path.postures {
+        w.posture(p, out)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]

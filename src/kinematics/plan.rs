@@ -1,0 +1,866 @@
+//! Velocity planning along the blocks (kinematics.md §6): Level 1, the exact
+//! acceleration-limited look-ahead (`plan_acc_only`), and Level 2, the jerk-limited
+//! look-ahead interpolator simulated at the NC cycle time (`plan_jerk`, "Eq 4").
+//!
+//! Level 2 is a greedy choice of a constant jerk per cycle: the largest jerk whose next
+//! state is *feasible* (the full-stop manoeuvre from it stays under every ceiling ahead and
+//! ends before the path end and the look-ahead window) and, if possible, *releasable*
+//! (every ceiling ahead can still be met with zero acceleration). The final stop is appended
+//! in closed form. The stop profiles are evaluated in closed form, not by integration.
+
+use super::blocks::{Blocks, Limit};
+
+/// Bisection steps on the jerk (§6.3 step 2).
+const BISECT: usize = 30;
+/// Relative slack on speed checks.
+const REL: f64 = 1e-9;
+/// The stop and brake profiles of the feasibility tests use this fraction of ā and j̄.
+/// A constant jerk per cycle cannot switch phase inside a cycle, so a state on the exact
+/// boundary may have no feasible successor; the 2 % margin leaves room to catch up,
+/// while the moves themselves use the full limits.
+const MARGIN: f64 = 1.0;
+/// The limits of a stop profile are the minimum over the blocks within this multiple of
+/// its distance (plus one cycle of travel). With exactly its distance (factor 1), a
+/// profile that ends just before a block with a lower jerk limit is feasible, the next
+/// one that reaches into it by a hair is not, and the interpolator is caught braking too
+/// late; looking half a stop further makes the switch happen while there is room.
+const COVER: f64 = 1.5;
+
+/// Result of a planning pass.
+#[derive(Debug, Clone, Default)]
+pub struct Timing {
+    /// Time stamp of every posture, s.
+    pub t: Vec<f64>,
+    /// Path speed ṡ at every posture, mm/s.
+    pub v: Vec<f64>,
+    /// Highest sampled path speed inside each block, mm/s.
+    pub block_peak: Vec<f64>,
+    /// Total time, s.
+    pub total: f64,
+    /// Number of cycles simulated (Level 2).
+    pub cycles: usize,
+    /// Cycles where no candidate was acceptable and the least-violating jerk was used.
+    pub fallbacks: usize,
+    /// Times the interpolator found no feasible successor and ran the previous state's
+    /// stop manoeuvre in closed form instead (an unplanned stop; see `Sim::run`).
+    pub stop_recoveries: usize,
+    /// Largest ratio of sampled |g_i ṡ|, |g_i s̈|, |g_i s⃛| to the axis limits (≤ 1 + 1e-6).
+    pub max_axis_ratio: f64,
+    /// Largest ratio of the speed at a posture to its ceiling.
+    pub max_ceiling_ratio: f64,
+}
+
+/// Level 1 (§6.1): acceleration-limited look-ahead, forward and backward pass, then a
+/// trapezoid per block. Exact and O(N); no jerk.
+pub fn plan_acc_only(b: &Blocks) -> Timing {
+    let n = b.n();
+    let np = n + 1;
+    let mut vin = vec![0.0; np];
+    let mut vout = vec![0.0; n];
+    for k in 0..n {
+        let reach = (vin[k] * vin[k] + 2.0 * b.abar[k] * b.len[k]).sqrt();
+        vout[k] = b.ceil[k + 1].min(b.vbar[k]).min(reach);
+        vin[k + 1] = vout[k];
+    }
+    vin[n] = 0.0;
+    for k in (0..n).rev() {
+        vout[k] = vout[k].min(vin[k + 1]);
+        let reach = (vout[k] * vout[k] + 2.0 * b.abar[k] * b.len[k]).sqrt();
+        vin[k] = vin[k].min(reach);
+    }
+    let mut t = vec![0.0; np];
+    let mut peak = vec![0.0; n];
+    for k in 0..n {
+        let (a, l) = (b.abar[k], b.len[k]);
+        let (v0, v1) = (vin[k], vout[k]);
+        let vp = b.vbar[k]
+            .min(((v0 * v0 + v1 * v1 + 2.0 * a * l) / 2.0).sqrt())
+            .max(v0.max(v1));
+        let d_up = (vp * vp - v0 * v0) / (2.0 * a);
+        let d_dn = (vp * vp - v1 * v1) / (2.0 * a);
+        let cruise = (l - d_up - d_dn).max(0.0);
+        let dt = (vp - v0) / a + (vp - v1) / a + if vp > 0.0 { cruise / vp } else { 0.0 };
+        t[k + 1] = t[k] + dt;
+        peak[k] = vp;
+    }
+    Timing {
+        total: t[n],
+        t,
+        v: vin,
+        block_peak: peak,
+        max_axis_ratio: 0.0,
+        max_ceiling_ratio: 0.0,
+        cycles: 0,
+        fallbacks: 0,
+        stop_recoveries: 0,
+    }
+}
+
+/// The three-phase braking profile from (v, a) with limits A, J: jerk −J until the
+/// acceleration is −a_p, hold, then +J back to zero acceleration (§6.3 "full stop").
+/// With a speed offset it is also the brake-to-c profile of `brake_dist`.
+#[derive(Debug, Clone, Copy)]
+struct Stop {
+    v0: f64,
+    a0: f64,
+    j: f64,
+    ap: f64,
+    t1: f64,
+    t2: f64,
+    t3: f64,
+}
+
+impl Stop {
+    /// The profile, or `None` when the speed would reach zero before the deceleration is
+    /// released (the state cannot stop without reversing).
+    fn new(v: f64, a: f64, amax: f64, jmax: f64) -> Option<Stop> {
+        let d = v + a * a / (2.0 * jmax);
+        if a < 0.0 && a * a / (2.0 * jmax) > v * (1.0 + 1e-9) + 1e-15 {
+            return None;
+        }
+        if d <= 0.0 {
+            return Some(Stop {
+                v0: v,
+                a0: a,
+                j: jmax,
+                ap: 0.0,
+                t1: 0.0,
+                t2: 0.0,
+                t3: 0.0,
+            });
+        }
+        let ap = amax.min((jmax * d).sqrt()).max(-a);
+        let t1 = ((a + ap) / jmax).max(0.0);
+        let t2 = if ap > 0.0 {
+            ((d - ap * ap / jmax) / ap).max(0.0)
+        } else {
+            0.0
+        };
+        let t3 = ap / jmax;
+        Some(Stop {
+            v0: v,
+            a0: a,
+            j: jmax,
+            ap,
+            t1,
+            t2,
+            t3,
+        })
+    }
+
+    fn duration(&self) -> f64 {
+        self.t1 + self.t2 + self.t3
+    }
+
+    /// (position, speed, acceleration) at time t from the start (clamped at the end).
+    fn at(&self, t: f64) -> (f64, f64, f64) {
+        let j = self.j;
+        let t = t.max(0.0);
+        let tau = t.min(self.t1);
+        let mut s = self.v0 * tau + self.a0 * tau * tau / 2.0 - j * tau.powi(3) / 6.0;
+        let mut v = self.v0 + self.a0 * tau - j * tau * tau / 2.0;
+        let mut a = self.a0 - j * tau;
+        if t <= self.t1 {
+            return (s, v, a);
+        }
+        let tau = (t - self.t1).min(self.t2);
+        s += v * tau + a * tau * tau / 2.0;
+        v += a * tau;
+        if t <= self.t1 + self.t2 {
+            return (s, v, a);
+        }
+        let tau = (t - self.t1 - self.t2).min(self.t3);
+        s += v * tau + a * tau * tau / 2.0 + j * tau.powi(3) / 6.0;
+        v += a * tau + j * tau * tau / 2.0;
+        a += j * tau;
+        (s, v, a)
+    }
+
+    fn distance(&self) -> f64 {
+        self.at(self.duration()).0
+    }
+
+    /// Peak speed (reached when a positive initial acceleration has been ramped down).
+    fn peak(&self) -> f64 {
+        if self.a0 > 0.0 {
+            self.v0 + self.a0 * self.a0 / (2.0 * self.j)
+        } else {
+            self.v0
+        }
+    }
+
+    /// Does the profile pass position `x` (from its start) at a speed ≤ `c`?
+    fn under(&self, x: f64, c: f64) -> bool {
+        let c = c * (1.0 + REL) + 1e-12;
+        let pk = self.peak();
+        if pk <= c {
+            return true;
+        }
+        let j = self.j;
+        // Falling crossing: first time after the peak at which the speed is ≤ c.
+        let t_pk = (self.a0 / j).max(0.0).min(self.t1);
+        let v1 = self.at(self.t1).1;
+        let v2 = v1 - self.ap * self.t2;
+        let tf = if c >= v1 {
+            let disc = (self.a0 * self.a0 + 2.0 * j * (self.v0 - c)).max(0.0);
+            ((self.a0 + disc.sqrt()) / j).clamp(t_pk, self.t1)
+        } else if c >= v2 && self.ap > 0.0 {
+            self.t1 + (v1 - c) / self.ap
+        } else {
+            let disc = (self.ap * self.ap - 2.0 * j * (v2 - c)).max(0.0);
+            self.t1 + self.t2 + ((self.ap - disc.sqrt()) / j).clamp(0.0, self.t3)
+        };
+        let df = self.at(tf).0;
+        if x >= df * (1.0 - 1e-12) - 1e-12 {
+            return true;
+        }
+        if self.v0 <= c {
+            // Rising crossing inside phase 1.
+            let disc = (self.a0 * self.a0 - 2.0 * j * (c - self.v0)).max(0.0);
+            let tr = ((self.a0 - disc.sqrt()) / j).clamp(0.0, t_pk);
+            let dr = self.at(tr).0;
+            return x <= dr;
+        }
+        false
+    }
+
+    /// Time at which the profile reaches position x (bisection; x within the profile).
+    fn time_at(&self, x: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0, self.duration());
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if self.at(mid).0 < x {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+/// Shortest distance to bring the speed from (v, a) down to c with zero final
+/// acceleration (§6.3 "brake_dist").
+fn brake_dist(v: f64, a: f64, c: f64, amax: f64, jmax: f64) -> f64 {
+    if (v <= c && a <= 0.0) || (a > 0.0 && v + a * a / (2.0 * jmax) <= c) {
+        return 0.0;
+    }
+    let d = v - c + a * a / (2.0 * jmax);
+    if a < 0.0 && d <= a * a / jmax {
+        let t = (-a - (a * a - 2.0 * jmax * (v - c)).max(0.0).sqrt()) / jmax;
+        return v * t + a * t * t / 2.0 + jmax * t.powi(3) / 6.0;
+    }
+    match Stop::new(v - c, a, amax, jmax) {
+        Some(p) => p.distance() + c * p.duration(),
+        None => 0.0,
+    }
+}
+
+/// One cycle of constant jerk from (v, a): (Δs, v', a') after time τ.
+#[inline]
+fn step(v: f64, a: f64, j: f64, tau: f64) -> (f64, f64, f64) {
+    (
+        v * tau + a * tau * tau / 2.0 + j * tau.powi(3) / 6.0,
+        v + a * tau + j * tau * tau / 2.0,
+        a + j * tau,
+    )
+}
+
+struct Sim<'b> {
+    b: &'b Blocks,
+    cycle: f64,
+    lookahead: usize,
+    /// Last block of the segment being planned (exclusive).
+    end: usize,
+}
+
+/// How acceptable a next state is.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Debug)]
+enum Tier {
+    Rejected = 0,
+    Feasible = 1,
+    Releasable = 2,
+}
+
+impl Sim<'_> {
+    /// Block containing s, searching forward from `k` (never past `end − 1`).
+    #[inline]
+    fn block_at(&self, mut k: usize, s: f64) -> usize {
+        while k + 1 < self.end && self.b.start[k + 1] <= s {
+            k += 1;
+        }
+        k
+    }
+
+    /// Minimum ā and j̄ over blocks covering [s, s + d], from block k.
+    fn limits_over(&self, k: usize, s: f64, d: f64) -> (f64, f64) {
+        let (mut a, mut j) = (self.b.abar[k], self.b.jbar[k]);
+        let mut m = k + 1;
+        while m < self.end && self.b.start[m] < s + d {
+            a = a.min(self.b.abar[m]);
+            j = j.min(self.b.jbar[m]);
+            m += 1;
+        }
+        (a, j)
+    }
+
+    fn min_vbar(&self, k0: usize, k1: usize) -> f64 {
+        self.b.vbar[k0..=k1]
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// End of the look-ahead window seen from block k.
+    fn window_end(&self, k: usize) -> f64 {
+        if self.lookahead == 0 {
+            self.b.start[self.end]
+        } else {
+            self.b.start[(k + self.lookahead + 1).min(self.end)]
+        }
+    }
+
+    /// The full-stop profile from (v, a) at s in block k, with A and J over the blocks it
+    /// covers (iterated twice), both scaled by `margin`.
+    fn stop_from(&self, k: usize, s: f64, v: f64, a: f64, margin: f64) -> Option<Stop> {
+        let (mut am, mut jm) = (self.b.abar[k], self.b.jbar[k]);
+        let mut prof = Stop::new(v, a, am * margin, jm * margin)?;
+        for _ in 0..2 {
+            let (a2, j2) = self.limits_over(k, s, COVER * prof.distance() + v * self.cycle);
+            if a2 >= am && j2 >= jm {
+                break;
+            }
+            am = a2;
+            jm = j2;
+            prof = Stop::new(v, a, am * margin, jm * margin)?;
+        }
+        Some(prof)
+    }
+
+    /// Classify the state after one cycle of jerk j from (s, v, a) in block k.
+    fn evaluate(&self, k: usize, s: f64, v: f64, a: f64, j: f64) -> Tier {
+        let b = self.b;
+        let t = self.cycle;
+        let (ds, v1, a1) = step(v, a, j, t);
+        let s1 = s + ds;
+        let s_end = b.start[self.end];
+        if v1 < -1e-12 * (1.0 + v.abs()) || s1 >= s_end {
+            return Tier::Rejected;
+        }
+        let v1 = v1.max(0.0);
+        let k1 = self.block_at(k, s1);
+        // Speed inside the step: peak where the acceleration crosses zero.
+        let mut vmax = v.max(v1);
+        if a > 0.0 && a1 < 0.0 && j != 0.0 {
+            vmax = vmax.max(v - a * a / (2.0 * j));
+        }
+        if vmax > self.min_vbar(k, k1) * (1.0 + REL) {
+            return Tier::Rejected;
+        }
+        if a1.abs() > b.abar[k1] * (1.0 + REL) {
+            return Tier::Rejected;
+        }
+        // Ceilings of postures crossed during the step, at the crossing instant.
+        for p in (k + 1)..=k1 {
+            let sp = b.start[p];
+            if sp <= s {
+                continue;
+            }
+            let c = b.ceil[p];
+            let amax_step = a.abs().max(a1.abs());
+            if vmax <= c * (1.0 + REL) && amax_step <= b.abar[p] {
+                continue;
+            }
+            let tau = crossing_time(v, a, j, t, sp - s);
+            let vc = v + a * tau + j * tau * tau / 2.0;
+            if vc > c * (1.0 + REL) + 1e-12 {
+                return Tier::Rejected;
+            }
+            // Entering block p: the acceleration must be within its ā from here on.
+            if (a + j * tau).abs() > b.abar[p] * (1.0 + REL) {
+                return Tier::Rejected;
+            }
+        }
+        // The peak speed ahead (positive acceleration released at the block's jerk).
+        let jk = b.jbar[k1];
+        if a1 > 0.0 {
+            let tp = a1 / jk;
+            let vpk = peak_discrete(v1, a1, jk, t);
+            let dpk = v1 * tp + a1 * tp * tp / 2.0 - jk * tp.powi(3) / 6.0;
+            let mut m = k1;
+            while m < self.end && b.start[m] < s1 + dpk {
+                if vpk > b.vbar[m] * (1.0 + REL) {
+                    return Tier::Rejected;
+                }
+                m += 1;
+            }
+        }
+        let Some(prof) = self.stop_from(k1, s1, v1, a1, MARGIN) else {
+            return Tier::Rejected;
+        };
+        let dist = prof.distance();
+        let limit = self.window_end(k1).min(s_end);
+        if s1 + dist > limit + 1e-12 * (1.0 + limit.abs()) {
+            return Tier::Rejected;
+        }
+        // Acceleration on entering later blocks (only matters when |a'| exceeds their ā).
+        let pk = prof.peak();
+        let mut releasable = true;
+        let a_stop = b.abar[k1].min(prof.ap.max(a1.abs()));
+        let mut p = k1 + 1;
+        while p < self.end && b.start[p] <= s1 + dist {
+            let x = b.start[p] - s1;
+            let c = b.ceil[p];
+            if c < pk && !prof.under(x, c) {
+                return Tier::Rejected;
+            }
+            if a_stop > b.abar[p] * (1.0 + REL) {
+                let (_, _, ae) = prof.at(prof.time_at(x));
+                if ae.abs() > b.abar[p] * (1.0 + REL) {
+                    return Tier::Rejected;
+                }
+            }
+            if releasable && c < pk {
+                let (am, jm) = (prof.ap.max(1e-300).max(b.abar[p].min(b.abar[k1])), prof.j);
+                if brake_dist(v1, a1, c, am, jm) > x * (1.0 + 1e-12) + 1e-12 {
+                    releasable = false;
+                }
+            }
+            p += 1;
+        }
+        if releasable {
+            Tier::Releasable
+        } else {
+            Tier::Feasible
+        }
+    }
+
+    /// A measure of how badly a jerk violates the constraints (for the fallback tier).
+    fn violation(&self, k: usize, s: f64, v: f64, a: f64, j: f64) -> f64 {
+        let b = self.b;
+        let (ds, v1, a1) = step(v, a, j, self.cycle);
+        let s1 = s + ds;
+        let mut bad = (-v1).max(0.0);
+        let s_end = b.start[self.end];
+        let k1 = self.block_at(k, s1.min(s_end));
+        bad += (v1 - b.vbar[k1]).max(0.0);
+        let am = b.abar[k1];
+        let jm = b.jbar[k1];
+        let dist = Stop::new(v1.max(0.0), a1.max(-v1.max(0.0).sqrt() * jm.sqrt()), am, jm)
+            .map_or(0.0, |p| p.distance());
+        bad += (s1 + dist - s_end).max(0.0);
+        bad
+    }
+
+    /// Choose the jerk of the next cycle (§6.3 steps 1–3). Returns (jerk, fallback used).
+    fn choose(&self, k: usize, s: f64, v: f64, a: f64) -> (f64, bool) {
+        let b = self.b;
+        let t = self.cycle;
+        let (a0, j0) = (b.abar[k], b.jbar[k]);
+        let jh0 = j0.min((a0 - a) / t);
+        let (ds, ..) = step(v, a, jh0.max(0.0), t);
+        let k2 = self.block_at(k, s + ds);
+        let (mut am, mut jm) = (a0, j0);
+        for m in k..=k2 {
+            am = am.min(b.abar[m]);
+            jm = jm.min(b.jbar[m]);
+        }
+        let mut j_lo = (-jm).max((-am - a) / t);
+        let mut j_hi = jm.min((am - a) / t);
+        if j_lo > j_hi {
+            // |a| is beyond this block's ā (entering a weaker block): steer back.
+            if a > 0.0 {
+                j_hi = j_lo;
+            } else {
+                j_lo = j_hi;
+            }
+        }
+        // Tighten j_hi by the velocity cap of the step's blocks (closed form), so cruising
+        // needs one evaluation instead of a bisection.
+        let vcap = self.min_vbar(k, k2);
+        let j_cap = jerk_cap(v, a, t, jm, vcap, j_lo, j_hi);
+        if j_cap > f64::NEG_INFINITY {
+            j_hi = j_cap;
+        }
+        let clip = |x: f64| x.clamp(j_lo, j_hi);
+        let mut cands = [j_hi, clip(-a / t), clip(0.0), j_lo];
+        cands.sort_by(|x, y| y.total_cmp(x));
+        let mut tiers = [Tier::Rejected; 4];
+        let mut best = Tier::Rejected;
+        for (i, &c) in cands.iter().enumerate() {
+            if i > 0 && c == cands[i - 1] {
+                tiers[i] = tiers[i - 1];
+            } else {
+                tiers[i] = self.evaluate(k, s, v, a, c);
+            }
+            if tiers[i] == Tier::Releasable {
+                best = Tier::Releasable;
+                break;
+            }
+            best = best.max(tiers[i]);
+        }
+        if best == Tier::Rejected {
+            // Least violation on a 41-point grid.
+            let mut bj = j_lo;
+            let mut bv = f64::INFINITY;
+            for i in 0..=40 {
+                let jj = j_lo + (j_hi - j_lo) * i as f64 / 40.0;
+                let viol = self.violation(k, s, v, a, jj);
+                if viol < bv {
+                    bv = viol;
+                    bj = jj;
+                }
+            }
+            return (bj, true);
+        }
+        if best == Tier::Feasible && tiers[3] == Tier::Feasible {
+            // No candidate keeps every ceiling reachable with zero acceleration: the state
+            // fell behind a braking profile by less than a cycle (a phase switch inside a
+            // cycle). Riding the feasibility boundary from here would leave no feasible
+            // successor at the next phase switch, so brake as hard as allowed for a cycle
+            // to win the margin back.
+            return (cands[3], false);
+        }
+        let i = tiers.iter().position(|&x| x >= best).unwrap_or(3);
+        let mut good = cands[i];
+        if i == 0 {
+            return (good, false);
+        }
+        let mut bad = cands[i - 1];
+        for _ in 0..BISECT {
+            let mid = 0.5 * (good + bad);
+            if mid == good || mid == bad {
+                break;
+            }
+            if self.evaluate(k, s, v, a, mid) >= best {
+                good = mid;
+            } else {
+                bad = mid;
+            }
+        }
+        (good, false)
+    }
+}
+
+/// Highest speed reached from (v, a > 0) when the acceleration is ramped down at −J in
+/// whole cycles of length T, the last one with the jerk −a/T that ends at a = 0. It is the
+/// discrete counterpart of v + a²/(2J), never lower, so that a greedy interpolator can
+/// settle exactly on a speed cap instead of oscillating around it.
+fn peak_discrete(v: f64, a: f64, jm: f64, t: f64) -> f64 {
+    if a <= 0.0 {
+        return v;
+    }
+    let n = (a / (jm * t)).floor();
+    let r = a - n * jm * t;
+    v + n * n * jm * t * t / 2.0 + n * r * t + r * t / 2.0
+}
+
+/// Largest jerk j in [j_lo, j_hi] such that, after one cycle, the discrete peak speed is
+/// ≤ vcap (`NEG_INFINITY` if none).
+fn jerk_cap(v: f64, a: f64, t: f64, jm: f64, vcap: f64, j_lo: f64, j_hi: f64) -> f64 {
+    let ok = |j: f64| {
+        let (_, v1, a1) = step(v, a, j, t);
+        peak_discrete(v1, a1, jm, t) <= vcap
+    };
+    if ok(j_hi) {
+        return j_hi;
+    }
+    if !ok(j_lo) {
+        return f64::NEG_INFINITY;
+    }
+    let (mut lo, mut hi) = (j_lo, j_hi);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Time τ in [0, T] at which a constant-jerk step from (v, a) has advanced by x.
+fn crossing_time(v: f64, a: f64, j: f64, t: f64, x: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0, t);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if step(v, a, j, mid).0 < x {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Level 2 (§6.3): jerk-limited look-ahead interpolator at the cycle time. Exact stops
+/// (zero ceilings) split the path into rest-to-rest segments.
+pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing {
+    let n = b.n();
+    let np = n + 1;
+    let mut out = Timing {
+        t: vec![0.0; np],
+        v: vec![0.0; np],
+        block_peak: vec![0.0; n],
+        ..Default::default()
+    };
+    if n == 0 {
+        return out;
+    }
+    // Segment ends: the path ends, exact stops, and ceilings below the speed change of one
+    // cycle at the incoming block's jerk (j̄ T²). Braking to such a ceiling needs a phase
+    // switch inside a cycle, which a constant jerk per cycle cannot follow; a stop there
+    // costs less than a cycle and is planned in closed form like the path end.
+    let mut cuts = vec![0];
+    for p in 1..n {
+        let c = b.ceil[p];
+        if c <= b.jbar[p - 1] * cycle_time * cycle_time {
+            cuts.push(p);
+        }
+    }
+    cuts.push(n);
+    let mut t0 = 0.0;
+    for w in cuts.windows(2) {
+        let sim = Sim {
+            b,
+            cycle: cycle_time,
+            lookahead: lookahead_blocks,
+            end: w[1],
+        };
+        t0 = sim.run(w[0], t0, &mut out);
+    }
+    out.total = out.t[n];
+    // Self-check at the postures.
+    for p in 0..np {
+        let c = b.ceil[p];
+        let r = if c > 0.0 {
+            out.v[p] / c
+        } else if out.v[p] > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        };
+        out.max_ceiling_ratio = out.max_ceiling_ratio.max(r);
+    }
+    out
+}
+
+impl Sim<'_> {
+    /// Simulate the segment of blocks [k0, end), starting at rest at time t0. Returns the
+    /// end time.
+    fn run(&self, k0: usize, t0: f64, out: &mut Timing) -> f64 {
+        let b = self.b;
+        let cyc = self.cycle;
+        let s_end = b.start[self.end];
+        let seg_len = s_end - b.start[k0];
+        let eps = 1e-9 * seg_len;
+        let (mut s, mut v, mut a, mut t) = (b.start[k0], 0.0f64, 0.0f64, t0);
+        out.t[k0] = t0;
+        out.v[k0] = 0.0;
+        let mut k = k0;
+        let mut next = k0 + 1; // next posture to record
+        // Guard against a creeping simulation: far more cycles than any sane plan needs.
+        let l1 = {
+            let mut tmin = 0.0;
+            for m in k0..self.end {
+                tmin += b.len[m] / b.vbar[m];
+            }
+            tmin
+        };
+        let max_cycles = (50.0 * l1 / cyc) as usize + 100_000;
+        let mut cycles = 0usize;
+        let mut prev: Option<(f64, f64, f64, f64, usize, usize)> = None;
+        loop {
+            k = self.block_at(k, s);
+            // Final stop in closed form when the path end lies in the window and is due.
+            if self.window_end(k) >= s_end {
+                let due = self.stop_from(k, s, v, a, MARGIN);
+                if let (Some(check), Some(prof)) = (due, self.stop_from(k, s, v, a, 1.0)) {
+                    let rem = s_end - s;
+                    let d = prof.distance();
+                    if check.distance() >= rem - eps || cycles >= max_cycles {
+                        if cycles >= max_cycles {
+                            out.fallbacks += 1;
+                        }
+                        let gap = (rem - d).max(0.0);
+                        let tg = if gap > 0.0 && v > 0.0 { gap / v } else { 0.0 };
+                        while next < self.end {
+                            let x = b.start[next] - s;
+                            let (tt, vv) = if x <= gap {
+                                (if gap > 0.0 { tg * x / gap } else { 0.0 }, v)
+                            } else {
+                                let tp = prof.time_at(x - gap);
+                                (tg + tp, prof.at(tp).1)
+                            };
+                            out.t[next] = t + tt;
+                            out.v[next] = vv.max(0.0);
+                            next += 1;
+                        }
+                        let tend = t + tg + prof.duration();
+                        out.t[self.end] = tend.max(out.t[self.end - 1]);
+                        out.v[self.end] = 0.0;
+                        self.sample(k, v, a, 0.0, out);
+                        out.cycles += cycles;
+                        return out.t[self.end];
+                    }
+                }
+            }
+            let (j, fell) = self.choose(k, s, v, a);
+            if fell {
+                if let Some((ps, pv, pa, pt, pnext, pk)) = prev.take() {
+                    // The last state was feasible but has no feasible successor: it rode
+                    // the full-stop boundary into a phase switch inside a cycle. Its stop
+                    // manoeuvre is admissible by construction, so run it in closed form
+                    // from the last state and restart from rest.
+                    if let Some(prof) = self.stop_from(pk, ps, pv, pa, MARGIN) {
+                        next = pnext;
+                        while next < self.end && b.start[next] <= ps + prof.distance() {
+                            let tp = prof.time_at(b.start[next] - ps);
+                            out.t[next] = pt + tp;
+                            out.v[next] = prof.at(tp).1.max(0.0);
+                            next += 1;
+                        }
+                        s = ps + prof.distance();
+                        t = pt + prof.duration();
+                        v = 0.0;
+                        a = 0.0;
+                        out.stop_recoveries += 1;
+                        cycles += 1;
+                        continue;
+                    }
+                }
+                out.fallbacks += 1;
+            }
+            prev = Some((s, v, a, t, next, k));
+            let (ds, v1, a1) = step(v, a, j, cyc);
+            let s1 = (s + ds).min(s_end);
+            // Record postures crossed during the cycle.
+            while next < self.end && b.start[next] <= s1 {
+                let tau = crossing_time(v, a, j, cyc, b.start[next] - s);
+                let (_, vc, ac) = step(v, a, j, tau);
+                out.t[next] = t + tau;
+                out.v[next] = vc.max(0.0);
+                self.sample(next, vc, ac, j, out);
+                next += 1;
+            }
+            // Self-check samples inside the cycle.
+            for q in 1..=4 {
+                let tau = cyc * q as f64 / 4.0;
+                let (dq, vq, aq) = step(v, a, j, tau);
+                let kq = self.block_at(k, (s + dq).min(s_end));
+                self.sample(kq, vq, aq, j, out);
+            }
+            s = s1;
+            v = v1.max(0.0);
+            a = a1;
+            t += cyc;
+            cycles += 1;
+        }
+    }
+
+    /// Record a state sample in block k for the self-check and the block's peak speed.
+    fn sample(&self, k: usize, v: f64, a: f64, j: f64, out: &mut Timing) {
+        let k = k.min(self.end - 1);
+        let b = self.b;
+        let rv = v / b.vaxis[k];
+        let ra = a.abs() / b.abar[k];
+        let rj = j.abs() / b.jbar[k];
+        out.max_axis_ratio = out.max_axis_ratio.max(rv).max(ra).max(rj);
+        if v > out.block_peak[k] {
+            out.block_peak[k] = v;
+        }
+    }
+}
+
+/// The limiting constraint of the block starting at each posture (the last posture: stop).
+pub fn limits_per_posture(b: &Blocks, timing: &Timing, lookahead_blocks: usize) -> Vec<Limit> {
+    let n = b.n();
+    let mut out = Vec::with_capacity(n + 1);
+    for p in 0..=n {
+        if p == n {
+            out.push(Limit::Stop);
+            continue;
+        }
+        let v = timing.v[p];
+        let c = b.ceil[p];
+        let lim = if p > 0 && b.ceil_junction[p] && v >= 0.999 * c && c > 0.0 {
+            Limit::Junction
+        } else if timing.block_peak[p] >= 0.999 * b.vbar[p] {
+            b.vbar_by[p]
+        } else if lookahead_blocks > 0 {
+            Limit::Lookahead
+        } else {
+            Limit::Ramp(b.jbar_by[p])
+        };
+        out.push(lim);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn stop_profile_ends_at_rest() {
+        for &(v, a) in &[(83.0, 0.0), (83.0, 1500.0), (83.0, -1500.0), (1.0, 10.0)] {
+            let p = Stop::new(v, a, 5000.0, 40000.0).unwrap();
+            let (_, ve, ae) = p.at(p.duration());
+            assert!(ve.abs() < 1e-9 && ae.abs() < 1e-9, "{v} {a}: {ve} {ae}");
+            assert!(p.distance() > 0.0);
+        }
+        // Cannot stop without reversing.
+        assert!(Stop::new(0.01, -4000.0, 5000.0, 40000.0).is_none());
+    }
+
+    #[test]
+    fn brake_dist_closed_forms() {
+        // From rest-free cruise v to c with a = 0 and A not reached: t = 2 sqrt((v−c)/J),
+        // distance = (v + c)/2 · t.
+        let (v, c, j): (f64, f64, f64) = (83.333, 20.0, 40000.0);
+        let t = 2.0 * ((v - c) / j).sqrt();
+        assert_relative_eq!(
+            brake_dist(v, 0.0, c, 5000.0, j),
+            (v + c) / 2.0 * t,
+            max_relative = 1e-9
+        );
+        assert_eq!(brake_dist(10.0, -5.0, 20.0, 5000.0, j), 0.0);
+        assert_eq!(brake_dist(10.0, 5.0, 20.0, 5000.0, j), 0.0);
+    }
+
+    #[test]
+    fn under_matches_sampling() {
+        let p = Stop::new(50.0, 800.0, 3000.0, 40000.0).unwrap();
+        let n = 400;
+        for i in 1..n {
+            let t = p.duration() * i as f64 / n as f64;
+            let (x, v, _) = p.at(t);
+            assert!(p.under(x, v * 1.001 + 1e-6), "t {t}");
+            if v > 1.0 {
+                assert!(!p.under(x, v * 0.99), "t {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn jerk_cap_hits_the_cap() {
+        let (t, jm, vcap) = (0.003, 40000.0, 83.0);
+        for &(v, a) in &[(82.8, 0.0), (82.0, 200.0), (82.95, -30.0)] {
+            let j = jerk_cap(v, a, t, jm, vcap, -jm, jm);
+            let (_, v1, a1) = step(v, a, j, t);
+            assert_relative_eq!(peak_discrete(v1, a1, jm, t), vcap, max_relative = 1e-9);
+        }
+    }
+
+    #[test]
+    fn discrete_peak_bounds_the_continuous_one() {
+        let (t, jm) = (0.003, 40000.0);
+        for &a in &[0.0, 10.0, 120.0, 121.0, 1000.0, 4999.0] {
+            let d = peak_discrete(50.0, a, jm, t);
+            assert!(d >= 50.0 + a * a / (2.0 * jm) - 1e-12);
+            assert!(d <= 50.0 + a * a / (2.0 * jm) + a * t / 2.0 + 1e-12);
+        }
+    }
+}

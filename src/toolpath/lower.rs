@@ -1,0 +1,1120 @@
+//! Lowering: parse records → [`Posture`]s, one record at a time.
+//!
+//! [`Lowerer`] is an incremental state machine. It keeps the modal state of CLSF (feed,
+//! spindle, tool, units, tool axis, one-shot RAPID, pending CIRCLE, open NURBS block,
+//! cycle, cutter data) and hands every finished posture to a callback, so a file of any
+//! size lowers in constant memory. A posture is finished when the next record arrives,
+//! because a `CONTACT` record attaches to the GOTO before it.
+//!
+//! Coordinates stay in the frame they are written in (the operation's MCS) unless
+//! [`LowerOptions::apply_msys`] maps them to the absolute frame with the path's `MSYS`.
+//! Lengths become mm (`UNITS/INCH` and `IPM`/`IPR` feeds are converted), angles radians.
+
+use super::geom::Spline;
+use super::{
+    ArcMove, Contact, MotionKind, Posture, Program, RawRecord, ToolData, Toolpath, Warning,
+};
+use crate::math::{Point3, Vec3, normalize_or_none};
+use crate::parse::{Arg, Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+use std::collections::HashMap;
+
+/// mm per inch.
+pub const MM_PER_INCH: f64 = 25.4;
+/// At most this many warnings of one kind are kept; the rest are counted.
+const WARNINGS_PER_KIND: usize = 5;
+/// At most this many distinct feeds/spindle speeds are listed per path.
+const SEEN_LIMIT: usize = 64;
+/// At most this many raw (unknown) records are kept per path.
+const RAW_LIMIT: usize = 1000;
+
+/// How to lower.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LowerOptions {
+    /// Map coordinates with the path's MSYS to the absolute frame (`--absolute`).
+    pub apply_msys: bool,
+    /// Keep the postures in [`Toolpath::postures`] (off for streaming conversion).
+    pub keep_postures: bool,
+    /// Chord tolerance for sampling NURBS blocks, mm.
+    pub nurbs_tolerance_mm: f64,
+}
+
+impl Default for LowerOptions {
+    fn default() -> Self {
+        LowerOptions {
+            apply_msys: false,
+            keep_postures: true,
+            nurbs_tolerance_mm: 0.001,
+        }
+    }
+}
+
+/// Why lowering failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LowerError {
+    /// A record that parses but cannot mean anything geometric (zero axis, radius ≤ 0, …).
+    #[error("line {line}, column {column}: expected {expected}, found {found}")]
+    Invalid {
+        /// 1-based line.
+        line: u32,
+        /// 1-based column.
+        column: u32,
+        /// What was expected.
+        expected: String,
+        /// What was found.
+        found: String,
+    },
+    /// The posture callback failed (e.g. writing the output).
+    #[error("writing failed: {0}")]
+    Output(#[from] std::io::Error),
+}
+
+fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError {
+    LowerError::Invalid {
+        line,
+        column,
+        expected: expected.to_string(),
+        found,
+    }
+}
+
+/// Callback receiving each finished posture with the header of its path.
+pub type PostureSink<'a> = dyn FnMut(&Toolpath, &Posture) -> std::io::Result<()> + 'a;
+
+#[derive(Debug, Clone)]
+struct PendingCircle {
+    arc: ArcMove,
+    line: u32,
+}
+
+#[derive(Debug, Clone)]
+struct OpenNurbs {
+    knots: Vec<f64>,
+    cntrl: Vec<Point3>,
+    line: u32,
+}
+
+/// The incremental lowering state machine (see the module docs).
+pub struct Lowerer {
+    opts: LowerOptions,
+    path: Option<Toolpath>,
+    finished: Vec<Toolpath>,
+    warnings: Vec<Warning>,
+    warning_counts: HashMap<&'static str, usize>,
+    inch: bool,
+    feed_mm_min: Option<f64>,
+    feed_mm_rev: Option<f64>,
+    spindle_rpm: Option<f64>,
+    axis: Vec3,
+    rapid_next: bool,
+    circle: Option<PendingCircle>,
+    cycle: bool,
+    nurbs: Option<OpenNurbs>,
+    /// Last posture, not yet emitted (a CONTACT record may follow), in the file frame.
+    pending: Option<Posture>,
+    /// Current tool position in the file frame (start of the next move).
+    current: Option<Point3>,
+    /// Last emitted position in the output frame (for lengths).
+    last_out: Option<Point3>,
+    frame: Option<MsysFrame>,
+    /// The open path was started by a `TOOL PATH` record (and so needs `END-OF-PATH`).
+    opened_by_record: bool,
+}
+
+/// An orthonormal MSYS frame.
+#[derive(Debug, Clone, Copy)]
+struct MsysFrame {
+    origin: Vec3,
+    x: Vec3,
+    y: Vec3,
+    z: Vec3,
+}
+
+impl MsysFrame {
+    fn new(m: &[f64; 9], scale: f64) -> Option<MsysFrame> {
+        let x = normalize_or_none(&Vec3::new(m[3], m[4], m[5]), 1e-12)?;
+        let y0 = Vec3::new(m[6], m[7], m[8]);
+        let y = normalize_or_none(&(y0 - x * x.dot(&y0)), 1e-12)?;
+        Some(MsysFrame {
+            origin: Vec3::new(m[0], m[1], m[2]) * scale,
+            x,
+            y,
+            z: x.cross(&y),
+        })
+    }
+    fn dir(&self, v: &Vec3) -> Vec3 {
+        self.x * v.x + self.y * v.y + self.z * v.z
+    }
+    fn point(&self, p: &Point3) -> Point3 {
+        Point3::from(self.origin + self.dir(&p.coords))
+    }
+}
+
+fn vec3(t: [f64; 3]) -> Vec3 {
+    Vec3::new(t[0], t[1], t[2])
+}
+
+/// Normalise a direction read from a file: vectors within 10⁻⁶ of unit length are kept
+/// exactly as written (so printed digits survive round trips), others are normalised.
+fn unit_as_written(v: Vec3) -> Option<Vec3> {
+    let n = v.norm();
+    if !(n > 1e-12 && n.is_finite()) {
+        return None;
+    }
+    if (n - 1.0).abs() <= 1e-6 {
+        Some(v)
+    } else {
+        Some(v / n)
+    }
+}
+
+/// The surface normal at `cc` for a cutter with tip at `tip`, axis `axis`: from the CC
+/// point towards the centre of the cutter's rounding (the ball centre for a ball end, the
+/// nearest point of the corner-radius circle for a torus). Flat ends give the axis.
+pub fn derive_normal(tool: &ToolData, tip: &Point3, axis: &Vec3, cc: &Point3) -> Option<Vec3> {
+    let big_r = 0.5 * tool.diameter_mm;
+    let r = tool.corner_radius_mm.clamp(0.0, big_r.max(0.0));
+    if r <= 1e-9 {
+        return Some(*axis);
+    }
+    let mut centre = tip + axis * r;
+    if big_r - r > 1e-9 {
+        let w = cc - centre;
+        if let Some(radial) = normalize_or_none(&(w - axis * axis.dot(&w)), 1e-12) {
+            centre += radial * (big_r - r);
+        }
+    }
+    normalize_or_none(&(centre - cc), 1e-12)
+}
+
+impl Lowerer {
+    /// A new lowering with the given options.
+    pub fn new(opts: LowerOptions) -> Lowerer {
+        Lowerer {
+            opts,
+            path: None,
+            finished: Vec::new(),
+            warnings: Vec::new(),
+            warning_counts: HashMap::new(),
+            inch: false,
+            feed_mm_min: None,
+            feed_mm_rev: None,
+            spindle_rpm: None,
+            axis: Vec3::z(),
+            rapid_next: false,
+            circle: None,
+            cycle: false,
+            nurbs: None,
+            pending: None,
+            current: None,
+            last_out: None,
+            frame: None,
+            opened_by_record: false,
+        }
+    }
+
+    fn scale(&self) -> f64 {
+        if self.inch { MM_PER_INCH } else { 1.0 }
+    }
+
+    fn warn(&mut self, kind: &'static str, line: u32, column: u32, message: String) {
+        let count = self.warning_counts.entry(kind).or_insert(0);
+        *count += 1;
+        if *count <= WARNINGS_PER_KIND {
+            self.warnings.push(Warning {
+                line,
+                column,
+                message,
+            });
+        }
+    }
+
+    /// Start a tool path explicitly (contact12 input, or motion before any `TOOL PATH`).
+    pub fn begin_path(
+        &mut self,
+        name: &str,
+        tool_name: &str,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        self.end_path(sink)?;
+        self.path = Some(Toolpath {
+            name: name.to_string(),
+            tool_name: tool_name.to_string(),
+            ..Default::default()
+        });
+        Ok(())
+    }
+
+    fn ensure_path(
+        &mut self,
+        line: u32,
+        column: u32,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        if self.path.is_none() {
+            self.warn(
+                "outside",
+                line,
+                column,
+                "motion before any TOOL PATH record; an unnamed tool path was started".into(),
+            );
+            self.begin_path("", "", sink)?;
+        }
+        Ok(())
+    }
+
+    fn path_mut(&mut self) -> &mut Toolpath {
+        self.path.get_or_insert_with(Toolpath::default)
+    }
+
+    /// Emit the pending posture (and close an open NURBS block).
+    fn flush(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
+        if self.nurbs.is_some() {
+            self.close_nurbs(sink)?;
+        }
+        self.flush_pending(sink)
+    }
+
+    fn flush_pending(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
+        let Some(mut p) = self.pending.take() else {
+            return Ok(());
+        };
+        let start_file = self.current;
+        self.current = Some(p.position);
+        // Length of the move into p, in the file frame (MSYS is a rigid motion).
+        let seg = match (p.motion, start_file) {
+            (MotionKind::From, _) | (_, None) => 0.0,
+            (_, Some(s)) => match &p.arc {
+                Some(arc) => arc.length_mm(&s, &p.position),
+                None => (p.position - s).norm(),
+            },
+        };
+        if self.opts.apply_msys
+            && let Some(f) = self.frame
+        {
+            p.position = f.point(&p.position);
+            p.axis = f.dir(&p.axis);
+            if let Some(a) = &mut p.arc {
+                a.centre = f.point(&a.centre);
+                a.axis = f.dir(&a.axis);
+            }
+            if let Some(c) = &mut p.contact {
+                c.point = f.point(&c.point);
+                c.normal = f.dir(&c.normal);
+            }
+        }
+        self.last_out = Some(p.position);
+        let keep = self.opts.keep_postures;
+        let path = self.path.get_or_insert_with(Toolpath::default);
+        path.stats.postures += 1;
+        path.stats.length_mm += seg;
+        if p.motion == MotionKind::Cut {
+            path.stats.cutting_length_mm += seg;
+        }
+        sink(path, &p)?;
+        if keep {
+            path.postures.push(p);
+        }
+        Ok(())
+    }
+
+    fn close_nurbs(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
+        let Some(nb) = self.nurbs.take() else {
+            return Ok(());
+        };
+        // The spline starts at the current position: emit the pending posture first.
+        self.flush_pending(sink)?;
+        let Some(start) = self.current else {
+            self.warn(
+                "nurbs-start",
+                nb.line,
+                1,
+                "NURBS block without a start position; its control points are used as moves".into(),
+            );
+            return self.nurbs_polyline(nb, sink);
+        };
+        match Spline::from_clsf(start, &nb.knots, &nb.cntrl) {
+            Some(sp) => {
+                for q in sp.sample(self.opts.nurbs_tolerance_mm) {
+                    self.pending = Some(self.posture_here(q, nb.line));
+                    self.flush_pending(sink)?;
+                }
+                Ok(())
+            }
+            None => {
+                self.warn(
+                    "nurbs-knots",
+                    nb.line,
+                    1,
+                    format!(
+                        "NURBS block with {} knots and {} control points is not a clamped cubic; its control points are used as moves",
+                        nb.knots.len(),
+                        nb.cntrl.len()
+                    ),
+                );
+                self.nurbs_polyline(nb, sink)
+            }
+        }
+    }
+
+    fn nurbs_polyline(
+        &mut self,
+        nb: OpenNurbs,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        for q in nb.cntrl {
+            self.pending = Some(self.posture_here(q, nb.line));
+            self.flush_pending(sink)?;
+        }
+        Ok(())
+    }
+
+    fn motion_now(&mut self) -> MotionKind {
+        let m = if self.cycle {
+            MotionKind::Cycle
+        } else if self.rapid_next {
+            MotionKind::Rapid
+        } else {
+            MotionKind::Cut
+        };
+        self.rapid_next = false;
+        m
+    }
+
+    fn posture_here(&mut self, position: Point3, line: u32) -> Posture {
+        let motion = self.motion_now();
+        Posture {
+            position,
+            axis: self.axis,
+            motion,
+            arc: None,
+            contact: None,
+            feed_mm_min: self.feed_mm_min,
+            spindle_rpm: self.spindle_rpm,
+            line,
+        }
+    }
+
+    fn read_axis(&self, n: &Numbers, k: usize, line: u32, column: u32) -> Result<Vec3, LowerError> {
+        let t = n.triple(k);
+        unit_as_written(vec3(t)).ok_or_else(|| {
+            invalid(
+                line,
+                column,
+                "a unit vector",
+                format!("({}, {}, {})", t[0], t[1], t[2]),
+            )
+        })
+    }
+
+    fn contact_from(
+        &mut self,
+        n: &Numbers,
+        k: usize,
+        tip: &Point3,
+        axis: &Vec3,
+        line: u32,
+        column: u32,
+    ) -> Result<Contact, LowerError> {
+        let s = self.scale();
+        let point = Point3::from(vec3(n.triple(k)) * s);
+        if n.len() >= k + 6 {
+            let normal = self.read_axis(n, k + 3, line, column)?;
+            return Ok(Contact {
+                point,
+                normal,
+                normal_derived: false,
+            });
+        }
+        let derived = self
+            .path
+            .as_ref()
+            .and_then(|p| p.tool.as_ref())
+            .and_then(|t| derive_normal(t, tip, axis, &point));
+        let normal = match derived {
+            Some(nv) => nv,
+            None => {
+                self.warn(
+                    "normal-axis",
+                    line,
+                    column,
+                    "contact point without normal and no usable TLDATA: the tool axis is used as the normal".into(),
+                );
+                *axis
+            }
+        };
+        Ok(Contact {
+            point,
+            normal,
+            normal_derived: true,
+        })
+    }
+
+    /// Lower one CLSF record.
+    pub fn push(&mut self, rec: &Record, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
+        let (line, column) = (rec.line, rec.column);
+        // Anything but KNOT/CNTRL closes an open NURBS block; anything but CONTACT
+        // finishes the pending posture.
+        match &rec.kind {
+            RecordKind::Knot(_) | RecordKind::Cntrl(_) | RecordKind::Comment(_) => {}
+            RecordKind::Contact(_) => {
+                if self.nurbs.is_some() {
+                    self.close_nurbs(sink)?;
+                }
+            }
+            _ => self.flush(sink)?,
+        }
+        match &rec.kind {
+            RecordKind::ToolPath { name, tool } => {
+                if self.path.is_some() {
+                    self.warn(
+                        "no-end",
+                        line,
+                        column,
+                        "TOOL PATH before END-OF-PATH of the previous path".into(),
+                    );
+                }
+                self.begin_path(name, tool, sink)?;
+                self.opened_by_record = true;
+            }
+            RecordKind::EndOfPath => {
+                if self.path.is_none() {
+                    self.warn(
+                        "stray-end",
+                        line,
+                        column,
+                        "END-OF-PATH without TOOL PATH".into(),
+                    );
+                }
+                self.end_path(sink)?;
+            }
+            RecordKind::Tldata {
+                kind,
+                subtype: _,
+                args,
+            } => {
+                let nums: Vec<f64> = args
+                    .iter()
+                    .filter_map(|a| match a {
+                        Arg::Num(v) => Some(*v),
+                        Arg::Word(_) => None,
+                    })
+                    .collect();
+                let s = self.scale();
+                let get = |k: usize| nums.get(k).copied().unwrap_or(0.0);
+                let tool = match kind.as_str() {
+                    "MILL" => ToolData {
+                        kind: kind.clone(),
+                        diameter_mm: get(0) * s,
+                        corner_radius_mm: get(1) * s,
+                        length_mm: get(2) * s,
+                        taper_rad: get(3).to_radians(),
+                        tip_rad: get(4).to_radians(),
+                    },
+                    "DRILL" => ToolData {
+                        kind: kind.clone(),
+                        diameter_mm: get(0) * s,
+                        corner_radius_mm: get(1) * s,
+                        length_mm: get(2) * s,
+                        taper_rad: 0.0,
+                        tip_rad: get(3).to_radians(),
+                    },
+                    _ => ToolData {
+                        kind: kind.clone(),
+                        ..Default::default()
+                    },
+                };
+                if kind == "MILL" && nums.len() < 2 {
+                    return Err(invalid(
+                        line,
+                        column,
+                        "TLDATA/MILL with at least diameter and corner radius",
+                        format!("{} numbers", nums.len()),
+                    ));
+                }
+                if tool.diameter_mm < 0.0 || tool.corner_radius_mm < 0.0 {
+                    return Err(invalid(
+                        line,
+                        column,
+                        "a tool diameter and radius ≥ 0",
+                        format!("{} and {}", get(0), get(1)),
+                    ));
+                }
+                self.path_mut().tool = Some(tool);
+            }
+            RecordKind::Msys(m) => {
+                let frame = MsysFrame::new(m, self.scale());
+                if frame.is_none() {
+                    return Err(invalid(
+                        line,
+                        column,
+                        "MSYS with two independent axis vectors",
+                        "a zero or parallel axis".into(),
+                    ));
+                }
+                self.frame = frame;
+                let s = self.scale();
+                let mut mm = *m;
+                for v in mm.iter_mut().take(3) {
+                    *v *= s;
+                }
+                let applied = self.opts.apply_msys;
+                let p = self.path_mut();
+                p.msys = Some(mm);
+                p.msys_applied = applied;
+            }
+            RecordKind::Comment(_) | RecordKind::Paint(_) | RecordKind::Cutcom(_) => {}
+            RecordKind::Units(u) => self.inch = *u == LengthUnit::Inch,
+            RecordKind::LoadTool { .. } | RecordKind::SelectTool { .. } => {}
+            RecordKind::Fedrat { unit, value } => {
+                let per_rev = matches!(
+                    unit,
+                    Some(FeedUnit::Mmpr | FeedUnit::Ipr | FeedUnit::Perrev)
+                );
+                let factor = match unit {
+                    Some(FeedUnit::Mmpm | FeedUnit::Mmpr) => 1.0,
+                    Some(FeedUnit::Ipm | FeedUnit::Ipr) => MM_PER_INCH,
+                    Some(FeedUnit::Permin | FeedUnit::Perrev) | None => self.scale(),
+                };
+                if *value < 0.0 {
+                    return Err(invalid(line, column, "a feed ≥ 0", format!("{value}")));
+                }
+                let v = value * factor;
+                if per_rev {
+                    self.feed_mm_rev = Some(v);
+                    self.feed_mm_min = self.spindle_rpm.map(|rpm| v * rpm);
+                    if self.spindle_rpm.is_none() {
+                        self.warn(
+                            "feed-per-rev",
+                            line,
+                            column,
+                            "feed per revolution before any spindle speed: feed unknown until SPINDL".into(),
+                        );
+                    }
+                } else {
+                    self.feed_mm_rev = None;
+                    self.feed_mm_min = Some(v);
+                }
+                if let Some(f) = self.feed_mm_min {
+                    self.note_feed(f);
+                }
+            }
+            RecordKind::Spindl(args) => self.spindl(args, line, column),
+            RecordKind::Rapid => {
+                self.rapid_next = true;
+                self.path_mut().stats.rapids += 1;
+            }
+            RecordKind::Cycle(args) => {
+                self.cycle = !args.first().is_some_and(|a| a.is_word("OFF"));
+            }
+            RecordKind::Circle { numbers, times } => {
+                self.ensure_path(line, column, sink)?;
+                let s = self.scale();
+                let axis = self.read_axis(numbers, 3, line, column)?;
+                let radius = numbers.as_slice()[6] * s;
+                if radius <= 0.0 {
+                    return Err(invalid(
+                        line,
+                        column,
+                        "a CIRCLE radius > 0",
+                        format!("{}", numbers.as_slice()[6]),
+                    ));
+                }
+                if let Some(c) = &self.circle {
+                    let l = c.line;
+                    self.warn(
+                        "circle-unused",
+                        line,
+                        column,
+                        format!("CIRCLE on line {l} was not followed by a GOTO"),
+                    );
+                }
+                self.circle = Some(PendingCircle {
+                    arc: ArcMove {
+                        centre: Point3::from(vec3(numbers.triple(0)) * s),
+                        axis,
+                        radius_mm: radius,
+                        extra_turns: times.map(|t| t.saturating_sub(1)).unwrap_or(0),
+                    },
+                    line,
+                });
+                self.path_mut().stats.circles += 1;
+            }
+            RecordKind::Goto(n) => {
+                self.ensure_path(line, column, sink)?;
+                self.path_mut().stats.gotos += 1;
+                let s = self.scale();
+                let position = Point3::from(vec3(n.triple(0)) * s);
+                if n.len() >= 6 {
+                    self.axis = self.read_axis(n, 3, line, column)?;
+                }
+                let mut p = self.posture_here(position, line);
+                if let Some(c) = self.circle.take() {
+                    p.arc = Some(c.arc);
+                }
+                if n.len() >= 9 {
+                    let axis = self.axis;
+                    p.contact = Some(self.contact_from(n, 6, &position, &axis, line, column)?);
+                }
+                self.pending = Some(p);
+            }
+            RecordKind::From(n) | RecordKind::GoHome(n) => {
+                self.ensure_path(line, column, sink)?;
+                let s = self.scale();
+                let position = Point3::from(vec3(n.triple(0)) * s);
+                if n.len() >= 6 {
+                    self.axis = self.read_axis(n, 3, line, column)?;
+                }
+                let mut p = self.posture_here(position, line);
+                p.motion = if matches!(rec.kind, RecordKind::From(_)) {
+                    MotionKind::From
+                } else {
+                    MotionKind::GoHome
+                };
+                self.pending = Some(p);
+            }
+            RecordKind::Contact(n) => {
+                let Some(p) = self.pending.take() else {
+                    self.warn(
+                        "contact-orphan",
+                        line,
+                        column,
+                        "CONTACT record without a GOTO before it; ignored".into(),
+                    );
+                    return Ok(());
+                };
+                let mut p = p;
+                if p.contact.is_some() {
+                    self.warn(
+                        "contact-twice",
+                        line,
+                        column,
+                        format!(
+                            "CONTACT record replaces the contact data of the GOTO on line {}",
+                            p.line
+                        ),
+                    );
+                }
+                let (tip, axis) = (p.position, p.axis);
+                p.contact = Some(self.contact_from(n, 0, &tip, &axis, line, column)?);
+                self.pending = Some(p);
+            }
+            RecordKind::Nurbs => {
+                self.ensure_path(line, column, sink)?;
+                self.path_mut().stats.nurbs += 1;
+                self.nurbs = Some(OpenNurbs {
+                    knots: Vec::new(),
+                    cntrl: Vec::new(),
+                    line,
+                });
+            }
+            RecordKind::Knot(k) => match &mut self.nurbs {
+                Some(nb) => nb.knots.extend_from_slice(k),
+                None => self.warn(
+                    "knot-orphan",
+                    line,
+                    column,
+                    "KNOT outside a NURBS block; ignored".into(),
+                ),
+            },
+            RecordKind::Cntrl(c) => {
+                let s = self.scale();
+                match &mut self.nurbs {
+                    Some(nb) => nb.cntrl.push(Point3::from(vec3(*c) * s)),
+                    None => self.warn(
+                        "cntrl-orphan",
+                        line,
+                        column,
+                        "CNTRL outside a NURBS block; ignored".into(),
+                    ),
+                }
+            }
+            RecordKind::Unknown { word, text } => {
+                self.warn(
+                    "unknown",
+                    line,
+                    column,
+                    format!("unknown record {word} kept raw"),
+                );
+                let p = self.path_mut();
+                if p.raw_records.len() < RAW_LIMIT {
+                    p.raw_records.push(RawRecord {
+                        line,
+                        text: text.clone(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn note_feed(&mut self, f: f64) {
+        let st = &mut self.path_mut().stats;
+        if !st.feeds_mm_min.contains(&f) && st.feeds_mm_min.len() < SEEN_LIMIT {
+            st.feeds_mm_min.push(f);
+        }
+    }
+
+    fn spindl(&mut self, args: &[Arg], line: u32, column: u32) {
+        let speed = args.iter().find_map(|a| match a {
+            Arg::Num(v) => Some(*v),
+            Arg::Word(_) => None,
+        });
+        if args.iter().any(|a| a.is_word("OFF")) {
+            self.spindle_rpm = None;
+            return;
+        }
+        let Some(v) = speed else {
+            return; // SPINDL/ON keeps the last speed.
+        };
+        let diameter = self
+            .path
+            .as_ref()
+            .and_then(|p| p.tool.as_ref())
+            .map(|t| t.diameter_mm);
+        let surface = if args.iter().any(|a| a.is_word("SMM")) {
+            Some(1000.0)
+        } else if args.iter().any(|a| a.is_word("SFM")) {
+            Some(304.8)
+        } else {
+            None
+        };
+        let rpm = match (surface, diameter) {
+            (None, _) => Some(v),
+            (Some(mm_per_unit), Some(d)) if d > 0.0 => {
+                Some(v * mm_per_unit / (std::f64::consts::PI * d))
+            }
+            (Some(_), _) => {
+                self.warn(
+                    "spindle-surface",
+                    line,
+                    column,
+                    "surface speed without a tool diameter: spindle speed unknown".into(),
+                );
+                None
+            }
+        };
+        self.spindle_rpm = rpm;
+        if let Some(fr) = self.feed_mm_rev {
+            self.feed_mm_min = rpm.map(|r| fr * r);
+            if let Some(f) = self.feed_mm_min {
+                self.note_feed(f);
+            }
+        }
+        if let Some(r) = rpm {
+            let st = &mut self.path_mut().stats;
+            if !st.spindles_rpm.contains(&r) && st.spindles_rpm.len() < SEEN_LIMIT {
+                st.spindles_rpm.push(r);
+            }
+        }
+    }
+
+    /// Lower one contact12 line: columns 7-12 given in full = a cutting move with contact
+    /// data; all of them missing or zero, or a missing/zero normal = a non-cutting move
+    /// (`MotionKind::Rapid`).
+    pub fn push_contact12(
+        &mut self,
+        row: &Contact12Row,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        self.flush(sink)?;
+        let line = row.line;
+        self.ensure_path(line, 1, sink)?;
+        self.path_mut().stats.gotos += 1;
+        let c = &row.cl_axis;
+        let position = Point3::new(c[0], c[1], c[2]);
+        let raw_axis = Vec3::new(c[3], c[4], c[5]);
+        let axis = unit_as_written(raw_axis).ok_or_else(|| {
+            invalid(
+                line,
+                row.columns[3],
+                "a unit tool axis",
+                format!("({}, {}, {})", c[3], c[4], c[5]),
+            )
+        })?;
+        self.axis = axis;
+        let t = &row.contact;
+        let triple_state = |k: usize| -> Result<Option<[f64; 3]>, LowerError> {
+            match (t[k], t[k + 1], t[k + 2]) {
+                (Some(a), Some(b), Some(c)) => Ok(Some([a, b, c])),
+                (None, None, None) => Ok(None),
+                _ => {
+                    let bad = (k..k + 3).find(|&j| t[j].is_none()).unwrap_or(k);
+                    Err(invalid(
+                        line,
+                        row.columns[6 + bad],
+                        "a number (a CC point or normal is given in full or marked missing in full)",
+                        "a missing value".into(),
+                    ))
+                }
+            }
+        };
+        let cc = triple_state(0)?;
+        let normal = triple_state(3)?;
+        let normal = normal.and_then(|n| unit_as_written(vec3(n)));
+        let mut p = Posture {
+            position,
+            axis,
+            motion: MotionKind::Cut,
+            arc: None,
+            contact: None,
+            feed_mm_min: None,
+            spindle_rpm: None,
+            line,
+        };
+        match (cc, normal) {
+            (Some(cc), Some(n)) => {
+                p.contact = Some(Contact {
+                    point: Point3::from(vec3(cc)),
+                    normal: n,
+                    normal_derived: false,
+                });
+            }
+            (cc, _) => {
+                if cc.is_some_and(|c| c.iter().any(|v| *v != 0.0)) {
+                    self.warn(
+                        "cc-without-normal",
+                        line,
+                        row.columns[9],
+                        "CC point without a usable normal: line treated as non-cutting".into(),
+                    );
+                }
+                p.motion = MotionKind::Rapid;
+            }
+        }
+        self.pending = Some(p);
+        Ok(())
+    }
+
+    fn end_path(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
+        self.flush(sink)?;
+        if let Some(c) = self.circle.take() {
+            self.warn(
+                "circle-unused",
+                c.line,
+                1,
+                "CIRCLE not followed by a GOTO".into(),
+            );
+        }
+        if let Some(p) = self.path.take() {
+            self.finished.push(p);
+        }
+        // State resets at the end of a path (units are file-wide).
+        self.feed_mm_min = None;
+        self.feed_mm_rev = None;
+        self.spindle_rpm = None;
+        self.axis = Vec3::z();
+        self.rapid_next = false;
+        self.cycle = false;
+        self.current = None;
+        self.last_out = None;
+        self.frame = None;
+        self.opened_by_record = false;
+        Ok(())
+    }
+
+    /// Finish: close an unterminated path and return the program (postures included only
+    /// when [`LowerOptions::keep_postures`]).
+    pub fn finish(mut self, sink: &mut PostureSink<'_>) -> Result<Program, LowerError> {
+        if self.path.is_some() {
+            self.flush(sink)?;
+            if self.opened_by_record {
+                self.warn("no-end", 0, 0, "file ends without END-OF-PATH".into());
+            }
+            self.end_path(sink)?;
+        }
+        let mut counts: Vec<(&'static str, usize)> = self
+            .warning_counts
+            .iter()
+            .filter(|(_, c)| **c > WARNINGS_PER_KIND)
+            .map(|(k, c)| (*k, *c))
+            .collect();
+        counts.sort();
+        for (kind, c) in counts {
+            self.warnings.push(Warning {
+                line: 0,
+                column: 0,
+                message: format!(
+                    "{} more warnings of kind {kind} not shown",
+                    c - WARNINGS_PER_KIND
+                ),
+            });
+        }
+        Ok(Program {
+            paths: self.finished,
+            warnings: self.warnings,
+        })
+    }
+}
+
+/// Lower records held in memory (tests, small inputs).
+pub fn lower_records(records: &[Record], opts: LowerOptions) -> Result<Program, LowerError> {
+    let mut low = Lowerer::new(opts);
+    let mut sink = |_: &Toolpath, _: &Posture| Ok(());
+    for r in records {
+        low.push(r, &mut sink)?;
+    }
+    low.finish(&mut sink)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::parse::clsf::parse_str;
+    use approx::assert_relative_eq;
+
+    fn lower(text: &str, apply_msys: bool) -> Program {
+        let recs = parse_str(text).unwrap_or_else(|e| panic!("{e}"));
+        lower_records(
+            &recs,
+            LowerOptions {
+                apply_msys,
+                ..Default::default()
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn modal_state_rapid_axis_and_feed() {
+        let p = lower(
+            "TOOL PATH/OP,TOOL,T\nTLDATA/MILL,10,5,50,0,0\nRAPID\nGOTO/0,0,10,0,0,1\nFEDRAT/MMPM,500\nSPINDL/RPM,8000,CLW\nGOTO/0,0,0\nGOTO/3,4,0,0,1,0\nGOTO/3,4,1\nEND-OF-PATH\n",
+            false,
+        );
+        let t = &p.paths[0];
+        let ps = &t.postures;
+        assert_eq!(ps.len(), 4);
+        assert_eq!(ps[0].motion, MotionKind::Rapid);
+        assert_eq!(ps[0].feed_mm_min, None);
+        assert_eq!(ps[1].motion, MotionKind::Cut);
+        assert_eq!(ps[1].feed_mm_min, Some(500.0));
+        assert_eq!(ps[1].spindle_rpm, Some(8000.0));
+        assert_eq!(ps[1].axis, Vec3::z());
+        assert_eq!(ps[3].axis, Vec3::y());
+        // The rapid starts the path (no length); the cuts are 10, 5 and 1 mm.
+        assert_relative_eq!(t.stats.length_mm, 16.0, epsilon = 1e-12);
+        assert_relative_eq!(t.stats.cutting_length_mm, 16.0, epsilon = 1e-12);
+        assert_eq!((t.stats.gotos, t.stats.rapids), (4, 1));
+    }
+
+    #[test]
+    fn inches_and_feed_units() {
+        let p = lower(
+            "UNITS/INCH\nTOOL PATH/OP,TOOL,T\nSPINDL/RPM,1000\nFEDRAT/IPR,0.01\nGOTO/1,0,0\nFEDRAT/IPM,10\nGOTO/2,0,0\nEND-OF-PATH\n",
+            false,
+        );
+        let ps = &p.paths[0].postures;
+        assert_relative_eq!(ps[0].position.x, 25.4, epsilon = 1e-12);
+        assert_relative_eq!(ps[0].feed_mm_min.unwrap_or(0.0), 254.0, epsilon = 1e-9);
+        assert_relative_eq!(ps[1].feed_mm_min.unwrap_or(0.0), 254.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn msys_applied_only_on_request() {
+        let text =
+            "TOOL PATH/OP,TOOL,T\nMSYS/10,20,30,0,1,0,1,0,0\nGOTO/1,2,3,0,0,1\nEND-OF-PATH\n";
+        let kept = lower(text, false);
+        assert_eq!(
+            kept.paths[0].postures[0].position,
+            Point3::new(1.0, 2.0, 3.0)
+        );
+        let abs = lower(text, true);
+        let q = &abs.paths[0].postures[0];
+        // X_mcs = +y_acs, Y_mcs = +x_acs, Z_mcs = X × Y = −z_acs.
+        assert_relative_eq!(q.position, Point3::new(12.0, 21.0, 27.0), epsilon = 1e-12);
+        assert_relative_eq!(q.axis, -Vec3::z(), epsilon = 1e-12);
+        assert!(abs.paths[0].msys_applied);
+    }
+
+    #[test]
+    fn contact_forms_and_derived_normals() {
+        // Ball R = 5, axis +Z, tip at origin: ball centre (0,0,5). CC at 45° on the ball.
+        let c = 5.0 - 5.0 * 0.5f64.sqrt();
+        let text = format!(
+            "TOOL PATH/OP,TOOL,BALL\nTLDATA/MILL,10,5,50,0,0\nGOTO/0,0,0,0,0,1,{x},0,{c}\nGOTO/1,0,0\n$$ CONTACT/1,0,0,0,0,2\nGOTO/2,0,0\nCONTACT/{x2},0,{c}\nEND-OF-PATH\n",
+            x = 5.0 * 0.5f64.sqrt(),
+            x2 = 2.0 + 5.0 * 0.5f64.sqrt(),
+        );
+        let p = lower(&text, false);
+        let ps = &p.paths[0].postures;
+        let n0 = ps[0].contact.as_ref().unwrap_or_else(|| panic!("contact"));
+        assert!(n0.normal_derived);
+        assert_relative_eq!(
+            n0.normal,
+            Vec3::new(-1.0, 0.0, 1.0).normalize(),
+            epsilon = 1e-12
+        );
+        let n1 = ps[1].contact.as_ref().unwrap_or_else(|| panic!("contact"));
+        assert!(!n1.normal_derived);
+        assert_eq!(n1.normal, Vec3::z());
+        let n2 = ps[2].contact.as_ref().unwrap_or_else(|| panic!("contact"));
+        assert_relative_eq!(
+            n2.normal,
+            Vec3::new(-1.0, 0.0, 1.0).normalize(),
+            epsilon = 1e-12
+        );
+    }
+
+    #[test]
+    fn torus_normal_points_to_the_corner_circle() {
+        let tool = ToolData {
+            kind: "MILL".into(),
+            diameter_mm: 20.0,
+            corner_radius_mm: 2.0,
+            ..Default::default()
+        };
+        // Corner circle centre ring: radius 8 at height 2. CC straight out at radius 10.
+        let n = derive_normal(
+            &tool,
+            &Point3::origin(),
+            &Vec3::z(),
+            &Point3::new(10.0, 0.0, 2.0),
+        );
+        assert_relative_eq!(n.unwrap_or_else(Vec3::zeros), -Vec3::x(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn arcs_cycles_and_times() {
+        let p = lower(
+            "TOOL PATH/OP,TOOL,T\nGOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10,0.06,0.5,10,0,TIMES,2\nGOTO/0,-10,0\nCYCLE/DRILL,RAPTO,3\nGOTO/5,5,0\nCYCLE/OFF\nGOTO/5,5,1\nEND-OF-PATH\n",
+            false,
+        );
+        let t = &p.paths[0];
+        let arc = t.postures[1].arc.as_ref().unwrap_or_else(|| panic!("arc"));
+        assert_eq!(arc.extra_turns, 1);
+        assert_eq!(t.postures[2].motion, MotionKind::Cycle);
+        assert_eq!(t.postures[3].motion, MotionKind::Cut);
+        let quarter = 10.0 * std::f64::consts::FRAC_PI_2;
+        let hole = (Point3::new(5.0, 5.0, 0.0) - Point3::new(0.0, -10.0, 0.0)).norm();
+        assert_relative_eq!(
+            t.stats.length_mm,
+            quarter + 20.0 * std::f64::consts::PI + hole + 1.0,
+            epsilon = 1e-9
+        );
+        assert_relative_eq!(
+            t.stats.cutting_length_mm,
+            quarter + 20.0 * std::f64::consts::PI + 1.0,
+            epsilon = 1e-9
+        );
+    }
+
+    #[test]
+    fn several_paths_reset_state() {
+        let p = lower(
+            "TOOL PATH/A,TOOL,T\nFEDRAT/100\nGOTO/0,0,0,1,0,0\nEND-OF-PATH\nTOOL PATH/B,TOOL,T\nGOTO/1,0,0\nEND-OF-PATH\n",
+            false,
+        );
+        assert_eq!(p.paths.len(), 2);
+        assert_eq!(p.paths[1].postures[0].axis, Vec3::z());
+        assert_eq!(p.paths[1].postures[0].feed_mm_min, None);
+    }
+
+    #[test]
+    fn bad_geometry_is_an_error_with_position() {
+        let recs = parse_str("TOOL PATH/A,TOOL,T\nGOTO/0,0,0,0,0,0\n").unwrap_or_default();
+        match lower_records(&recs, LowerOptions::default()) {
+            Err(LowerError::Invalid { line, column, .. }) => assert_eq!((line, column), (2, 1)),
+            other => panic!("{other:?}"),
+        }
+    }
+}

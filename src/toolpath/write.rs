@@ -1,0 +1,420 @@
+//! Writers: NX-style CLSF with contact data and contact12 CSV, posture by posture.
+//!
+//! Numbers are printed in fixed point: lengths with 4 to 6 decimals, unit vectors with 7
+//! to 9 (NX writes 4 and 7; trailing zeros beyond that are dropped). A number read from a
+//! file with at most that many decimals prints back to the same digits, so contact12 →
+//! CLSF → contact12 is exact to the printed digits.
+
+use super::{MotionKind, Posture, ToolData, Toolpath};
+use std::io::{self, Write};
+
+/// Decimals of lengths: at least, at most.
+pub const LENGTH_DECIMALS: (u32, u32) = (4, 6);
+/// Decimals of unit vectors: at least, at most.
+pub const UNIT_DECIMALS: (u32, u32) = (7, 9);
+
+const POW10: [u64; 10] = [
+    1,
+    10,
+    100,
+    1_000,
+    10_000,
+    100_000,
+    1_000_000,
+    10_000_000,
+    100_000_000,
+    1_000_000_000,
+];
+
+/// Append `v` in fixed point with between `min` and `max` decimals (`max ≤ 9`), rounded
+/// half away from zero; `-0` prints as `0`.
+pub fn push_fixed(out: &mut Vec<u8>, v: f64, (min, max): (u32, u32)) {
+    let max = max.min(9);
+    let min = min.min(max);
+    let scaled = (v * POW10[max as usize] as f64).round();
+    if !scaled.is_finite() || scaled.abs() >= 9.0e15 {
+        // Huge or non-finite values: the shortest exact form.
+        let _ = write!(out, "{v}");
+        return;
+    }
+    let mut q = scaled.abs() as u64;
+    let mut dec = max;
+    while dec > min && q % 10 == 0 {
+        q /= 10;
+        dec -= 1;
+    }
+    if scaled < 0.0 && q != 0 {
+        out.push(b'-');
+    }
+    let p = POW10[dec as usize];
+    let (int, frac) = (q / p, q % p);
+    push_u64(out, int);
+    if dec > 0 {
+        out.push(b'.');
+        let mut digits = [b'0'; 9];
+        let mut f = frac;
+        for k in (0..dec as usize).rev() {
+            digits[k] = b'0' + (f % 10) as u8;
+            f /= 10;
+        }
+        out.extend_from_slice(&digits[..dec as usize]);
+    }
+}
+
+fn push_u64(out: &mut Vec<u8>, mut v: u64) {
+    let mut buf = [0u8; 20];
+    let mut k = buf.len();
+    loop {
+        k -= 1;
+        buf[k] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    out.extend_from_slice(&buf[k..]);
+}
+
+/// Format one number (tests, messages).
+pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
+    let mut b = Vec::new();
+    push_fixed(&mut b, v, decimals);
+    String::from_utf8(b).unwrap_or_default()
+}
+
+/// The contact12 CSV header.
+pub const CONTACT12_HEADER: &str = "x,y,z,i,j,k,cx,cy,cz,nx,ny,nz";
+
+/// Streams contact12 rows.
+pub struct Contact12Writer {
+    all_moves: bool,
+    line: Vec<u8>,
+}
+
+impl Contact12Writer {
+    /// A writer; `all_moves` writes every posture (CC/normal empty without contact),
+    /// otherwise only cutting moves with contact data.
+    pub fn new(all_moves: bool) -> Contact12Writer {
+        Contact12Writer {
+            all_moves,
+            line: Vec::with_capacity(160),
+        }
+    }
+
+    /// Write the header line.
+    pub fn header(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        out.write_all(CONTACT12_HEADER.as_bytes())?;
+        out.write_all(b"\n")
+    }
+
+    /// Write the row of one posture, if it qualifies.
+    pub fn posture(&mut self, p: &Posture, out: &mut dyn Write) -> io::Result<()> {
+        let cutting_contact = p.motion == MotionKind::Cut && p.contact.is_some();
+        if !(self.all_moves || cutting_contact) {
+            return Ok(());
+        }
+        let l = &mut self.line;
+        l.clear();
+        for v in [p.position.x, p.position.y, p.position.z] {
+            push_fixed(l, v, LENGTH_DECIMALS);
+            l.push(b',');
+        }
+        for v in [p.axis.x, p.axis.y, p.axis.z] {
+            push_fixed(l, v, UNIT_DECIMALS);
+            l.push(b',');
+        }
+        match &p.contact {
+            Some(c) => {
+                for v in [c.point.x, c.point.y, c.point.z] {
+                    push_fixed(l, v, LENGTH_DECIMALS);
+                    l.push(b',');
+                }
+                for (k, v) in [c.normal.x, c.normal.y, c.normal.z].into_iter().enumerate() {
+                    push_fixed(l, v, UNIT_DECIMALS);
+                    if k < 2 {
+                        l.push(b',');
+                    }
+                }
+            }
+            None => l.extend_from_slice(b",,,,,"),
+        }
+        l.push(b'\n');
+        out.write_all(l)
+    }
+}
+
+/// Streams NX-style CLSF: header records per path, then one or two records per posture
+/// (`RAPID`, `CIRCLE`, `FEDRAT`, `SPINDL`, `CYCLE` where needed), `END-OF-PATH`.
+pub struct ClsfWriter {
+    line: Vec<u8>,
+    feed: Option<f64>,
+    spindle: Option<f64>,
+    axis: Option<[u8; 64]>,
+    axis_len: usize,
+    cycle: bool,
+    tool: Option<ToolData>,
+}
+
+impl Default for ClsfWriter {
+    fn default() -> Self {
+        ClsfWriter::new()
+    }
+}
+
+impl ClsfWriter {
+    /// A new writer.
+    pub fn new() -> ClsfWriter {
+        ClsfWriter {
+            line: Vec::with_capacity(200),
+            feed: None,
+            spindle: None,
+            axis: None,
+            axis_len: 0,
+            cycle: false,
+            tool: None,
+        }
+    }
+
+    fn name(s: &str, fallback: &str) -> String {
+        let t: String = s
+            .chars()
+            .map(|c| {
+                if c == ',' || c == '/' || c == '$' || c.is_control() {
+                    '_'
+                } else {
+                    c
+                }
+            })
+            .collect();
+        let t = t.trim().to_string();
+        if t.is_empty() {
+            fallback.to_string()
+        } else {
+            t
+        }
+    }
+
+    /// Write the header of a path (`TOOL PATH`, `TLDATA`, `MSYS` unless applied).
+    pub fn begin_path(&mut self, path: &Toolpath, out: &mut dyn Write) -> io::Result<()> {
+        self.feed = None;
+        self.spindle = None;
+        self.axis = None;
+        self.cycle = false;
+        self.tool = path.tool.clone();
+        writeln!(
+            out,
+            "TOOL PATH/{},TOOL,{}",
+            Self::name(&path.name, "PATH"),
+            Self::name(&path.tool_name, "NONE")
+        )?;
+        let l = &mut self.line;
+        if let Some(t) = &path.tool {
+            l.clear();
+            l.extend_from_slice(b"TLDATA/");
+            l.extend_from_slice(Self::name(&t.kind, "MILL").as_bytes());
+            for v in [t.diameter_mm, t.corner_radius_mm, t.length_mm] {
+                l.push(b',');
+                push_fixed(l, v, LENGTH_DECIMALS);
+            }
+            if t.kind != "DRILL" {
+                l.push(b',');
+                push_fixed(l, t.taper_rad.to_degrees(), LENGTH_DECIMALS);
+            }
+            l.push(b',');
+            push_fixed(l, t.tip_rad.to_degrees(), LENGTH_DECIMALS);
+            l.push(b'\n');
+            out.write_all(l)?;
+        }
+        if let Some(m) = &path.msys
+            && !path.msys_applied
+        {
+            l.clear();
+            l.extend_from_slice(b"MSYS/");
+            for (k, v) in m.iter().enumerate() {
+                if k > 0 {
+                    l.push(b',');
+                }
+                push_fixed(
+                    l,
+                    *v,
+                    if k < 3 {
+                        LENGTH_DECIMALS
+                    } else {
+                        UNIT_DECIMALS
+                    },
+                );
+            }
+            l.push(b'\n');
+            out.write_all(l)?;
+        }
+        out.write_all(b"$$ centerline data\n")?;
+        out.write_all(
+            b"$$ crest: GOTO/x,y,z,i,j,k,cx,cy,cz[,nx,ny,nz] carries the CC point and normal\n",
+        )
+    }
+
+    /// Write the records of one posture.
+    pub fn posture(&mut self, p: &Posture, out: &mut dyn Write) -> io::Result<()> {
+        let in_cycle = p.motion == MotionKind::Cycle;
+        if in_cycle != self.cycle {
+            out.write_all(if in_cycle {
+                b"CYCLE/DRILL\n"
+            } else {
+                b"CYCLE/OFF\n"
+            })?;
+            self.cycle = in_cycle;
+        }
+        if p.spindle_rpm != self.spindle {
+            match p.spindle_rpm {
+                Some(s) => {
+                    self.line.clear();
+                    self.line.extend_from_slice(b"SPINDL/RPM,");
+                    push_fixed(&mut self.line, s, LENGTH_DECIMALS);
+                    self.line.extend_from_slice(b",CLW\n");
+                    out.write_all(&self.line)?;
+                }
+                None => out.write_all(b"SPINDL/OFF\n")?,
+            }
+            self.spindle = p.spindle_rpm;
+        }
+        if p.motion == MotionKind::Cut
+            && let Some(f) = p.feed_mm_min
+            && Some(f) != self.feed
+        {
+            self.line.clear();
+            self.line.extend_from_slice(b"FEDRAT/MMPM,");
+            push_fixed(&mut self.line, f, LENGTH_DECIMALS);
+            self.line.push(b'\n');
+            out.write_all(&self.line)?;
+            self.feed = Some(f);
+        }
+        if p.motion == MotionKind::Rapid {
+            out.write_all(b"RAPID\n")?;
+        }
+        let l = &mut self.line;
+        if let Some(a) = &p.arc {
+            l.clear();
+            l.extend_from_slice(b"CIRCLE/");
+            for v in [a.centre.x, a.centre.y, a.centre.z] {
+                push_fixed(l, v, LENGTH_DECIMALS);
+                l.push(b',');
+            }
+            for v in [a.axis.x, a.axis.y, a.axis.z] {
+                push_fixed(l, v, UNIT_DECIMALS);
+                l.push(b',');
+            }
+            let (d, r) = self
+                .tool
+                .as_ref()
+                .map(|t| (t.diameter_mm, t.corner_radius_mm))
+                .unwrap_or((0.0, 0.0));
+            for (k, v) in [a.radius_mm, 0.06, 0.5, d, r].into_iter().enumerate() {
+                if k > 0 {
+                    l.push(b',');
+                }
+                push_fixed(l, v, LENGTH_DECIMALS);
+            }
+            if a.extra_turns > 0 {
+                l.extend_from_slice(b",TIMES,");
+                push_u64(l, u64::from(a.extra_turns) + 1);
+            }
+            l.push(b'\n');
+            out.write_all(l)?;
+        }
+        l.clear();
+        l.extend_from_slice(match p.motion {
+            MotionKind::From => b"FROM/".as_slice(),
+            MotionKind::GoHome => b"GOHOME/".as_slice(),
+            _ => b"GOTO/".as_slice(),
+        });
+        for (k, v) in [p.position.x, p.position.y, p.position.z]
+            .into_iter()
+            .enumerate()
+        {
+            if k > 0 {
+                l.push(b',');
+            }
+            push_fixed(l, v, LENGTH_DECIMALS);
+        }
+        // The axis as it would be printed; written when it changes (or with contact data).
+        let mut axis_text = [0u8; 64];
+        let mut tmp = Vec::with_capacity(48);
+        for v in [p.axis.x, p.axis.y, p.axis.z] {
+            tmp.push(b',');
+            push_fixed(&mut tmp, v, UNIT_DECIMALS);
+        }
+        let n = tmp.len().min(64);
+        axis_text[..n].copy_from_slice(&tmp[..n]);
+        let axis_changed = self.axis.is_none_or(|a| a[..self.axis_len] != tmp[..]);
+        let with_contact =
+            p.contact.is_some() && !matches!(p.motion, MotionKind::From | MotionKind::GoHome);
+        if axis_changed || with_contact {
+            l.extend_from_slice(&tmp);
+            self.axis = Some(axis_text);
+            self.axis_len = n;
+        }
+        if with_contact && let Some(c) = &p.contact {
+            for v in [c.point.x, c.point.y, c.point.z] {
+                l.push(b',');
+                push_fixed(l, v, LENGTH_DECIMALS);
+            }
+            if !c.normal_derived {
+                for v in [c.normal.x, c.normal.y, c.normal.z] {
+                    l.push(b',');
+                    push_fixed(l, v, UNIT_DECIMALS);
+                }
+            }
+        }
+        l.push(b'\n');
+        out.write_all(l)
+    }
+
+    /// Close the path.
+    pub fn end_path(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        if self.cycle {
+            out.write_all(b"CYCLE/OFF\n")?;
+            self.cycle = false;
+        }
+        out.write_all(b"END-OF-PATH\n")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_point_digits() {
+        assert_eq!(fixed(1.5, LENGTH_DECIMALS), "1.5000");
+        assert_eq!(fixed(-297.5, LENGTH_DECIMALS), "-297.5000");
+        assert_eq!(fixed(1.234567, LENGTH_DECIMALS), "1.234567");
+        assert_eq!(fixed(1.2345678, LENGTH_DECIMALS), "1.234568");
+        assert_eq!(fixed(-0.00000001, LENGTH_DECIMALS), "0.0000");
+        assert_eq!(
+            fixed(std::f64::consts::FRAC_1_SQRT_2, UNIT_DECIMALS),
+            "0.707106781"
+        );
+        assert_eq!(fixed(1.0, UNIT_DECIMALS), "1.0000000");
+        assert_eq!(fixed(25.400000000000002, LENGTH_DECIMALS), "25.4000");
+        assert_eq!(fixed(1e300, LENGTH_DECIMALS), format!("{}", 1e300));
+    }
+
+    #[test]
+    fn printed_digits_survive_reading() {
+        // Any value with at most 6 decimals prints back to itself after a parse.
+        for s in [
+            "0.000001",
+            "-1234.5678",
+            "99999.999999",
+            "0.1",
+            "-0.5",
+            "123456789.123456",
+        ] {
+            let v: f64 = s.parse().unwrap_or(f64::NAN);
+            let printed = fixed(v, LENGTH_DECIMALS);
+            let again: f64 = printed.parse().unwrap_or(f64::NAN);
+            assert_eq!(fixed(again, LENGTH_DECIMALS), printed);
+            assert_eq!(again, v, "{s}");
+        }
+    }
+}
