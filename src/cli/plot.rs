@@ -1,12 +1,447 @@
-//! `crest plot`.
+//! `crest plot`: trochoids of the ICE elements, height maps, profiles and the feed (or crest
+//! height) along a path, as SVG or PNG by the extension of `-o`.
 
 use super::Outcome;
+use crate::plot::profile::{LineChart, Series};
+use crate::plot::{Format, feed, heightmap, profile, trochoid};
+use miette::{IntoDiagnostic, WrapErr, miette};
+use std::path::{Path, PathBuf};
 
 /// Options of `crest plot`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// What to plot.
+    #[command(subcommand)]
+    pub what: What,
+}
+
+/// The plots.
+#[derive(Debug, clap::Subcommand)]
+pub enum What {
+    /// Trochoidal paths of ICE elements (002 Fig 14a/b) and crest heights between marks.
+    Trochoid(TrochoidArgs),
+    /// A height map as a colour map (µm scale bar, axes in mm, missing points blank).
+    Heightmap(HeightmapArgs),
+    /// A profile of a height map, optionally against a measured profile.
+    Profile(ProfileArgs),
+    /// The programmed (and actual) feed, or the feed-mark crest height, along a path.
+    Feed(FeedArgs),
+}
+
+/// Options common to every plot.
+#[derive(Debug, clap::Args)]
+pub struct Common {
+    /// Output picture: `.svg` or `.png`.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: PathBuf,
+    /// Title (a default names what is shown).
+    #[arg(long)]
+    pub title: Option<String>,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Options of `crest plot trochoid`.
+#[derive(Debug, clap::Args)]
+pub struct TrochoidArgs {
+    /// Cutter description (tool.toml), run-out included.
+    #[arg(long, value_name = "TOOL.toml")]
+    pub tool: PathBuf,
+    /// Tool heights above the tip, mm.
+    #[arg(long, value_delimiter = ',', default_value = "0.1,0.25,0.5,1,2,3")]
+    pub heights_mm: Vec<f64>,
+    /// Lead angles, degrees (one to four; one isometric panel each).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "5,15,25",
+        allow_negative_numbers = true
+    )]
+    pub lead_deg: Vec<f64>,
+    /// Parallel passes in the isometric views.
+    #[arg(long, default_value_t = 3)]
+    pub passes: usize,
+    /// Distance between passes, mm.
+    #[arg(long, default_value_t = 0.5)]
+    pub stepover_mm: f64,
+    /// Feed per tooth of the drawn trochoids, mm.
+    #[arg(long, default_value_t = 0.2)]
+    pub fz_mm: f64,
+    /// Feeds per tooth of the crest-height panel, mm.
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.2")]
+    pub crest_fz_mm: Vec<f64>,
+    /// Spindle revolutions traced.
+    #[arg(long, default_value_t = 3.0)]
+    pub revolutions: f64,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Options of height-map input.
+#[derive(Debug, clap::Args)]
+pub struct MapInput {
+    /// Height map: `.csv` (grid, µm; needs --dx-um), `.xyz`/`.txt`, `.gsf` or `.sdf`.
+    pub map: PathBuf,
+    /// Grid spacing along x, µm (grid CSV).
+    #[arg(long)]
+    pub dx_um: Option<f64>,
+    /// Grid spacing along y, µm (default: --dx-um).
+    #[arg(long)]
+    pub dy_um: Option<f64>,
+}
+
+/// Options of `crest plot heightmap`.
+#[derive(Debug, clap::Args)]
+pub struct HeightmapArgs {
+    #[command(flatten)]
+    pub input: MapInput,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Options of `crest plot profile`.
+#[derive(Debug, clap::Args)]
+pub struct ProfileArgs {
+    #[command(flatten)]
+    pub input: MapInput,
+    /// Profile along x at this y, mm (the nearest row; default: the middle row).
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "x_mm")]
+    pub y_mm: Option<f64>,
+    /// Profile along y at this x, mm (the nearest column).
+    #[arg(long, allow_negative_numbers = true)]
+    pub x_mm: Option<f64>,
+    /// Measured profile to overlay: two columns, position (mm) and height (µm), separated
+    /// by commas, semicolons or blanks; an optional header line.
+    #[arg(long, value_name = "CSV")]
+    pub measured: Option<PathBuf>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Options of `crest plot feed`.
+#[derive(Debug, clap::Args)]
+pub struct FeedArgs {
+    /// Tool path: CLSF or contact12.
+    pub path: PathBuf,
+    /// Actual feed to overlay: two columns, path length (mm) and feed (mm/min).
+    #[arg(long, value_name = "CSV")]
+    pub actual: Option<PathBuf>,
+    /// Plot the feed-mark crest height (002 Eq 14 with fz = F/(Z n)) instead of the feed;
+    /// needs --tool.
+    #[arg(long, requires = "tool")]
+    pub crest: bool,
+    /// Cutter (tool.toml), for --crest.
+    #[arg(long, value_name = "TOOL.toml")]
+    pub tool: Option<PathBuf>,
+    /// Spindle speed, rpm (default: the path's SPINDL).
+    #[arg(long)]
+    pub rpm: Option<f64>,
+    /// Feed, mm/min, where the path states none (contact12 has no feed).
+    #[arg(long)]
+    pub feed_mm_min: Option<f64>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+fn check_format(path: &Path) -> miette::Result<()> {
+    Format::from_path(path)
+        .map(|_| ())
+        .ok_or_else(|| miette!("{}: unknown plot format (use .svg or .png)", path.display()))
+}
+
+fn done(common: &Common, kind: &str, extra: serde_json::Value) -> miette::Result<Outcome> {
+    if common.json {
+        let mut obj = serde_json::json!({
+            "plot": kind,
+            "output": common.output.display().to_string(),
+        });
+        if let (Some(o), serde_json::Value::Object(e)) = (obj.as_object_mut(), extra) {
+            o.extend(e);
+        }
+        println!("{obj}");
+    } else {
+        println!("wrote {}", common.output.display());
+    }
+    Ok(Outcome::Ok)
+}
 
 /// Run `crest plot`.
-pub fn run(_args: Args) -> miette::Result<Outcome> {
-    Err(miette::miette!("crest plot is not built yet"))
+pub fn run(args: Args) -> miette::Result<Outcome> {
+    match args.what {
+        What::Trochoid(a) => run_trochoid(a),
+        What::Heightmap(a) => run_heightmap(a),
+        What::Profile(a) => run_profile(a),
+        What::Feed(a) => run_feed(a),
+    }
+}
+
+fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
+    check_format(&a.common.output)?;
+    let cutter = super::synth::load_cutter(&a.tool)?;
+    let o = trochoid::TrochoidOptions {
+        heights_mm: a.heights_mm.clone(),
+        leads_rad: a.lead_deg.iter().map(|d| d.to_radians()).collect(),
+        passes: a.passes,
+        stepover_mm: a.stepover_mm,
+        fz_mm: a.fz_mm,
+        crest_fz_mm: a.crest_fz_mm.clone(),
+        revolutions: a.revolutions,
+        points_per_rev: 180,
+        title: a
+            .common
+            .title
+            .clone()
+            .unwrap_or_else(|| "Trochoidal paths of ICE elements".to_string()),
+    };
+    trochoid::plot_trochoids(&cutter, &o, &a.common.output).map_err(|e| miette!("{e}"))?;
+    let mut crests = Vec::new();
+    for &fz in &a.crest_fz_mm {
+        for &lead in &a.lead_deg {
+            for &z in &a.heights_mm {
+                let c = trochoid::crest_between_marks_mm(&cutter, z, fz, lead.to_radians());
+                crests.push(serde_json::json!({
+                    "fz_mm": fz,
+                    "lead_deg": lead,
+                    "height_mm": z,
+                    "crest_um": c * 1e3,
+                }));
+            }
+        }
+    }
+    done(
+        &a.common,
+        "trochoid",
+        serde_json::json!({ "crests": crests }),
+    )
+}
+
+fn read_map(input: &MapInput) -> miette::Result<crate::surface::HeightMap> {
+    let opts = crate::io::ReadOptions {
+        dx_um: input.dx_um,
+        dy_um: input.dy_um,
+    };
+    crate::io::read_heightmap(&input.map, &opts).map_err(|e| miette!("{e}"))
+}
+
+fn file_stem(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn run_heightmap(a: HeightmapArgs) -> miette::Result<Outcome> {
+    check_format(&a.common.output)?;
+    let map = read_map(&a.input)?;
+    let title = a
+        .common
+        .title
+        .clone()
+        .unwrap_or_else(|| format!("Height map {}", file_stem(&a.input.map)));
+    heightmap::plot_heightmap(&map, &title, &a.common.output).map_err(|e| miette!("{e}"))?;
+    done(
+        &a.common,
+        "heightmap",
+        serde_json::json!({ "nx": map.nx, "ny": map.ny, "dx_um": map.dx_um, "dy_um": map.dy_um }),
+    )
+}
+
+/// Read a two-column numeric table (optional header; commas, semicolons, tabs or blanks).
+fn read_two_columns(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
+    let text = std::fs::read_to_string(path)
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot read {}", path.display()))?;
+    let (mut xs, mut ys) = (Vec::new(), Vec::new());
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line
+            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+            .filter(|f| !f.is_empty())
+            .collect();
+        let parsed: Vec<Option<f64>> = fields.iter().map(|f| f.parse::<f64>().ok()).collect();
+        if xs.is_empty() && parsed.iter().all(|v| v.is_none()) {
+            continue; // header
+        }
+        if fields.len() < 2 {
+            return Err(miette!(
+                "{}:{}: expected two numbers, found {}",
+                path.display(),
+                i + 1,
+                fields.len()
+            ));
+        }
+        for (k, v) in parsed.iter().take(2).enumerate() {
+            if v.is_none() {
+                let col = line.find(fields[k]).unwrap_or(0) + 1;
+                return Err(miette!(
+                    "{}:{}:{}: expected a number, found '{}'",
+                    path.display(),
+                    i + 1,
+                    col,
+                    fields[k]
+                ));
+            }
+        }
+        xs.push(parsed[0].unwrap_or(f64::NAN));
+        ys.push(parsed[1].unwrap_or(f64::NAN));
+    }
+    if xs.is_empty() {
+        return Err(miette!("{}: no data rows", path.display()));
+    }
+    Ok((xs, ys))
+}
+
+fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
+    check_format(&a.common.output)?;
+    let map = read_map(&a.input)?;
+    if map.nx == 0 || map.ny == 0 {
+        return Err(miette!("{}: empty height map", a.input.map.display()));
+    }
+    let nearest = |v: f64, v0: f64, d_um: f64, n: usize| -> usize {
+        let i = ((v - v0) / (d_um * 1e-3)).round();
+        if i.is_finite() {
+            i.clamp(0.0, (n - 1) as f64) as usize
+        } else {
+            0
+        }
+    };
+    let (pos, z, what) = if let Some(x) = a.x_mm {
+        let col = nearest(x, map.x0_mm, map.dx_um, map.nx);
+        let pos: Vec<f64> = (0..map.ny)
+            .map(|r| map.y0_mm + r as f64 * map.dy_um * 1e-3)
+            .collect();
+        let z: Vec<f64> = (0..map.ny).map(|r| map.get(col, r)).collect();
+        let x = map.x0_mm + col as f64 * map.dx_um * 1e-3;
+        (pos, z, format!("along y at x = {x:.3} mm"))
+    } else {
+        let row = match a.y_mm {
+            Some(y) => nearest(y, map.y0_mm, map.dy_um, map.ny),
+            None => map.ny / 2,
+        };
+        let pos: Vec<f64> = (0..map.nx)
+            .map(|c| map.x0_mm + c as f64 * map.dx_um * 1e-3)
+            .collect();
+        let y = map.y0_mm + row as f64 * map.dy_um * 1e-3;
+        (
+            pos,
+            map.row(row).to_vec(),
+            format!("along x at y = {y:.3} mm"),
+        )
+    };
+    let measured = match &a.measured {
+        Some(p) => Some(read_two_columns(p)?),
+        None => None,
+    };
+    let title = a
+        .common
+        .title
+        .clone()
+        .unwrap_or_else(|| format!("Profile of {} {what}", file_stem(&a.input.map)));
+    profile::plot_profiles(
+        &title,
+        (&pos, &z),
+        measured.as_ref().map(|(x, y)| (x.as_slice(), y.as_slice())),
+        &a.common.output,
+    )
+    .map_err(|e| miette!("{e}"))?;
+    done(
+        &a.common,
+        "profile",
+        serde_json::json!({ "points": pos.len(), "profile": what }),
+    )
+}
+
+fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
+    check_format(&a.common.output)?;
+    let program = super::input::read_program(&a.path)?;
+    let Some(tp) = program.paths.iter().find(|p| !p.cutting_runs().is_empty()) else {
+        return Err(miette!("{}: no cutting moves", a.path.display()));
+    };
+    // Path length of the CL point over cutting moves; runs are separated by a gap (NaN).
+    let (mut s, mut feed, mut rpm) = (Vec::new(), Vec::new(), Vec::new());
+    let mut len = 0.0;
+    for run in tp.cutting_runs() {
+        if !s.is_empty() {
+            s.push(f64::NAN);
+            feed.push(f64::NAN);
+            rpm.push(f64::NAN);
+        }
+        for i in run.clone() {
+            if i > run.start {
+                len += (tp.postures[i].position - tp.postures[i - 1].position).norm();
+            }
+            let p = &tp.postures[i];
+            s.push(len);
+            feed.push(p.feed_mm_min.or(a.feed_mm_min).unwrap_or(f64::NAN));
+            rpm.push(a.rpm.or(p.spindle_rpm).unwrap_or(f64::NAN));
+        }
+    }
+    let name = file_stem(&a.path);
+    if a.crest {
+        let tool = a
+            .tool
+            .as_ref()
+            .ok_or_else(|| miette!("--crest needs --tool"))?;
+        let cutter = super::synth::load_cutter(tool)?;
+        let teeth = cutter.teeth() as f64;
+        let r = cutter.corner_radius_mm();
+        let crest: Vec<f64> = feed
+            .iter()
+            .zip(&rpm)
+            .map(|(f, n)| crate::tool::crest_height_mm(r, f / (teeth * n)) * 1e3)
+            .collect();
+        if crest.iter().all(|c| !c.is_finite()) {
+            return Err(miette!(
+                "{}: no feed and spindle speed to compute fz (give --feed-mm-min and --rpm)",
+                a.path.display()
+            ));
+        }
+        let title = a
+            .common
+            .title
+            .clone()
+            .unwrap_or_else(|| format!("Feed-mark crest height along {name}"));
+        feed::plot_crest_along_path(&title, &s, &[("programmed feed", &crest)], &a.common.output)
+            .map_err(|e| miette!("{e}"))?;
+        let finite = crest.iter().cloned().filter(|c| c.is_finite());
+        let lo = finite.clone().fold(f64::INFINITY, f64::min);
+        let hi = finite.fold(f64::NEG_INFINITY, f64::max);
+        return done(
+            &a.common,
+            "crest",
+            serde_json::json!({ "points": len_points(&s), "crest_um_min": lo, "crest_um_max": hi }),
+        );
+    }
+    let mut series = vec![Series::new("programmed", &s, &feed)];
+    if let Some(p) = &a.actual {
+        let (x, y) = read_two_columns(p)?;
+        series.push(Series::new("actual", &x, &y));
+    }
+    let title = a
+        .common
+        .title
+        .clone()
+        .unwrap_or_else(|| format!("Feed along {name}"));
+    profile::plot_lines(
+        &LineChart {
+            title,
+            x_label: "path length [mm]".to_string(),
+            y_label: "feed [mm/min]".to_string(),
+            series,
+        },
+        &a.common.output,
+    )
+    .map_err(|e| miette!("{e}"))?;
+    done(
+        &a.common,
+        "feed",
+        serde_json::json!({ "points": len_points(&s), "length_mm": len }),
+    )
+}
+
+fn len_points(s: &[f64]) -> usize {
+    s.iter().filter(|v| v.is_finite()).count()
 }

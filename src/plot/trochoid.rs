@@ -1,1 +1,518 @@
-//! Plot: trochoid (built by its stage's owner).
+//! Trochoidal paths of the infinitesimal cutting-edge (ICE) elements (002 Fig 14a/b):
+//! isometric views of several passes for each lead angle, a top view grouped by tool
+//! height, and the crest heights between consecutive marks for two feeds per tooth.
+//!
+//! The pass is straight along +x on the plane z = 0 with the tip on it; the tool axis leans
+//! by the lead β into the feed, `z_t = (sin β, 0, cos β)`, `x_t = (cos β, 0, −sin β)`,
+//! `y_t = (0, 1, 0)` (model.md §1.3). The spindle turns θ while the tip advances
+//! `Z fz θ / 2π`; the ICE point of tooth j at height z is `P + [x_t y_t z_t] E_j(z, θ)`
+//! with `E_j` = [`Cutter::edge_point`] (helix lag and run-out included).
+//!
+//! **Crest between consecutive marks (top view).** Seen along the surface normal, the ICE
+//! at height z (radius r) of consecutive teeth leaves marks fz apart. Their lateral
+//! envelope dips between two marks to the point where the outer arcs cross, at spindle
+//! angle θ* from the mark's apex solving `v θ + r cos β sin θ = fz/2` with `v = Z fz/2π`
+//! per radian; the crest is `r (1 − cos θ*)`. When v ≪ r this is 002 Eq 14 with the
+//! projected spacing, `r − √(r² − (fz/2 cos β)²)`. Nominal radii (no run-out): a run-out
+//! that leaves one tooth cutting is modelled by passing the effective fz (002: 0.05 → 0.2).
+
+use super::profile::{
+    Draw, DrawResult, PlotError, label_font, render, series_color, tick_font, title_font,
+};
+use crate::math::{Point3, Vec3};
+use crate::tool::Cutter;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::f64::consts::TAU;
+use std::path::Path;
+
+/// What a trochoid figure shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrochoidOptions {
+    /// Tool heights z above the tip at which ICE elements are traced, mm.
+    pub heights_mm: Vec<f64>,
+    /// Lead angles, rad (one isometric panel each; the first is also shown from the top).
+    pub leads_rad: Vec<f64>,
+    /// Number of parallel passes.
+    pub passes: usize,
+    /// Lateral distance between passes, mm.
+    pub stepover_mm: f64,
+    /// Feed per tooth of the drawn trochoids, mm.
+    pub fz_mm: f64,
+    /// Feeds per tooth for the crest-height panel (e.g. 0.05 and 0.2), mm.
+    pub crest_fz_mm: Vec<f64>,
+    /// Spindle revolutions traced per pass.
+    pub revolutions: f64,
+    /// Samples per revolution.
+    pub points_per_rev: usize,
+    /// Figure title.
+    pub title: String,
+}
+
+impl Default for TrochoidOptions {
+    /// Six heights, leads 5/15/25°, 3 passes 0.5 mm apart, fz 0.2 mm, crest panel for
+    /// fz 0.05 and 0.2 mm (the 002 case study), 3 revolutions.
+    fn default() -> Self {
+        TrochoidOptions {
+            heights_mm: vec![0.1, 0.25, 0.5, 1.0, 2.0, 3.0],
+            leads_rad: [5.0f64, 15.0, 25.0]
+                .iter()
+                .map(|d| d.to_radians())
+                .collect(),
+            passes: 3,
+            stepover_mm: 0.5,
+            fz_mm: 0.2,
+            crest_fz_mm: vec![0.05, 0.2],
+            revolutions: 3.0,
+            points_per_rev: 180,
+            title: "Trochoidal paths of ICE elements".to_string(),
+        }
+    }
+}
+
+/// The ICE path of tooth `j` at height `z_mm` along a straight pass at lateral offset
+/// `y_mm`, lead `lead_rad`, feed per tooth `fz_mm`, for spindle angles θ = 0 … 2π·revs in
+/// `n` + 1 samples. Points in the part frame (x feed, y lateral, z normal), mm.
+#[allow(clippy::too_many_arguments)]
+pub fn trochoid(
+    cutter: &Cutter,
+    j: usize,
+    z_mm: f64,
+    lead_rad: f64,
+    fz_mm: f64,
+    y_mm: f64,
+    revolutions: f64,
+    n: usize,
+) -> Vec<Point3> {
+    let (sb, cb) = lead_rad.sin_cos();
+    let xt = Vec3::new(cb, 0.0, -sb);
+    let yt = Vec3::new(0.0, 1.0, 0.0);
+    let zt = Vec3::new(sb, 0.0, cb);
+    let advance_per_rad = cutter.teeth() as f64 * fz_mm / TAU;
+    (0..=n)
+        .map(|i| {
+            let theta = TAU * revolutions * i as f64 / n.max(1) as f64;
+            let e = cutter.edge_point(j, z_mm, theta);
+            Point3::new(advance_per_rad * theta, y_mm, 0.0) + xt * e.x + yt * e.y + zt * e.z
+        })
+        .collect()
+}
+
+/// Crest height between consecutive marks of the ICE at height `z_mm`, in the top view,
+/// for feed per tooth `fz_mm` and lead `lead_rad` (nominal radii; see the module docs), mm.
+pub fn crest_between_marks_mm(cutter: &Cutter, z_mm: f64, fz_mm: f64, lead_rad: f64) -> f64 {
+    let r = cutter.profile_radius(z_mm);
+    let rp = r * lead_rad.cos();
+    let v = cutter.teeth().max(1) as f64 * fz_mm / TAU;
+    let target = 0.5 * fz_mm;
+    // v θ + r' sin θ is increasing on [0, π]; bisection.
+    let f = |t: f64| v * t + rp * t.sin() - target;
+    let (mut lo, mut hi) = (0.0, std::f64::consts::PI);
+    if f(hi) <= 0.0 {
+        return 2.0 * r;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let t = 0.5 * (lo + hi);
+    // r (1 − cos θ) = 2 r sin²(θ/2), without cancellation.
+    2.0 * r * (0.5 * t).sin().powi(2)
+}
+
+struct Figure<'a> {
+    cutter: &'a Cutter,
+    o: &'a TrochoidOptions,
+}
+
+fn height_color(i: usize) -> RGBColor {
+    series_color(i)
+}
+
+impl Figure<'_> {
+    fn curves(&self, lead: f64, passes: std::ops::Range<usize>) -> Vec<(usize, Vec<Point3>)> {
+        let o = self.o;
+        let n = ((o.points_per_rev as f64) * o.revolutions).ceil().max(8.0) as usize;
+        let mut out = Vec::new();
+        for p in passes {
+            let y = p as f64 * o.stepover_mm;
+            for (hi, &z) in o.heights_mm.iter().enumerate() {
+                for j in 0..self.cutter.teeth() {
+                    out.push((
+                        hi,
+                        trochoid(self.cutter, j, z, lead, o.fz_mm, y, o.revolutions, n),
+                    ));
+                }
+            }
+        }
+        out
+    }
+
+    fn iso<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, lead: f64) -> DrawResult<DB> {
+        let curves = self.curves(lead, 0..self.o.passes);
+        let pts = curves.iter().flat_map(|(_, c)| c.iter());
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in pts {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        // Equal scales on the three axes: a cube around the data.
+        let half = (0..3).map(|k| 0.5 * (hi[k] - lo[k])).fold(0.1f64, f64::max) * 1.02;
+        let mid: Vec<f64> = (0..3).map(|k| 0.5 * (hi[k] + lo[k])).collect();
+        let r = |k: usize| (mid[k] - half)..(mid[k] + half);
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!(
+                    "isometric view, lead {:.0}°, {} passes",
+                    lead.to_degrees(),
+                    self.o.passes
+                ),
+                label_font(),
+            )
+            .margin(10)
+            .margin_left(40)
+            .margin_right(70)
+            // plotters' 3-D axes: x, y (up), z. We map (feed, normal, lateral).
+            .build_cartesian_3d(r(0), r(2), r(1))?;
+        chart.with_projection(|mut pb| {
+            pb.yaw = 0.7;
+            pb.pitch = 0.45;
+            pb.scale = 0.85;
+            pb.into_matrix()
+        });
+        chart
+            .configure_axes()
+            .x_labels(5)
+            .y_labels(5)
+            .z_labels(5)
+            .label_style(tick_font())
+            .light_grid_style(RGBColor(238, 238, 238))
+            .bold_grid_style(RGBColor(215, 215, 215))
+            .max_light_lines(2)
+            .draw()?;
+        for (hi_idx, c) in &curves {
+            let color = height_color(*hi_idx);
+            chart.draw_series(LineSeries::new(
+                c.iter().map(|p| (p.x, p.z, p.y)),
+                color.stroke_width(1),
+            ))?;
+        }
+        let at = |x: f64, y: f64, z: f64| (x, y, z);
+        let style = tick_font();
+        chart.draw_series([
+            Text::new(
+                "x feed [mm]",
+                at(mid[0] + half, mid[2] - half, mid[1] - half),
+                style.clone(),
+            ),
+            Text::new(
+                "y lateral [mm]",
+                at(mid[0] - half, mid[2] - half, mid[1] + half),
+                style.clone(),
+            ),
+            Text::new(
+                "z normal [mm]",
+                at(mid[0] - half, mid[2] + half, mid[1] - half),
+                style,
+            ),
+        ])?;
+        Ok(())
+    }
+
+    fn top<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, lead: f64) -> DrawResult<DB> {
+        // One pass: the loops of several passes overlap into a blur.
+        let curves = self.curves(lead, 0..1);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in curves.iter().flat_map(|(_, c)| c.iter()) {
+            for k in 0..2 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        // Equal scales: widen the shorter range to the panel's aspect ratio.
+        let (w, h) = area.dim_in_pixel();
+        let (pw, ph) = ((w as f64 - 100.0).max(50.0), (h as f64 - 110.0).max(50.0));
+        let (mut sx, mut sy) = ((hi[0] - lo[0]) * 1.04, (hi[1] - lo[1]) * 1.04);
+        if sx / pw > sy / ph {
+            sy = sx * ph / pw;
+        } else {
+            sx = sy * pw / ph;
+        }
+        let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!(
+                    "top view of one pass, lead {:.0}°, fz {} mm",
+                    lead.to_degrees(),
+                    self.o.fz_mm
+                ),
+                label_font(),
+            )
+            .margin(10)
+            .x_label_area_size(50)
+            .y_label_area_size(60)
+            .build_cartesian_2d(cx - 0.5 * sx..cx + 0.5 * sx, cy - 0.5 * sy..cy + 0.5 * sy)?;
+        chart
+            .configure_mesh()
+            .x_desc("x feed [mm]")
+            .y_desc("y lateral [mm]")
+            .axis_desc_style(label_font())
+            .label_style(tick_font())
+            .max_light_lines(4)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .draw()?;
+        let mut labelled = vec![false; self.o.heights_mm.len()];
+        for (hi_idx, c) in &curves {
+            let color = height_color(*hi_idx);
+            let drawn = chart.draw_series(LineSeries::new(
+                c.iter().map(|p| (p.x, p.y)),
+                color.stroke_width(1),
+            ))?;
+            if !labelled[*hi_idx] {
+                labelled[*hi_idx] = true;
+                let z = self.o.heights_mm[*hi_idx];
+                drawn
+                    .label(format!(
+                        "z = {z} mm (r = {:.2} mm)",
+                        self.cutter.profile_radius(z)
+                    ))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                    });
+            }
+        }
+        chart
+            .configure_series_labels()
+            .label_font(tick_font())
+            .background_style(WHITE.mix(0.9))
+            .border_style(RGBColor(160, 160, 160))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        Ok(())
+    }
+
+    fn crest<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let o = self.o;
+        let zmax = o.heights_mm.iter().cloned().fold(0.0, f64::max);
+        let zmin = o.heights_mm.iter().cloned().fold(f64::INFINITY, f64::min);
+        let n = 80;
+        let zs: Vec<f64> = (0..=n)
+            .map(|i| zmin + (zmax - zmin) * i as f64 / n as f64)
+            .collect();
+        let mut lines = Vec::new();
+        for (fi, &fz) in o.crest_fz_mm.iter().enumerate() {
+            for (li, &lead) in o.leads_rad.iter().enumerate() {
+                let ys: Vec<f64> = zs
+                    .iter()
+                    .map(|&z| crest_between_marks_mm(self.cutter, z, fz, lead) * 1e3)
+                    .collect();
+                let marks: Vec<(f64, f64)> = o
+                    .heights_mm
+                    .iter()
+                    .map(|&z| (z, crest_between_marks_mm(self.cutter, z, fz, lead) * 1e3))
+                    .collect();
+                lines.push((fi, li, fz, lead, ys, marks));
+            }
+        }
+        let positive = lines
+            .iter()
+            .flat_map(|l| l.4.iter())
+            .filter(|v| **v > 0.0 && v.is_finite());
+        let lo = positive.clone().cloned().fold(f64::INFINITY, f64::min);
+        let hi = positive.cloned().fold(0.0, f64::max);
+        let (lo, hi) = if lo.is_finite() && hi > 0.0 {
+            (lo / 1.5, hi * 1.5)
+        } else {
+            (1e-3, 1.0)
+        };
+        let mut chart = ChartBuilder::on(area)
+            .caption("crest between consecutive marks", label_font())
+            .margin(10)
+            .x_label_area_size(50)
+            .y_label_area_size(70)
+            .build_cartesian_2d(zmin..zmax, (lo..hi).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("tool height z [mm]")
+            .y_desc("crest height [µm]")
+            .axis_desc_style(label_font())
+            .label_style(tick_font())
+            .max_light_lines(4)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .draw()?;
+        for (fi, li, fz, lead, ys, marks) in &lines {
+            let color = series_color(*li);
+            let style = if *fi == 0 {
+                color.stroke_width(2)
+            } else {
+                color.stroke_width(1)
+            };
+            let pts: Vec<(f64, f64)> = zs.iter().cloned().zip(ys.iter().cloned()).collect();
+            let label = format!("fz {fz} mm, lead {:.0}°", lead.to_degrees());
+            if *fi == 0 {
+                chart
+                    .draw_series(LineSeries::new(pts, style))?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+            } else {
+                chart
+                    .draw_series(DashedLineSeries::new(pts, 6, 4, style))?
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 8, y)], style));
+            }
+            chart.draw_series(
+                marks
+                    .iter()
+                    .map(|&(x, y)| Circle::new((x, y), 3, color.filled())),
+            )?;
+        }
+        chart
+            .configure_series_labels()
+            .label_font(tick_font())
+            .background_style(WHITE.mix(0.9))
+            .border_style(RGBColor(160, 160, 160))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()?;
+        Ok(())
+    }
+}
+
+impl Draw for Figure<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let root = root.titled(&self.o.title, title_font())?;
+        let (top_row, bottom_row) = root.split_vertically(root.dim_in_pixel().1 / 2);
+        let panels = top_row.split_evenly((1, self.o.leads_rad.len()));
+        for (area, &lead) in panels.iter().zip(&self.o.leads_rad) {
+            self.iso(area, lead)?;
+        }
+        let (left, right) = bottom_row.split_horizontally(bottom_row.dim_in_pixel().0 / 2);
+        self.top(&left, self.o.leads_rad[0])?;
+        self.crest(&right)?;
+        Ok(())
+    }
+}
+
+/// Draw the trochoid figure of `cutter` to `path` (SVG or PNG).
+pub fn plot_trochoids(
+    cutter: &Cutter,
+    options: &TrochoidOptions,
+    path: &Path,
+) -> Result<(), PlotError> {
+    let o = options;
+    let bad = |m: &str| Err(PlotError::Invalid(m.to_string()));
+    if cutter.teeth() == 0 {
+        return bad("the cutter has no teeth");
+    }
+    if o.heights_mm.is_empty() || o.heights_mm.iter().any(|z| !(*z >= 0.0 && z.is_finite())) {
+        return bad("tool heights must be given and not negative");
+    }
+    if o.leads_rad.is_empty()
+        || o.leads_rad.len() > 4
+        || o.leads_rad.iter().any(|b| b.is_nan() || b.abs() >= 1.5)
+    {
+        return bad("give one to four lead angles below 85°");
+    }
+    if o.passes == 0 || o.passes > 20 || o.stepover_mm.is_nan() || o.stepover_mm < 0.0 {
+        return bad("passes must be 1 to 20 and the stepover not negative");
+    }
+    let positive = |v: f64| v > 0.0 && v.is_finite();
+    if !positive(o.fz_mm) || o.crest_fz_mm.iter().any(|f| !positive(*f)) || o.crest_fz_mm.is_empty()
+    {
+        return bad("feeds per tooth must be positive");
+    }
+    if !(o.revolutions > 0.0 && o.revolutions <= 50.0) || o.points_per_rev < 8 {
+        return bad("revolutions must lie in (0, 50] and points per revolution be at least 8");
+    }
+    let width = 560 * o.leads_rad.len().max(2) as u32;
+    render(path, (width, 1120), &Figure { cutter, o })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tool::Shape;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn crest_matches_eq14_when_the_advance_is_small() {
+        // v ≪ r: the crest tends to Eq 14 with the projected spacing fz / cos β.
+        let c = Cutter::new(Shape::Ball, 5.0, 1, 0.0);
+        let (z, fz, lead): (f64, f64, f64) = (2.5, 0.001, 0.3);
+        let r = c.profile_radius(z);
+        let eq14 = crate::tool::crest_height_mm(r, fz / lead.cos());
+        assert_relative_eq!(
+            crest_between_marks_mm(&c, z, fz, lead),
+            eq14,
+            max_relative = 1e-3
+        );
+    }
+
+    #[test]
+    fn crest_matches_the_traced_envelope() {
+        // One straight tooth, z = 1 mm (r = 3 mm), fz = 0.2, lead 15°: the lateral envelope
+        // of the traced ICE path dips between two marks by the closed-form crest.
+        let c = Cutter::new(Shape::Ball, 5.0, 1, 0.0);
+        let (z, fz, lead) = (1.0, 0.2, 15f64.to_radians());
+        let expect = crest_between_marks_mm(&c, z, fz, lead);
+        let pts = trochoid(&c, 0, z, lead, fz, 0.0, 3.0, 3 * 20_000);
+        // Mark apexes (max y) lie at x = k fz + z sin β; the envelope at the midpoint
+        // between the second and third marks is the highest crossing of that abscissa.
+        let x_mid = 1.5 * fz + z * lead.sin();
+        let r = c.profile_radius(z);
+        let y_valley = pts
+            .windows(2)
+            .filter(|w| w[0].y > 0.0 && (w[0].x - x_mid) * (w[1].x - x_mid) <= 0.0)
+            .map(|w| w[0].y + (w[1].y - w[0].y) * (x_mid - w[0].x) / (w[1].x - w[0].x))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let y_peak = pts.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
+        assert_relative_eq!(y_peak, r, epsilon = 1e-6);
+        assert_relative_eq!(r - y_valley, expect, epsilon = 2e-6);
+        assert!(expect > 1.5e-3 && expect < 2.0e-3, "{expect}");
+    }
+
+    #[test]
+    fn trochoid_advances_by_z_fz_per_turn() {
+        let c = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
+        let p = trochoid(&c, 2, 1.0, 0.0, 0.05, 0.0, 1.0, 360);
+        let d = p[360] - p[0];
+        assert_relative_eq!(d, Vec3::new(0.2, 0.0, 0.0), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn figure_svg_has_title_and_labels() {
+        let c = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
+        let o = TrochoidOptions {
+            points_per_rev: 36,
+            revolutions: 1.0,
+            ..TrochoidOptions::default()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("t.svg");
+        plot_trochoids(&c, &o, &out).unwrap();
+        let svg = std::fs::read_to_string(&out).unwrap();
+        for t in [
+            "Trochoidal paths of ICE elements",
+            "x feed [mm]",
+            "y lateral [mm]",
+            "crest height [µm]",
+            "tool height z [mm]",
+            "fz 0.05 mm, lead 15°",
+        ] {
+            assert!(svg.contains(t), "missing {t}");
+        }
+        let bad = TrochoidOptions {
+            heights_mm: vec![],
+            ..o
+        };
+        assert!(plot_trochoids(&c, &bad, &out).is_err());
+    }
+}

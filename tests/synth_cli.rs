@@ -1,0 +1,198 @@
+//! `crest synth`: stepover and pass count in --json, CLSF and contact12 outputs, errors.
+
+use assert_cmd::Command;
+use std::path::{Path, PathBuf};
+
+fn sample(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples/synth")
+        .join(name)
+}
+
+fn synth(args: &[&str], tool: &str, out: &Path) -> std::process::Output {
+    Command::cargo_bin("crest")
+        .unwrap()
+        .arg("synth")
+        .args(args)
+        .arg("--tool")
+        .arg(sample(tool))
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+fn json(out: &std::process::Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn r6_trials_give_the_exact_steps() {
+    // model.md R6 (R = 5, rc = 1.5): exact steps 2.7850, 1.3115, 1.2385 mm.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.cls");
+    for (tilt, yaw, h, step, passes) in [
+        ("1", "0", "5", 2.7850, 5),
+        ("10", "0", "10", 1.3115, 9),
+        ("10", "20", "10", 1.2385, 10),
+    ] {
+        let o = synth(
+            &[
+                "plane",
+                "--tilt-deg",
+                tilt,
+                "--yaw-deg",
+                yaw,
+                "--scallop-um",
+                h,
+                "--feed-mm-min",
+                "4000",
+                "--rpm",
+                "15000",
+                "--size-mm",
+                "20,10",
+                "--json",
+            ],
+            "torus-r5-rc1.5.toml",
+            &out,
+        );
+        let v = json(&o);
+        let s = v["stepover_mm"].as_f64().unwrap();
+        assert!((s - step).abs() < 1e-3, "{s} vs {step}");
+        assert_eq!(v["passes"], passes);
+        let text = std::fs::read_to_string(&out).unwrap();
+        for word in [
+            "TOOL PATH/",
+            "TLDATA/MILL",
+            "FEDRAT/",
+            "SPINDL/",
+            "RAPID",
+            "GOTO/",
+        ] {
+            assert!(text.contains(word), "no {word} in the CLSF");
+        }
+        assert_eq!(text.matches("RAPID").count(), 2 * passes);
+    }
+}
+
+#[test]
+fn contact12_has_one_line_per_contact_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.txt");
+    let v = json(&synth(
+        &[
+            "extruded-parabola",
+            "--lead-deg",
+            "15",
+            "--stepover-mm",
+            "2",
+            "--pass-angle-deg",
+            "45",
+            "--zigzag",
+            "--feed-mm-min",
+            "5000",
+            "--rpm",
+            "15000",
+            "--json",
+        ],
+        "ball-r5.toml",
+        &out,
+    ));
+    // 10 × 10 mm field, 2 mm apart: 6 passes of 21 points (0.5 mm step).
+    assert_eq!(v["passes"], 6);
+    assert_eq!(v["points_per_pass"], 21);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter_map(|l| {
+            let f: Option<Vec<f64>> = l.split(',').map(|x| x.trim().parse().ok()).collect();
+            f
+        })
+        .collect();
+    assert_eq!(rows.len(), 6 * 21);
+    for r in rows {
+        assert_eq!(r.len(), 12);
+        // CC on z = −0.004 x² + 0.1; ball: CL = CC + R n − R a.
+        assert!((r[8] - (0.1 - 0.004 * r[6] * r[6])).abs() < 2e-4);
+        for k in 0..3 {
+            assert!((r[k] - (r[6 + k] + 5.0 * r[9 + k] - 5.0 * r[3 + k])).abs() < 5e-4);
+        }
+    }
+}
+
+#[test]
+fn bad_requests_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.cls");
+    let base = ["--feed-mm-min", "4000", "--rpm", "15000"];
+    // Lead and tilt together.
+    let o = synth(
+        &[
+            &[
+                "plane",
+                "--lead-deg",
+                "3",
+                "--tilt-deg",
+                "3",
+                "--stepover-mm",
+                "1",
+            ][..],
+            &base,
+        ]
+        .concat(),
+        "ball-r5.toml",
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    // Neither scallop nor stepover.
+    let o = synth(&[&["plane"][..], &base].concat(), "ball-r5.toml", &out);
+    assert_eq!(o.status.code(), Some(2));
+    // A concave region tighter than R_eff = 202 mm.
+    let o = synth(
+        &[
+            &["blade-patch", "--tilt-deg", "1", "--scallop-um", "5"][..],
+            &base,
+        ]
+        .concat(),
+        "torus-r5-rc1.5.toml",
+        &out,
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("gouge"));
+    // Unknown output extension.
+    let o = synth(
+        &[&["plane", "--stepover-mm", "1"][..], &base].concat(),
+        "ball-r5.toml",
+        &dir.path().join("p.nc"),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    // A bad tool file names the file.
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "shape = \"ball\"\nradius_mm = \"five\"\n").unwrap();
+    let o = Command::cargo_bin("crest")
+        .unwrap()
+        .args([
+            "synth",
+            "plane",
+            "--stepover-mm",
+            "1",
+            "--feed-mm-min",
+            "1",
+            "--rpm",
+            "1",
+            "--tool",
+        ])
+        .arg(&bad)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("bad.toml"));
+    assert!(!out.exists());
+}
