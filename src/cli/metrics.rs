@@ -1,12 +1,206 @@
-//! `crest metrics`.
+//! `crest metrics`: profile and ISO 25178 areal parameters of a height map, after optional
+//! form removal and Gaussian S-/L-filtering.
+
+use std::path::PathBuf;
+
+use miette::miette;
 
 use super::Outcome;
+use crate::io::{HeightMapFormat, ReadOptions, read_heightmap};
+use crate::metrics::{
+    EndEffects, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
+    preprocess_map, preprocess_profile, profile_parameters,
+};
+
+/// Border handling of the Gaussian filters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Ends {
+    /// Symmetric reflection at the borders, every node kept (as surfalize).
+    Reflect,
+    /// Reflection, then discard λ/2 of the largest nesting index at each border (ISO 4288).
+    Trim,
+}
 
 /// Options of `crest metrics`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+#[command(
+    after_help = "Heights and lateral lengths are µm, angles degrees, Sdr and Smr1/Smr2 %, \
+volumes µm³/µm². Missing (NaN) nodes are excluded, never taken as zero.\n\
+Processing order: form removal (--level), S-filter (--lambda-s-um), L-filter (--lambda-c-um), \
+then the end zones are cut off with --ends trim.\n\
+Std is measured counter-clockwise from +x with y = row index ascending (surfalize, which draws \
+row 0 at the top, reports 180 - Std). Str is null when the autocorrelation does not decay in \
+some direction (any 1-D lay). Sbi, Sci and Svi are not computed."
+)]
+pub struct Args {
+    /// Height map: `.csv` grid (rows = y ascending, µm; needs --dx-um), `.xyz`/`.txt` or a
+    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`.
+    pub file: PathBuf,
+    /// Spacing along x, µm (needed for grid CSV; checked against the other formats).
+    #[arg(long, value_name = "D")]
+    pub dx_um: Option<f64>,
+    /// Spacing along y, µm (grid CSV: defaults to --dx-um).
+    #[arg(long, value_name = "D")]
+    pub dy_um: Option<f64>,
+    /// Form removal before the parameters: `none`, `plane` or `poly:N` (least-squares
+    /// polynomial of total degree N; the 002 paper uses poly:5). Default `none`: heights
+    /// are only referred to their mean plane, nothing is re-levelled silently.
+    #[arg(long, default_value = "none", value_parser = Level::parse, value_name = "none|plane|poly:N")]
+    pub level: Level,
+    /// S-filter nesting index λs, µm (Gaussian low-pass, ISO 16610-21/61).
+    #[arg(long, value_name = "L")]
+    pub lambda_s_um: Option<f64>,
+    /// L-filter nesting index λc, µm (Gaussian high-pass: z − lowpass(z)).
+    #[arg(long, value_name = "L")]
+    pub lambda_c_um: Option<f64>,
+    /// End effects of the filters.
+    #[arg(long, value_enum, default_value = "reflect")]
+    pub ends: Ends,
+    /// Profile instead of areal parameters: `row:K`, `col:K` (0-based) or `angle:DEG`
+    /// (a line through the map centre, CCW from +x).
+    #[arg(long, value_parser = ProfileSpec::parse, value_name = "row:K|col:K|angle:DEG")]
+    pub profile: Option<ProfileSpec>,
+    /// Number of sampling lengths for Rp, Rv, Rz.
+    #[arg(long, default_value_t = 5, value_name = "N")]
+    pub sections: usize,
+    /// Comma list of ISO symbols to compute (e.g. `Sa,Sq,Sdr` or `Ra,Rz`); default all of the
+    /// kind. Only what is listed is computed.
+    #[arg(long, value_name = "LIST")]
+    pub params: Option<String>,
+    /// Print one JSON object (keys = ISO symbols; null for undefined values).
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn spec_label(s: ProfileSpec) -> String {
+    match s {
+        ProfileSpec::Row(k) => format!("row:{k}"),
+        ProfileSpec::Col(k) => format!("col:{k}"),
+        ProfileSpec::Angle(a) => format!("angle:{a}"),
+    }
+}
+
+fn num(v: f64) -> serde_json::Value {
+    serde_json::Value::from(v)
+}
 
 /// Run `crest metrics`.
-pub fn run(_args: Args) -> miette::Result<Outcome> {
-    Err(miette::miette!("crest metrics is not built yet"))
+pub fn run(args: Args) -> miette::Result<Outcome> {
+    let file = args.file.display().to_string();
+    let opts = ReadOptions {
+        dx_um: args.dx_um,
+        dy_um: args.dy_um,
+    };
+    let map = read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?;
+    let pp = Preprocess {
+        level: args.level,
+        lambda_s_um: args.lambda_s_um,
+        lambda_c_um: args.lambda_c_um,
+        ends: match args.ends {
+            Ends::Reflect => EndEffects::Reflect,
+            Ends::Trim => EndEffects::Trim,
+        },
+    };
+    let profile_mode = args.profile.is_some();
+    let set = match &args.params {
+        Some(list) => ParamSet::parse(list, profile_mode),
+        None => Ok(ParamSet::all(profile_mode)),
+    }
+    .map_err(|e| miette!("{e}"))?;
+    if set.params().is_empty() {
+        return Err(miette!("--params lists no parameter"));
+    }
+    let mut info = serde_json::Map::new();
+    info.insert("file".into(), file.clone().into());
+    let format = HeightMapFormat::from_path(&args.file).map(|f| format!("{f:?}").to_lowercase());
+    info.insert("format".into(), format.into());
+    info.insert("nx".into(), map.nx.into());
+    info.insert("ny".into(), map.ny.into());
+    info.insert("dx_um".into(), num(map.dx_um));
+    info.insert("dy_um".into(), num(map.dy_um));
+    info.insert("valid_nodes".into(), map.known().into());
+    info.insert("level".into(), pp.level.label().into());
+    info.insert(
+        "lambda_s_um".into(),
+        pp.lambda_s_um.map_or(serde_json::Value::Null, num),
+    );
+    info.insert(
+        "lambda_c_um".into(),
+        pp.lambda_c_um.map_or(serde_json::Value::Null, num),
+    );
+    let filtered = pp.lambda_s_um.is_some() || pp.lambda_c_um.is_some();
+    info.insert(
+        "end_effects".into(),
+        if filtered {
+            pp.ends.describe()
+        } else {
+            "no filter applied"
+        }
+        .into(),
+    );
+    info.insert("trimmed_um".into(), num(pp.trim_um()));
+
+    let values = if let Some(spec) = args.profile {
+        let raw = extract_profile(&map, spec).map_err(|e| miette!("{file}: {e}"))?;
+        let prof = preprocess_profile(&raw, &pp).map_err(|e| miette!("{file}: {e}"))?;
+        info.insert(
+            "profile".into(),
+            serde_json::json!({
+                "spec": spec_label(spec),
+                "samples": prof.z.len(),
+                "step_um": prof.step_um,
+                "evaluation_length_um": prof.z.len() as f64 * prof.step_um,
+                "sections": args.sections,
+            }),
+        );
+        profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?
+    } else {
+        let m = preprocess_map(&map, &pp).map_err(|e| miette!("{file}: {e}"))?;
+        info.insert("evaluated_nx".into(), m.nx.into());
+        info.insert("evaluated_ny".into(), m.ny.into());
+        areal_parameters(&m, &set).map_err(|e| miette!("{file}: {e}"))?
+    };
+
+    if args.json {
+        let mut units = serde_json::Map::new();
+        for (p, v) in &values {
+            info.insert(p.symbol().into(), num(*v));
+            units.insert(p.symbol().into(), p.unit().into());
+        }
+        info.insert("units".into(), units.into());
+        println!("{}", serde_json::Value::Object(info));
+    } else {
+        println!(
+            "{file}: {}×{} nodes, dx {} µm, dy {} µm, level {}",
+            map.nx,
+            map.ny,
+            map.dx_um,
+            map.dy_um,
+            pp.level.label()
+        );
+        if filtered {
+            println!(
+                "filters: λs {:?} µm, λc {:?} µm; {}",
+                pp.lambda_s_um,
+                pp.lambda_c_um,
+                pp.ends.describe()
+            );
+        }
+        if let Some(spec) = args.profile {
+            println!(
+                "profile {} ({} sampling lengths)",
+                spec_label(spec),
+                args.sections
+            );
+        }
+        for (p, v) in &values {
+            let shown = if v.is_finite() {
+                format!("{v:.6}")
+            } else {
+                "undefined".into()
+            };
+            println!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
+        }
+    }
+    Ok(Outcome::Ok)
 }
