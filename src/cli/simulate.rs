@@ -60,11 +60,16 @@ pub struct Args {
     #[arg(long, value_name = "G")]
     pub grid_um: f64,
     /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z).
-    #[arg(long, value_name = "X0,Y0,X1,Y1", conflicts_with_all = ["patch_at", "patch_mm"], required_unless_present = "patch_at")]
+    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true, conflicts_with_all = ["patch_at", "patch_mm"], required_unless_present = "patch_at")]
     pub window: Option<String>,
     /// A patch on the tangent plane at the contact point at this arc length of the path, mm
     /// (heights along the surface normal).
-    #[arg(long, value_name = "S_MM", requires = "patch_mm")]
+    #[arg(
+        long,
+        value_name = "S_MM",
+        requires = "patch_mm",
+        allow_negative_numbers = true
+    )]
     pub patch_at: Option<f64>,
     /// Patch size, mm: L (along the feed), W (across).
     #[arg(long, value_name = "L,W", requires = "patch_at")]

@@ -440,9 +440,27 @@ impl Setup<'_> {
         if k + 1 >= self.samples.len() || self.samples[k + 1].run != self.samples[k].run {
             return (strips, boxes);
         }
+        // Quick rejection of the whole pair: no level near the band at either end, or the
+        // tip too far from the grid for the candidate levels to reach it.
+        let mut pa = self.pose(k, 0.0, true);
+        let p1 = self.pose(k, 1.0, true);
+        let step = (self.samples[k + 1].position - self.samples[k].position).norm();
+        let (c0, c1) = (
+            self.candidates(&pa, thr + step),
+            self.candidates(&p1, thr + step),
+        );
+        let Some(hi) = c0.map(|c| c.1).max(c1.map(|c| c.1)) else {
+            return (strips, boxes);
+        };
+        let l = self.profile.levels[hi];
+        let reach = ((l.r * l.r + l.z * l.z).sqrt() + self.profile.runout_bound + step) / self.d;
+        let (xa, xb) = (pa.b.x.min(p1.b.x) - reach, pa.b.x.max(p1.b.x) + reach);
+        let (ya, yb) = (pa.b.y.min(p1.b.y) - reach, pa.b.y.max(p1.b.y) + reach);
+        if xb < 0.0 || ya > (self.ny - 1) as f64 || yb < 0.0 || xa > (self.nx - 1) as f64 {
+            return (strips, boxes);
+        }
         let dth = (self.samples[k + 1].theta_rad - self.samples[k].theta_rad).abs();
         let nsub = (dth / dtheta - 1e-9).ceil().clamp(1.0, MAX_SUBSTEPS) as usize;
-        let mut pa = self.pose(k, 0.0, true);
         let mut ca = self.candidates(&pa, thr);
         let mut wa: Vec<[f64; 3]> = Vec::new();
         let mut wb: Vec<[f64; 3]> = Vec::new();
@@ -504,6 +522,18 @@ impl Setup<'_> {
         let mut strips = Vec::new();
         let mut boxes = Vec::new();
         let base = self.pose(k, 0.0, false);
+        let Some((_, hi)) = self.candidates(&base, thr) else {
+            return (strips, boxes);
+        };
+        let l = self.profile.levels[hi];
+        let reach = ((l.r * l.r + l.z * l.z).sqrt() + self.profile.runout_bound) / self.d;
+        if base.b.x + reach < 0.0
+            || base.b.y + reach < 0.0
+            || base.b.x - reach > (self.nx - 1) as f64
+            || base.b.y - reach > (self.ny - 1) as f64
+        {
+            return (strips, boxes);
+        }
         let (a, b) = (base.m[(2, 0)], base.m[(2, 1)]);
         let amp = (a * a + b * b).sqrt();
         let m22 = base.m[(2, 2)];
