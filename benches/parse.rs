@@ -1,6 +1,99 @@
-use criterion::{Criterion, criterion_group, criterion_main};
+//! Parser and lowering throughput (bytes per second) on real and generated CLSF.
+//!
+//! `parse` = records only; `lower` = records + lowering to postures; `convert` = records +
+//! lowering + contact12 rows into memory (the `crest convert` pipeline without the file).
 
-fn bench(_c: &mut Criterion) {}
+use crest::parse::{ClsfReader, Contact12Reader};
+use crest::toolpath::{Contact12Writer, LowerOptions, Lowerer, Posture, Toolpath};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use std::hint::black_box;
+
+const LARGE: &str = include_str!("../../shared/samples-external/nx_5axis_varcontour_ijk_large.cls");
+
+/// A 5-axis path with contact data (12-number GOTOs), about `bytes` long.
+fn contact_clsf(bytes: usize) -> String {
+    let mut s = String::from(
+        "TOOL PATH/VC,TOOL,BALL\nTLDATA/MILL,10.0000,5.0000,75.0000,0.0000,0.0000\nFEDRAT/MMPM,1200.0000\n",
+    );
+    let mut k = 0u64;
+    while s.len() < bytes {
+        let x = (k % 2000) as f64 * 0.05;
+        let y = (k / 2000) as f64 * 0.3;
+        let z = (x / 20.0).sin() * 2.0;
+        s += &format!(
+            "GOTO/{:.4},{y:.4},{:.4},0.2588190,0.0000000,0.9659258,{x:.4},{y:.4},{z:.4},-0.0995037,0.0000000,0.9950372\n",
+            x - 1.29,
+            z + 0.17
+        );
+        k += 1;
+    }
+    s += "END-OF-PATH\n";
+    s
+}
+
+fn lower_all(text: &str, out: Option<&mut Vec<u8>>) -> usize {
+    let mut low = Lowerer::new(LowerOptions {
+        keep_postures: false,
+        ..Default::default()
+    });
+    let mut n = 0usize;
+    let mut w = Contact12Writer::new(false);
+    let mut buf = out;
+    let mut sink = |_: &Toolpath, p: &Posture| {
+        n += 1;
+        match buf.as_deref_mut() {
+            Some(b) => w.posture(p, b),
+            None => Ok(()),
+        }
+    };
+    for r in ClsfReader::new(text.as_bytes()) {
+        let r = r.unwrap_or_else(|e| panic!("{e}"));
+        low.push(&r, &mut sink).unwrap_or_else(|e| panic!("{e}"));
+    }
+    low.finish(&mut sink).unwrap_or_else(|e| panic!("{e}"));
+    n
+}
+
+fn bench(c: &mut Criterion) {
+    let contact = contact_clsf(4 << 20);
+    let mut csv = Vec::new();
+    lower_all(&contact, Some(&mut csv));
+    let csv_text = String::from_utf8(csv).unwrap_or_default();
+
+    let mut g = c.benchmark_group("parse");
+    for (name, text) in [
+        ("nx_large_5axis", LARGE),
+        ("contact_5axis_4MiB", contact.as_str()),
+    ] {
+        g.throughput(Throughput::Bytes(text.len() as u64));
+        g.bench_function(format!("records/{name}"), |b| {
+            b.iter(|| {
+                ClsfReader::new(black_box(text).as_bytes())
+                    .filter(|r| r.is_ok())
+                    .count()
+            })
+        });
+        g.bench_function(format!("lower/{name}"), |b| {
+            b.iter(|| lower_all(black_box(text), None))
+        });
+        g.bench_function(format!("convert/{name}"), |b| {
+            b.iter(|| {
+                let mut out = Vec::with_capacity(text.len());
+                lower_all(black_box(text), Some(&mut out));
+                out.len()
+            })
+        });
+    }
+    g.throughput(Throughput::Bytes(csv_text.len() as u64));
+    g.bench_function("records/contact12_csv", |b| {
+        b.iter(|| {
+            Contact12Reader::new(black_box(csv_text.as_str()).as_bytes())
+                .filter(|r| r.is_ok())
+                .count()
+        })
+    });
+    g.finish();
+}
 
 criterion_group!(benches, bench);
 criterion_main!(benches);

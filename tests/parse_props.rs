@@ -69,6 +69,32 @@ fn record() -> impl Strategy<Value = RecordKind> {
 
 proptest! {
     #[test]
+    fn fixed_point_printing_is_close_and_idempotent(x in -1.0..1.0f64, unit in any::<bool>()) {
+        use crest::toolpath::write::{fixed, LENGTH_DECIMALS, UNIT_DECIMALS};
+        // Unit-vector components within ±10, lengths within ±1e8 mm.
+        let (d, v) = if unit { (UNIT_DECIMALS, x * 10.0) } else { (LENGTH_DECIMALS, x * 1.0e8) };
+        let s = fixed(v, d);
+        let decimals = s.split('.').nth(1).map(str::len).unwrap_or(0) as u32;
+        prop_assert!(decimals >= d.0 && decimals <= d.1, "{}", s);
+        let back: f64 = s.parse().map_err(|e| TestCaseError::fail(format!("{s}: {e:?}")))?;
+        prop_assert!((back - v).abs() <= 0.5 * 10f64.powi(-(d.1 as i32)) * (1.0 + 1e-6) + v.abs() * 1e-15, "{} vs {}", s, v);
+        prop_assert_eq!(fixed(back, d), s);
+    }
+
+    #[test]
+    fn numbers_agree_with_std(s in "[+-]?[0-9]{0,25}(\\.[0-9]{0,25})?([eE][+-]?[0-9]{1,3})?") {
+        let std: Result<f64, _> = s.parse();
+        match crest::parse::number::scan_number(s.as_bytes()) {
+            Some((v, n)) => {
+                prop_assert_eq!(n, s.len());
+                let want = std.map_err(|e| TestCaseError::fail(format!("{s}: {e}")))?;
+                prop_assert_eq!(v.to_bits(), want.to_bits(), "{}", s);
+            }
+            None => prop_assert!(s.trim_start_matches(['+', '-']).starts_with(['.', 'e', 'E']) || s.trim_start_matches(['+', '-']).is_empty(), "{}", s),
+        }
+    }
+
+    #[test]
     fn printed_records_parse_back(r in record(), pad in 0usize..3) {
         let text = format!("{}{}", " ".repeat(pad), r);
         let back = parse_line(&text, 7).map_err(|e| TestCaseError::fail(format!("{text}: {e}")))?;

@@ -84,14 +84,19 @@ impl InputError {
                 .nth(s.column.saturating_sub(1) as usize)
                 .map(|(b, _)| b)
                 .unwrap_or(s.line_text.len());
-            let len = s.line_text[byte..]
+            let mut text = s.line_text.clone();
+            if byte >= text.len() {
+                // At the end of the line: point at a blank after the last character.
+                text.push(' ');
+            }
+            let len = text[byte..]
                 .find([',', ' ', '\t', '/', ';'])
-                .unwrap_or(s.line_text.len() - byte)
-                .max(usize::from(byte < s.line_text.len()));
+                .unwrap_or(text.len() - byte)
+                .max(1);
             (
                 Some(LineSource {
                     name: file.display().to_string(),
-                    text: s.line_text.clone(),
+                    text,
                     first_line: s.line.saturating_sub(1) as usize,
                 }),
                 Some(SourceSpan::new(byte.into(), len)),

@@ -34,10 +34,15 @@ where
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".crest-")
-        .suffix(".tmp")
-        .tempfile_in(dir)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".crest-").suffix(".tmp");
+    // tempfile creates 0600 files; outputs are ordinary files (0666 less the umask).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir)?;
     {
         let mut buffered = std::io::BufWriter::with_capacity(1 << 16, tmp.as_file_mut());
         fill(&mut buffered)?;
@@ -332,6 +337,13 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
         write_atomic(&out, |w| w.write_all(b"ok")).unwrap();
         assert_eq!(std::fs::read(&out).unwrap(), b"ok");
+        #[cfg(unix)]
+        {
+            // Readable by others (not tempfile's 0600), whatever the umask leaves of 0666.
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&out).unwrap().permissions().mode();
+            assert_eq!(mode & 0o044, 0o044, "mode {mode:o}");
+        }
     }
 
     #[test]

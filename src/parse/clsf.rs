@@ -331,6 +331,9 @@ fn slash(i: Span<'_>) -> Res<'_, ()> {
 /// A list of numbers `num { cm num }` into `Numbers` (at most `max`). With `word_tail`,
 /// the list ends softly before a `,` followed by a word (`CIRCLE/…,TIMES,n`).
 fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
+    if let Some((n, used)) = fast_numbers(i.fragment().as_bytes(), max, word_tail) {
+        return Ok((take_n(i, used), n));
+    }
     let mut out = Numbers {
         values: [0.0; MAX_NUMBERS],
         len: 0,
@@ -362,6 +365,40 @@ fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
         out.values[out.len()] = v;
         out.len += 1;
         i = rest;
+    }
+}
+
+/// The common case of [`numbers`] on raw bytes: numbers separated by bare commas (no
+/// blanks). Returns `None` whenever the general parser must decide (blanks, errors, too
+/// many numbers); when it returns a value, the general parser would return the same.
+fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Numbers, usize)> {
+    let mut out = Numbers {
+        values: [0.0; MAX_NUMBERS],
+        len: 0,
+    };
+    let mut pos = 0;
+    loop {
+        let (v, used) = scan_number(&b[pos..])?;
+        if !v.is_finite() {
+            return None;
+        }
+        out.values[out.len()] = v;
+        out.len += 1;
+        pos += used;
+        match b.get(pos) {
+            None => return Some((out, pos)),
+            Some(b',') => {
+                if word_tail && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
+                    return Some((out, pos));
+                }
+                if out.len() >= max {
+                    return None;
+                }
+                pos += 1;
+            }
+            Some(b' ' | b'\t') => return None,
+            Some(_) => return Some((out, pos)),
+        }
     }
 }
 
@@ -1037,9 +1074,13 @@ impl<R: BufRead> ClsfReader<R> {
                 }
             }
             // Drop a trailing `$$` comment, then look for a `$` continuation mark.
-            let code = match body.find("$$") {
-                Some(k) => body[..k].trim_end_matches([' ', '\t']),
-                None => body,
+            let code = if body.find('$').is_none() {
+                body
+            } else {
+                match body.find("$$") {
+                    Some(k) => body[..k].trim_end_matches([' ', '\t']),
+                    None => body,
+                }
             };
             if let Some(stripped) = code.strip_suffix('$') {
                 if self.joined.is_empty() {
@@ -1122,6 +1163,19 @@ impl<R: BufRead> ClsfReader<R> {
 /// Parse one record that sits on a single physical line. `lead` = byte offset of `code`
 /// in `full` (the whole physical line, for columns and the code frame).
 fn parse_physical(code: &str, line: u32, lead: usize, full: &str) -> Result<Record, ParseError> {
+    // Fast path for the bulk of a file: `GOTO/` with bare-comma numbers. Anything
+    // unusual (blanks, lower case, errors) goes through the grammar below.
+    if let Some(rest) = code.strip_prefix("GOTO/")
+        && let Some((n, used)) = fast_numbers(rest.as_bytes(), MAX_NUMBERS, false)
+        && used == rest.len()
+        && matches!(n.len(), 3 | 6 | 9 | 12)
+    {
+        return Ok(Record {
+            kind: RecordKind::Goto(n),
+            line,
+            column: lead as u32 + 1,
+        });
+    }
     let column_of = |byte: usize| -> u32 {
         let byte = lead + byte;
         full.get(..byte.min(full.len()))

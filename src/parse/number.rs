@@ -26,36 +26,35 @@ pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
         negative = bytes[i] == b'-';
         i += 1;
     }
+    // Accumulate all digits; with at most 18 of them the u64 cannot overflow.
     let mut mantissa: u64 = 0;
-    let mut exact = true;
-    let mut scale: i32 = 0;
-    let mut digits = 0usize;
+    let int_start = i;
     while i < len && bytes[i].is_ascii_digit() {
-        if mantissa < 100_000_000_000_000_000 {
-            mantissa = mantissa * 10 + u64::from(bytes[i] - b'0');
-        } else {
-            exact = false;
-        }
-        digits += 1;
+        mantissa = mantissa
+            .wrapping_mul(10)
+            .wrapping_add(u64::from(bytes[i] - b'0'));
         i += 1;
     }
+    let mut digits = i - int_start;
+    let mut scale: i32 = 0;
     if i < len && bytes[i] == b'.' {
         i += 1;
+        let frac_start = i;
         while i < len && bytes[i].is_ascii_digit() {
-            if mantissa < 100_000_000_000_000_000 {
-                mantissa = mantissa * 10 + u64::from(bytes[i] - b'0');
-                scale -= 1;
-            } else {
-                exact = false;
-            }
-            digits += 1;
+            mantissa = mantissa
+                .wrapping_mul(10)
+                .wrapping_add(u64::from(bytes[i] - b'0'));
             i += 1;
         }
+        let frac = i - frac_start;
+        digits += frac;
+        scale = -(frac.min(100_000) as i32);
     }
     // A lone "." (or a sign alone) is not a number.
     if digits == 0 {
         return None;
     }
+    let exact = digits <= 18;
     if i < len && (bytes[i] == b'e' || bytes[i] == b'E') {
         let mut j = i + 1;
         let mut exp_negative = false;

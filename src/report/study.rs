@@ -95,6 +95,423 @@ pub fn factor_effects(factors: &[Factor], runs: &[Vec<usize>], response: &[f64])
     }
 }
 
+/// Errors from design files.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum StudyError {
+    /// The design TOML does not parse or breaks a rule; `line`/`column` are 1-based (0 when
+    /// the error has no position).
+    #[error("{file}:{line}:{column}: {message}")]
+    Design {
+        /// File name as given.
+        file: String,
+        /// Line, 1-based.
+        line: usize,
+        /// Column, 1-based.
+        column: usize,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// Factor levels of a design file; every key carries its unit. A factor left out keeps its
+/// default (tilt, yaw and lead 0°); a factor with one level is held fixed.
+#[derive(Debug, Clone, Default, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FactorLevels {
+    /// Yaw ψ (convention A, model.md §7), degrees.
+    pub yaw_deg: Option<Vec<f64>>,
+    /// Tilt λ, degrees.
+    pub tilt_deg: Option<Vec<f64>>,
+    /// Lead (tilt with yaw 0), degrees; excludes `tilt_deg` and `yaw_deg`.
+    pub lead_deg: Option<Vec<f64>>,
+    /// Scallop height, µm (exact swept envelope, model.md R6); excludes `stepover_mm`.
+    pub scallop_um: Option<Vec<f64>>,
+    /// Pass interval, mm.
+    pub stepover_mm: Option<Vec<f64>>,
+    /// Feed, mm/min.
+    pub feed_mm_min: Option<Vec<f64>>,
+}
+
+/// A design file (`crest study design.toml`).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Design {
+    /// Title of the study.
+    #[serde(default)]
+    pub title: String,
+    /// Where the design comes from.
+    #[serde(default)]
+    pub source: String,
+    /// Surface name (as `crest synth`): `plane`, ….
+    pub surface: String,
+    /// Tool file, relative to the design file.
+    pub tool: std::path::PathBuf,
+    /// Spindle speed, rpm.
+    pub rpm: f64,
+    /// Grid spacing of the simulated height map, µm.
+    pub grid_um: f64,
+    /// Evaluated window (along the feed, across), mm; absent = one unit cell fz × step.
+    pub window_mm: Option<[f64; 2]>,
+    /// `one-way` or `zigzag`.
+    #[serde(default = "default_pattern")]
+    pub pattern: String,
+    /// Response symbols (areal parameters such as `Sz`, `Sq`).
+    pub responses: Vec<String>,
+    /// The factors and their levels.
+    pub factors: FactorLevels,
+}
+
+fn default_pattern() -> String {
+    "one-way".to_string()
+}
+
+/// How the pass interval of a run is given.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepSpec {
+    /// Scallop height, µm.
+    ScallopUm(f64),
+    /// Pass interval, mm.
+    StepoverMm(f64),
+}
+
+/// The settings of one run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunPoint {
+    /// Run number, 1-based, in appendix order.
+    pub run: usize,
+    /// Tilt, degrees (the lead when the design uses `lead_deg`).
+    pub tilt_deg: f64,
+    /// Yaw, degrees.
+    pub yaw_deg: f64,
+    /// Pass interval.
+    pub step: StepSpec,
+    /// Feed, mm/min.
+    pub feed_mm_min: f64,
+    /// The value of each design factor, in [`Design::factors`] order.
+    pub values: Vec<f64>,
+}
+
+impl Design {
+    /// Parse a design; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Design, StudyError> {
+        let err = |line: usize, column: usize, message: String| StudyError::Design {
+            file: file.to_string(),
+            line,
+            column,
+            message,
+        };
+        let design: Design = toml::from_str(text).map_err(|e| {
+            let (line, column) = e
+                .span()
+                .map(|s| line_column(text, s.start))
+                .unwrap_or((0, 0));
+            err(line, column, e.message().to_string())
+        })?;
+        // Rule violations are reported at the line of the offending key.
+        let at = |key: &str, message: String| {
+            let (line, column) = text
+                .lines()
+                .enumerate()
+                .find(|(_, l)| l.trim_start().starts_with(key))
+                .map(|(i, l)| (i + 1, l.len() - l.trim_start().len() + 1))
+                .unwrap_or((0, 0));
+            err(line, column, message)
+        };
+        let positive = |key: &str, v: f64| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(at(key, format!("{key} must be positive, got {v}")))
+            }
+        };
+        positive("rpm", design.rpm)?;
+        positive("grid_um", design.grid_um)?;
+        if let Some(w) = design.window_mm {
+            positive("window_mm", w[0])?;
+            positive("window_mm", w[1])?;
+        }
+        if !matches!(design.pattern.as_str(), "one-way" | "zigzag") {
+            return Err(at(
+                "pattern",
+                format!(
+                    "pattern must be one-way or zigzag, got '{}'",
+                    design.pattern
+                ),
+            ));
+        }
+        if design.responses.is_empty() {
+            return Err(at(
+                "responses",
+                "responses must name at least one parameter".into(),
+            ));
+        }
+        let f = &design.factors;
+        match (&f.scallop_um, &f.stepover_mm) {
+            (Some(_), Some(_)) => {
+                return Err(at(
+                    "stepover_mm",
+                    "give scallop_um or stepover_mm, not both".into(),
+                ));
+            }
+            (None, None) => {
+                return Err(at(
+                    "[factors]",
+                    "factors need scallop_um or stepover_mm".into(),
+                ));
+            }
+            _ => {}
+        }
+        if f.feed_mm_min.is_none() {
+            return Err(at("[factors]", "factors need feed_mm_min".into()));
+        }
+        if f.lead_deg.is_some() && (f.tilt_deg.is_some() || f.yaw_deg.is_some()) {
+            return Err(at(
+                "lead_deg",
+                "lead_deg excludes tilt_deg and yaw_deg (a lead is a tilt with yaw 0)".into(),
+            ));
+        }
+        for (key, levels) in design.factor_keys() {
+            if levels.is_empty() {
+                return Err(at(key, format!("{key} needs at least one level")));
+            }
+            let ok = levels.iter().all(|v| {
+                v.is_finite()
+                    && match key {
+                        "scallop_um" | "stepover_mm" | "feed_mm_min" => *v > 0.0,
+                        "tilt_deg" | "lead_deg" => (0.0..90.0).contains(v),
+                        _ => true,
+                    }
+            });
+            if !ok {
+                return Err(at(
+                    key,
+                    format!("{key} has a level out of range: {levels:?}"),
+                ));
+            }
+        }
+        Ok(design)
+    }
+
+    fn factor_keys(&self) -> Vec<(&'static str, &Vec<f64>)> {
+        let f = &self.factors;
+        [
+            ("yaw_deg", &f.yaw_deg),
+            ("tilt_deg", &f.tilt_deg),
+            ("lead_deg", &f.lead_deg),
+            ("scallop_um", &f.scallop_um),
+            ("stepover_mm", &f.stepover_mm),
+            ("feed_mm_min", &f.feed_mm_min),
+        ]
+        .into_iter()
+        .filter_map(|(k, v)| v.as_ref().map(|v| (k, v)))
+        .collect()
+    }
+
+    /// The factors in appendix order (yaw, tilt or lead, scallop or stepover, feed).
+    pub fn factors(&self) -> Vec<Factor> {
+        self.factor_keys()
+            .into_iter()
+            .map(|(k, v)| Factor {
+                name: k.to_string(),
+                levels: v.clone(),
+            })
+            .collect()
+    }
+
+    /// The runs of the full factorial, in appendix order.
+    pub fn runs(&self) -> Vec<RunPoint> {
+        let factors = self.factors();
+        full_factorial(&factors)
+            .into_iter()
+            .enumerate()
+            .map(|(r, idx)| {
+                let values: Vec<f64> = idx
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &j)| factors[i].levels[j])
+                    .collect();
+                let get = |name: &str| {
+                    factors
+                        .iter()
+                        .position(|f| f.name == name)
+                        .map(|i| values[i])
+                };
+                let step = match get("scallop_um") {
+                    Some(h) => StepSpec::ScallopUm(h),
+                    None => StepSpec::StepoverMm(get("stepover_mm").unwrap_or(f64::NAN)),
+                };
+                RunPoint {
+                    run: r + 1,
+                    tilt_deg: get("tilt_deg").or(get("lead_deg")).unwrap_or(0.0),
+                    yaw_deg: get("yaw_deg").unwrap_or(0.0),
+                    step,
+                    feed_mm_min: get("feed_mm_min").unwrap_or(f64::NAN),
+                    values,
+                }
+            })
+            .collect()
+    }
+}
+
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// The outcome of one run: its responses (in [`Design::responses`] order) or why it failed.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunResult {
+    /// The settings.
+    pub point: RunPoint,
+    /// Responses; NaN where the run failed.
+    pub responses: Vec<f64>,
+    /// Why the run failed, if it did.
+    pub error: Option<String>,
+}
+
+/// Evaluate every run of `design` with `eval` in parallel (rayon); results come back in run
+/// order whatever the thread count. `tick` is called once per finished run.
+pub fn run_design<F, T>(design: &Design, eval: F, tick: T) -> Vec<RunResult>
+where
+    F: Fn(&RunPoint) -> Result<Vec<f64>, String> + Sync,
+    T: Fn() + Sync,
+{
+    use rayon::prelude::*;
+    let n = design.responses.len();
+    design
+        .runs()
+        .into_par_iter()
+        .map(|point| {
+            let out = eval(&point);
+            tick();
+            match out {
+                Ok(mut v) => {
+                    v.resize(n, f64::NAN);
+                    RunResult {
+                        point,
+                        responses: v,
+                        error: None,
+                    }
+                }
+                Err(e) => RunResult {
+                    point,
+                    responses: vec![f64::NAN; n],
+                    error: Some(e),
+                },
+            }
+        })
+        .collect()
+}
+
+/// Eqs 7-8 for every response of a finished design, in [`Design::responses`] order.
+pub fn design_effects(design: &Design, results: &[RunResult]) -> Vec<Effects> {
+    let factors = design.factors();
+    let runs = full_factorial(&factors);
+    (0..design.responses.len())
+        .map(|k| {
+            let y: Vec<f64> = results.iter().map(|r| r.responses[k]).collect();
+            factor_effects(&factors, &runs, &y)
+        })
+        .collect()
+}
+
+/// `runs.csv`: one row per run, `run`, the factor values, the responses and `error`.
+pub fn write_runs_csv(
+    design: &Design,
+    results: &[RunResult],
+    w: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    let mut head = vec!["run".to_string()];
+    head.extend(design.factors().into_iter().map(|f| f.name));
+    // Response columns are named by their symbol only: units follow iso25178.md.
+    head.extend(design.responses.iter().cloned());
+    head.push("error".into());
+    writeln!(w, "{}", head.join(","))?;
+    for r in results {
+        let mut row = vec![r.point.run.to_string()];
+        row.extend(r.point.values.iter().map(|v| format!("{v}")));
+        row.extend(r.responses.iter().map(|v| fmt_value(*v)));
+        row.push(
+            r.error
+                .as_deref()
+                .map(|e| format!("\"{}\"", e.replace('"', "'")))
+                .unwrap_or_default(),
+        );
+        writeln!(w, "{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+fn fmt_value(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.6}")
+    } else {
+        String::new()
+    }
+}
+
+/// `effects.csv`: one row per response, factor and level: `response,factor,level,mean,
+/// effect` (Eq 7, M_ij − M) and `relative_first` (Eq 8, filled on the first level only).
+pub fn write_effects_csv(
+    design: &Design,
+    effects: &[Effects],
+    w: &mut dyn std::io::Write,
+) -> std::io::Result<()> {
+    writeln!(w, "response,factor,level,mean,effect,relative_first")?;
+    let factors = design.factors();
+    for (resp, e) in design.responses.iter().zip(effects) {
+        for (i, f) in factors.iter().enumerate() {
+            for (j, level) in f.levels.iter().enumerate() {
+                let rel = if j == 0 {
+                    fmt_value(e.relative_first[i])
+                } else {
+                    String::new()
+                };
+                writeln!(
+                    w,
+                    "{resp},{},{level},{},{},{rel}",
+                    f.name,
+                    fmt_value(e.mean),
+                    fmt_value(e.effects[i][j]),
+                )?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The chart of 001 Fig 11: relative first-level effect EF_i1 (Eq 8, %) per parameter (x =
+/// 1…n in [`Design::responses`] order), one series per factor with more than one level.
+pub fn effects_chart(design: &Design, effects: &[Effects]) -> crate::plot::profile::LineChart {
+    let factors = design.factors();
+    let x: Vec<f64> = (1..=design.responses.len()).map(|k| k as f64).collect();
+    let series = factors
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.levels.len() > 1)
+        .map(|(i, f)| {
+            let y: Vec<f64> = effects
+                .iter()
+                .map(|e| 100.0 * e.relative_first[i])
+                .collect();
+            crate::plot::profile::Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
+        })
+        .collect();
+    crate::plot::profile::LineChart {
+        title: if design.title.is_empty() {
+            "Relative first-level effects (001 Eq 8)".into()
+        } else {
+            format!("{}: relative first-level effects (Eq 8)", design.title)
+        },
+        x_label: format!("parameter ({})", design.responses.join(", ")),
+        y_label: "EF_i1 [%]".into(),
+        series,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -153,5 +570,146 @@ mod tests {
         for row in &e.effects {
             assert_relative_eq!(row.iter().sum::<f64>(), 0.0, epsilon = 1e-12);
         }
+    }
+
+    const DOE16: &str = include_str!("../../samples/studies/lavernhe-doe16.toml");
+    const YAW6: &str = include_str!("../../samples/studies/lavernhe-yaw6.toml");
+
+    #[test]
+    fn the_sample_designs_parse_into_the_001_runs() {
+        let d = Design::parse(DOE16, "doe16").unwrap();
+        let names: Vec<String> = d.factors().into_iter().map(|f| f.name).collect();
+        assert_eq!(names, ["yaw_deg", "tilt_deg", "scallop_um", "feed_mm_min"]);
+        let runs = d.runs();
+        assert_eq!(runs.len(), 16);
+        // Appendix run 6: yaw 0, tilt 10, scallop 5 µm, feed 4000.
+        let r = &runs[5];
+        assert_eq!(r.run, 6);
+        assert_eq!((r.yaw_deg, r.tilt_deg, r.feed_mm_min), (0.0, 10.0, 4000.0));
+        assert_eq!(r.step, StepSpec::ScallopUm(5.0));
+        assert_eq!(d.factors(), doe16());
+        let y6 = Design::parse(YAW6, "yaw6").unwrap();
+        assert_eq!(y6.runs().len(), 48);
+        assert_eq!(
+            y6.factors()[0].levels,
+            vec![0.0, 2.0, 5.0, 10.0, 15.0, 20.0]
+        );
+    }
+
+    fn design_err(text: &str) -> (usize, String) {
+        match Design::parse(text, "d.toml") {
+            Err(StudyError::Design { line, message, .. }) => (line, message),
+            Ok(_) => panic!("accepted: {text}"),
+        }
+    }
+
+    #[test]
+    fn bad_designs_are_rejected_at_their_line() {
+        let base = "surface = \"plane\"\ntool = \"t.toml\"\nrpm = 15000.0\ngrid_um = 4.0\n\
+                    responses = [\"Sq\"]\n[factors]\nscallop_um = [5.0]\nfeed_mm_min = [2000.0]\n";
+        assert!(Design::parse(base, "d.toml").is_ok());
+        let (line, msg) = design_err(&base.replace("grid_um", "grid"));
+        assert_eq!(line, 4, "{msg}");
+        let (line, msg) = design_err(&format!("{base}stepover_mm = [0.5]\n"));
+        assert_eq!(line, 9, "{msg}");
+        assert!(msg.contains("not both"), "{msg}");
+        let (line, msg) = design_err(&base.replace("rpm = 15000.0", "rpm = -1.0"));
+        assert_eq!(line, 3, "{msg}");
+        let (_, msg) = design_err(&format!("{base}tilt_deg = [95.0]\n"));
+        assert!(msg.contains("out of range"), "{msg}");
+        let (_, msg) = design_err(&format!("{base}lead_deg = [5.0]\nyaw_deg = [0.0]\n"));
+        assert!(msg.contains("excludes"), "{msg}");
+        let (_, msg) = design_err(&base.replace("responses = [\"Sq\"]", "responses = []"));
+        assert!(msg.contains("at least one"), "{msg}");
+    }
+
+    /// A synthetic response with known effects: Sq = 1 + 0.5·[yaw 20] + 0.1·scallop.
+    fn fake(p: &RunPoint) -> Result<Vec<f64>, String> {
+        let h = match p.step {
+            StepSpec::ScallopUm(h) => h,
+            StepSpec::StepoverMm(_) => return Err("no scallop".into()),
+        };
+        let sq = 1.0 + 0.5 * (p.yaw_deg / 20.0) + 0.1 * h;
+        Ok(vec![6.0 * sq, sq])
+    }
+
+    #[test]
+    fn runs_in_parallel_come_back_in_order_for_any_thread_count() {
+        let mut d = Design::parse(DOE16, "doe16").unwrap();
+        d.responses = vec!["Sz".into(), "Sq".into()];
+        let count = std::sync::atomic::AtomicUsize::new(0);
+        let tick = || {
+            count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        };
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let a = one.install(|| run_design(&d, fake, tick));
+        let b = two.install(|| run_design(&d, fake, tick));
+        assert_eq!(a, b);
+        assert_eq!(count.load(std::sync::atomic::Ordering::Relaxed), 32);
+        assert!(a.iter().enumerate().all(|(i, r)| r.point.run == i + 1));
+        let e = design_effects(&d, &a);
+        // M(Sq) = 1 + 0.25 + 0.75 = 2; yaw at 0° lowers it by 0.25; scallop 5 µm by 0.25.
+        assert_relative_eq!(e[1].mean, 2.0, epsilon = 1e-12);
+        assert_relative_eq!(e[1].effects[0][0], -0.25, epsilon = 1e-12);
+        assert_relative_eq!(e[1].relative_first[2], -0.125, epsilon = 1e-12);
+        assert_relative_eq!(e[1].relative_first[1], 0.0, epsilon = 1e-12);
+        // Eq 8 removes the unit: Sz = 6 Sq has the same relative effects.
+        for i in 0..4 {
+            assert_relative_eq!(
+                e[0].relative_first[i],
+                e[1].relative_first[i],
+                epsilon = 1e-12
+            );
+        }
+
+        let mut runs = Vec::new();
+        write_runs_csv(&d, &a, &mut runs).unwrap();
+        let runs = String::from_utf8(runs).unwrap();
+        let lines: Vec<&str> = runs.lines().collect();
+        assert_eq!(lines.len(), 17);
+        assert_eq!(
+            lines[0],
+            "run,yaw_deg,tilt_deg,scallop_um,feed_mm_min,Sz,Sq,error"
+        );
+        assert_eq!(lines[16], "16,20,10,10,4000,15.000000,2.500000,");
+        let mut eff = Vec::new();
+        write_effects_csv(&d, &e, &mut eff).unwrap();
+        let eff = String::from_utf8(eff).unwrap();
+        assert_eq!(eff.lines().count(), 1 + 2 * 4 * 2);
+        assert!(
+            eff.contains("Sq,yaw_deg,0,2.000000,-0.250000,-0.125000\n"),
+            "{eff}"
+        );
+        let chart = effects_chart(&d, &e);
+        assert_eq!(chart.series.len(), 4);
+        assert_eq!(chart.series[0].y, vec![-12.5, -12.5]);
+    }
+
+    #[test]
+    fn failed_runs_are_kept_with_their_error_and_left_out_of_the_means() {
+        let mut d = Design::parse(DOE16, "doe16").unwrap();
+        d.responses = vec!["Sq".into()];
+        let r = run_design(
+            &d,
+            |p| {
+                if p.run == 1 {
+                    Err("boom".into())
+                } else {
+                    Ok(vec![1.0])
+                }
+            },
+            || {},
+        );
+        assert_eq!(r[0].error.as_deref(), Some("boom"));
+        assert!(r[0].responses[0].is_nan());
+        let e = design_effects(&d, &r);
+        assert_relative_eq!(e[0].mean, 1.0, epsilon = 1e-12);
     }
 }

@@ -1,8 +1,69 @@
 //! Resampling the tool path onto the cutting edge's own clock (002 §2.4, 001 Eqs 1-6):
 //! even feed per tooth (`fz` mode) or a constant spindle step Δθ (`dtheta` mode), with the
 //! tool axis interpolated on the unit sphere and the local frame (f, g, n) at every sample.
+//!
+//! The surface simulation needs the tool where each tooth actually is, not where the CAM
+//! system happened to put a posture, so the path is re-cut on its own clock:
+//!
+//! * **Geometry.** Each cutting run ([`Toolpath::cutting_runs`]) is walked move by move:
+//!   straight lines, arcs ([`crate::toolpath::ArcMove`], clockwise about their axis, extra
+//!   turns, helical when the end is higher along the axis) or, with [`Options::spline`],
+//!   cubic Hermite curves through the postures. The tool axis, CC point and normal are
+//!   interpolated with the move's parameter u (axis and normal by slerp or nlerp,
+//!   renormalised; model.md §5.1).
+//! * **Clock.** Within a move the feed is linear in time (model.md §5.3):
+//!   Δt = 2L/(V_i + V_{i+1}), θ = Ω t. Programmed feeds (FEDRAT) are constant over a move
+//!   (the move's own modal feed); per-posture feeds ([`Options::posture_feed_mm_min`],
+//!   e.g. predicted by `kinematics`) vary linearly in time between the postures.
+//! * **Spindle speed.** [`Options::rpm`] when given. Otherwise the nominal feed per tooth
+//!   is authoritative: n = V_ref/(Z·fz), with V_ref the highest programmed feed of the
+//!   cutting moves ([`Options::feed_mm_min`], else FEDRAT, else the highest posture feed),
+//!   so that at the programmed feed θ(S) = 2πS/(Z·fz) exactly (model.md §5.2). Only a path
+//!   without any feed uses its SPINDL speed, with V = Z·fz·n.
+//! * **Spacing.** [`Mode::FeedPerTooth`]: every fz of arc length; [`Mode::SpindleStep`]:
+//!   every Δθ of spindle angle, i.e. ΔS = V·Δθ/Ω (= Z·fz·Δθ/2π at the programmed feed, and
+//!   the local fz follows the feed where it varies). Both ends of every run are kept; the
+//!   last step of a run is the remainder. s accumulates over the cutting runs; t and θ
+//!   restart at 0 at every run (the spindle phase between runs is unknown).
+//! * **Frame.** f = path tangent projected on the tangent plane of the interpolated normal
+//!   (on the plane normal to the tool axis when there is no contact data), g = n × f.
+//!
+//! Degenerate input is handled and counted in [`Stats`], never silently wrong.
+//!
+//! ```
+//! use crest::math::{Point3, Vec3};
+//! use crest::resample::{resample, Mode, Options};
+//! use crest::toolpath::{MotionKind, Posture, Toolpath};
+//!
+//! let posture = |x: f64, motion| Posture {
+//!     position: Point3::new(x, 0.0, 0.0),
+//!     axis: Vec3::z(),
+//!     motion,
+//!     arc: None,
+//!     contact: None,
+//!     feed_mm_min: Some(1000.0),
+//!     spindle_rpm: None,
+//!     line: 0,
+//! };
+//! let path = Toolpath {
+//!     postures: vec![posture(0.0, MotionKind::Rapid), posture(1.0, MotionKind::Cut)],
+//!     ..Default::default()
+//! };
+//! // Z = 4, fz = 0.05 mm, Δθ = 1°: ΔS = 5.5556e-4 mm, θ(S = 1 mm) = 31.4159 rad.
+//! let opts = Options::new(Mode::SpindleStep { dtheta_rad: 1f64.to_radians() }, 0.05, 4);
+//! let samples = resample(&path, &opts).unwrap();
+//! let last = samples.last().unwrap();
+//! assert!((last.s_mm - 1.0).abs() < 1e-12);
+//! assert!((last.theta_rad - 31.4159).abs() < 1e-4);
+//! ```
+
+mod curve;
+mod engine;
+
+pub use engine::{SpindleSource, Stats, resample, resample_with};
 
 use crate::math::{Point3, Vec3};
+use thiserror::Error;
 
 /// One resampled posture.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,4 +133,130 @@ pub struct Options {
     pub axis_interpolation: AxisInterpolation,
     /// Interpolate positions on a cubic spline through the postures instead of lines/arcs.
     pub spline: bool,
+}
+
+impl Default for Options {
+    /// The 002 case: fz = 0.05 mm, Z = 4, `fz` mode, feed and spindle from the path,
+    /// slerp, no spline.
+    fn default() -> Self {
+        Options {
+            mode: Mode::FeedPerTooth,
+            fz_mm: 0.05,
+            teeth: 4,
+            rpm: None,
+            feed_mm_min: None,
+            posture_feed_mm_min: None,
+            axis_interpolation: AxisInterpolation::Slerp,
+            spline: false,
+        }
+    }
+}
+
+impl Options {
+    /// Options with the given mode, nominal feed per tooth (mm) and number of teeth; the
+    /// rest as in [`Options::default`].
+    pub fn new(mode: Mode, fz_mm: f64, teeth: usize) -> Options {
+        Options {
+            mode,
+            fz_mm,
+            teeth,
+            ..Options::default()
+        }
+    }
+
+    /// Set the spindle speed, rpm.
+    pub fn with_rpm(mut self, rpm: f64) -> Options {
+        self.rpm = Some(rpm);
+        self
+    }
+
+    /// Set a constant feed, mm/min, overriding the path's FEDRAT.
+    pub fn with_feed_mm_min(mut self, feed_mm_min: f64) -> Options {
+        self.feed_mm_min = Some(feed_mm_min);
+        self
+    }
+
+    /// Set one feed per posture, mm/min (same length as the path's postures).
+    pub fn with_posture_feed_mm_min(mut self, feeds: Vec<f64>) -> Options {
+        self.posture_feed_mm_min = Some(feeds);
+        self
+    }
+
+    /// Set the tool-axis interpolation.
+    pub fn with_axis_interpolation(mut self, axis_interpolation: AxisInterpolation) -> Options {
+        self.axis_interpolation = axis_interpolation;
+        self
+    }
+
+    /// Interpolate positions on cubic Hermite curves through the postures (smooth
+    /// trochoid plots) instead of straight lines; arcs stay arcs.
+    pub fn with_spline(mut self, spline: bool) -> Options {
+        self.spline = spline;
+        self
+    }
+
+    /// The arc-length step of [`Mode::SpindleStep`] at the nominal fz: ΔS = Z·fz·Δθ/2π, mm
+    /// (model.md §5.2); the step itself in [`Mode::FeedPerTooth`].
+    pub fn nominal_step_mm(&self) -> f64 {
+        match self.mode {
+            Mode::FeedPerTooth => self.fz_mm,
+            Mode::SpindleStep { dtheta_rad } => {
+                self.teeth as f64 * self.fz_mm * dtheta_rad / std::f64::consts::TAU
+            }
+        }
+    }
+}
+
+/// Why a path could not be resampled.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum ResampleError {
+    /// The feed per tooth is zero, negative or not finite.
+    #[error("feed per tooth must be positive and finite, got {0} mm")]
+    InvalidFeedPerTooth(f64),
+    /// Zero teeth.
+    #[error("the number of teeth must be at least 1")]
+    NoTeeth,
+    /// The spindle step is zero, negative or not finite.
+    #[error("spindle step must be positive and finite, got {0} rad")]
+    InvalidSpindleStep(f64),
+    /// The spindle speed is zero, negative or not finite.
+    #[error("spindle speed must be positive and finite, got {0} rpm")]
+    InvalidSpindle(f64),
+    /// A feed is negative or not finite (or zero where it must be positive).
+    #[error("invalid feed {value} mm/min at line {line}")]
+    InvalidFeed {
+        /// Source line of the posture.
+        line: u32,
+        /// The feed, mm/min.
+        value: f64,
+    },
+    /// Neither a feed nor a spindle speed is known.
+    #[error(
+        "no feed and no spindle speed: the path has no FEDRAT or SPINDL; set a feed \
+         (Options::feed_mm_min, --feed-mm-min) or a spindle speed (Options::rpm, --rpm)"
+    )]
+    MissingFeedAndSpindle,
+    /// The per-posture feeds do not match the postures.
+    #[error("{got} posture feeds for {expected} postures")]
+    PostureFeedLength {
+        /// Number of postures.
+        expected: usize,
+        /// Number of feeds given.
+        got: usize,
+    },
+    /// A move whose feed is zero at both ends has no duration (model.md §5.3).
+    #[error("the move ending at line {line} has zero feed at both ends: its duration is undefined")]
+    ZeroFeedMove {
+        /// Source line of the posture the move ends at.
+        line: u32,
+    },
+    /// A posture has a non-finite coordinate or a zero tool axis.
+    #[error("invalid posture at line {line}: {what}")]
+    InvalidPosture {
+        /// Source line of the posture.
+        line: u32,
+        /// What is wrong, lower case.
+        what: &'static str,
+    },
 }

@@ -1,8 +1,149 @@
 //! Surface simulation: height maps on grids (WCS window or local patch along normals),
 //! dome and cutting-edge (ICE) models, a kiddo index over contact points.
 //!
-//! This is the only stage that uses rayon; results are identical for any thread count.
+//! This is the only stage that uses rayon; results are identical for any thread count
+//! (tiles are independent and every node keeps an exact minimum, which does not depend on
+//! the order in which cuts arrive).
+//!
+//! # How it works
+//! The cutter is a meridian polyline (levels) with, per tooth, its edge elements (ICE) or
+//! its revolved body (dome) at spindle angle 0 ([`profile`]). A pose (tool tip, tool frame,
+//! spindle angle) becomes one 3×3 matrix into the grid frame ([`grid`]).
+//! * **ICE**: between consecutive samples (subdivided so that Δθ ≤ the model's step) each
+//!   tooth's edge polyline forms a ribbon of quads; the surface is the lower envelope of the
+//!   ribbons, so it has no holes whatever the grid.
+//! * **Dome**: at each sample the revolved body of each tooth (its own radius r_j(z),
+//!   model.md Eq 5) is meshed in angle (chord error ≤ the tolerance) and imprinted.
+//!
+//! Triangles are rasterised into tiles of a z-buffer that keep the lowest height per node
+//! ([`raster`]). Only triangles within a band above the nominal surface are generated; a
+//! tile whose result is not provably inside that band is recomputed with a wider band,
+//! up to the depth of cut, so the band only changes the speed, never the result.
 
+mod engine;
+pub(crate) mod grid;
 mod heightmap;
+pub(crate) mod profile;
+pub(crate) mod raster;
 
+pub use engine::simulate;
+pub use grid::GridFrame;
 pub use heightmap::HeightMap;
+
+/// Which surface model imprints the tool.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Model {
+    /// Instantaneous positions: every sample imprints the revolved body of each tooth.
+    Dome,
+    /// Pondered movement: the teeth's edges sweep between samples, subdivided so that the
+    /// spindle turns at most `dtheta_rad` per step.
+    Ice {
+        /// Largest spindle step Δθ, rad.
+        dtheta_rad: f64,
+    },
+}
+
+/// Where the grid lies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GridSpec {
+    /// A window of the WCS xy plane, heights along +z. Corners in mm.
+    Window {
+        /// Lower x, mm.
+        x0_mm: f64,
+        /// Lower y, mm.
+        y0_mm: f64,
+        /// Upper x, mm.
+        x1_mm: f64,
+        /// Upper y, mm.
+        y1_mm: f64,
+    },
+    /// A patch on the tangent plane at the contact point nearest arc length `s_mm`, centred
+    /// there: `length_mm` along the feed f (columns), `width_mm` along g = n × f (rows);
+    /// heights along the local surface normals.
+    Patch {
+        /// Arc length of the CL point along the path, mm.
+        s_mm: f64,
+        /// Extent along f, mm.
+        length_mm: f64,
+        /// Extent along g, mm.
+        width_mm: f64,
+    },
+}
+
+/// Options of a simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Surface model.
+    pub model: Model,
+    /// Grid placement.
+    pub grid: GridSpec,
+    /// Node spacing, mm (the same along both axes).
+    pub spacing_mm: f64,
+    /// Depth of cut ap, mm: stock ends this far above the nominal surface, so a node whose
+    /// cut height would be higher is not reached (NaN).
+    pub depth_mm: f64,
+    /// First band above the nominal surface that is rasterised, mm (speed only).
+    pub band_mm: f64,
+    /// Chord tolerance of the meridian polyline and of the dome's angular mesh, mm.
+    pub chord_tol_mm: f64,
+    /// Nodes per tile side (memory per tile = side² × 8 bytes).
+    pub tile: usize,
+}
+
+impl Options {
+    /// Defaults: depth 0.5 mm, band 5 µm, chord tolerance 0.01 µm, tiles of 256 × 256.
+    pub fn new(model: Model, grid: GridSpec, spacing_mm: f64) -> Options {
+        Options {
+            model,
+            grid,
+            spacing_mm,
+            depth_mm: 0.5,
+            band_mm: 0.005,
+            chord_tol_mm: 1e-5,
+            tile: 256,
+        }
+    }
+}
+
+/// A finished simulation.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// Heights above the nominal surface, µm (NaN = not reached).
+    pub map: HeightMap,
+    /// The grid frame (for a window: the WCS).
+    pub frame: GridFrame,
+    /// Nodes with a finite height.
+    pub nodes_cut: usize,
+    /// Ribbon strips generated (all passes).
+    pub strips: usize,
+    /// Tiles recomputed with a wider band.
+    pub tiles_widened: usize,
+    /// True when the nominal surface came from contact data; false when the samples carry
+    /// none and a window's heights are WCS z (nominal z = 0).
+    pub nominal_from_contacts: bool,
+}
+
+/// Why a simulation cannot run.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SurfaceError {
+    /// A non-positive or non-finite option.
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+    /// The grid would hold no node or too many.
+    #[error("grid of {nx} × {ny} nodes is empty or too large")]
+    BadGrid {
+        /// Columns.
+        nx: usize,
+        /// Rows.
+        ny: usize,
+    },
+    /// No samples to simulate.
+    #[error("the path has no samples")]
+    NoSamples,
+    /// A patch needs contact points and normals.
+    #[error("a patch needs contact data (CC points and normals) in the path")]
+    NoContactData,
+    /// A sample holds a non-finite number.
+    #[error("sample {0} has a non-finite position, axis or angle")]
+    BadSample(usize),
+}

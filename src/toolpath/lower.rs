@@ -563,7 +563,17 @@ impl Lowerer {
                 p.msys = Some(mm);
                 p.msys_applied = applied;
             }
-            RecordKind::Comment(_) | RecordKind::Paint(_) | RecordKind::Cutcom(_) => {}
+            RecordKind::Comment(text) => {
+                if text.to_ascii_lowercase().contains("contact contour") {
+                    self.warn(
+                        "contact-contour",
+                        line,
+                        column,
+                        "contact contour data: GOTO positions are contact points, not tool tips, and are read as tool tips".into(),
+                    );
+                }
+            }
+            RecordKind::Paint(_) | RecordKind::Cutcom(_) => {}
             RecordKind::Units(u) => self.inch = *u == LengthUnit::Inch,
             RecordKind::LoadTool { .. } | RecordKind::SelectTool { .. } => {}
             RecordKind::Fedrat { unit, value } => {

@@ -4,6 +4,27 @@
 //! one-shot RAPID, tool axis carried over), converts inches to mm, keeps or applies MSYS,
 //! and turns arcs and NURBS into postures. Everything after this stage sees only
 //! [`Program`], [`Toolpath`] and [`Posture`].
+//!
+//! Lowering is incremental ([`Lowerer`]): each parse record goes in, finished postures
+//! come out through a callback, so conversion streams; [`lower_records`] collects a whole
+//! [`Program`]. The writers ([`write_clsf`], [`write_contact12`], and their streaming forms
+//! [`ClsfWriter`], [`Contact12Writer`]) print fixed-point numbers that read back to the
+//! same digits.
+//!
+//! ```
+//! use crest::parse::clsf::parse_str;
+//! use crest::toolpath::{lower_records, LowerOptions, MotionKind};
+//! let text = "TOOL PATH/OP,TOOL,BALL\nTLDATA/MILL,10,5,75,0,0\nRAPID\nGOTO/0,0,10\n\
+//!             FEDRAT/MMPM,500\nGOTO/0,0,0,0,0,1,3.5355,0,1.4645\nGOTO/4,3,0\nEND-OF-PATH\n";
+//! let program = lower_records(&parse_str(text).unwrap(), LowerOptions::default()).unwrap();
+//! let path = &program.paths[0];
+//! assert_eq!(path.postures[0].motion, MotionKind::Rapid);
+//! assert_eq!(path.postures[2].feed_mm_min, Some(500.0));
+//! // The 9-number GOTO has a CC point; its normal points to the ball centre (0, 0, 5).
+//! let contact = path.postures[1].contact.as_ref().unwrap();
+//! assert!(contact.normal_derived && (contact.normal.z - 0.7071).abs() < 1e-4);
+//! assert_eq!((path.stats.length_mm, path.stats.cutting_length_mm), (15.0, 15.0));
+//! ```
 
 use crate::math::{Point3, Vec3};
 

@@ -31,49 +31,80 @@ const POW10: [u64; 10] = [
 pub fn push_fixed(out: &mut Vec<u8>, v: f64, (min, max): (u32, u32)) {
     let max = max.min(9);
     let min = min.min(max);
-    let scaled = (v * POW10[max as usize] as f64).round();
-    if !scaled.is_finite() || scaled.abs() >= 9.0e15 {
-        // Huge or non-finite values: the shortest exact form.
+    let scaled = v * POW10[max as usize] as f64;
+    if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
+        // Values too large for the decimals to be meaningful (beyond 2.8e8 mm), or not
+        // finite: the shortest form that reads back exactly.
         let _ = write!(out, "{v}");
         return;
     }
-    let mut q = scaled.abs() as u64;
-    let mut dec = max;
-    while dec > min && q % 10 == 0 {
-        q /= 10;
+    // Round half away from zero without a libm call, then split at the decimal point.
+    let q = (scaled.abs() + 0.5) as u64;
+    let p = POW10[max as usize];
+    let int = q / p;
+    let mut frac = (q % p) as u32;
+    let mut dec = max as usize;
+    while dec > min as usize && frac % 10 == 0 {
+        frac /= 10;
         dec -= 1;
     }
     if scaled < 0.0 && q != 0 {
         out.push(b'-');
     }
-    let p = POW10[dec as usize];
-    let (int, frac) = (q / p, q % p);
     push_u64(out, int);
     if dec > 0 {
-        out.push(b'.');
-        let mut digits = [b'0'; 9];
-        let mut f = frac;
-        for k in (0..dec as usize).rev() {
-            digits[k] = b'0' + (f % 10) as u8;
-            f /= 10;
+        // The fraction, zero-padded to `dec` digits, two digits at a time.
+        let mut buf = [b'0'; 10];
+        let mut k = 10;
+        while frac >= 100 {
+            let r = (frac % 100) as usize * 2;
+            frac /= 100;
+            k -= 2;
+            buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
         }
-        out.extend_from_slice(&digits[..dec as usize]);
+        if frac >= 10 {
+            let r = frac as usize * 2;
+            k -= 2;
+            buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+        } else if frac > 0 {
+            buf[k - 1] = b'0' + frac as u8;
+        }
+        out.push(b'.');
+        out.extend_from_slice(&buf[10 - dec..]);
     }
 }
 
+/// Append the decimal digits of `v`.
 fn push_u64(out: &mut Vec<u8>, mut v: u64) {
+    if v < 10 {
+        out.push(b'0' + v as u8);
+        return;
+    }
     let mut buf = [0u8; 20];
     let mut k = buf.len();
-    loop {
+    while v >= 100 {
+        let r = (v % 100) as usize * 2;
+        v /= 100;
+        k -= 2;
+        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+    }
+    if v >= 10 {
+        let r = v as usize * 2;
+        k -= 2;
+        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+    } else {
         k -= 1;
-        buf[k] = b'0' + (v % 10) as u8;
-        v /= 10;
-        if v == 0 {
-            break;
-        }
+        buf[k] = b'0' + v as u8;
     }
     out.extend_from_slice(&buf[k..]);
 }
+
+/// "00", "01", …, "99".
+const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
 
 /// Format one number (tests, messages).
 pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
@@ -316,7 +347,7 @@ impl ClsfWriter {
             }
             if a.extra_turns > 0 {
                 l.extend_from_slice(b",TIMES,");
-                push_u64(l, u64::from(a.extra_turns) + 1);
+                let _ = write!(l, "{}", u64::from(a.extra_turns) + 1);
             }
             l.push(b'\n');
             out.write_all(l)?;
@@ -397,6 +428,10 @@ mod tests {
         assert_eq!(fixed(1.0, UNIT_DECIMALS), "1.0000000");
         assert_eq!(fixed(25.400000000000002, LENGTH_DECIMALS), "25.4000");
         assert_eq!(fixed(1e300, LENGTH_DECIMALS), format!("{}", 1e300));
+        assert_eq!(
+            fixed(-4364844.847241433, UNIT_DECIMALS),
+            "-4364844.847241433"
+        );
     }
 
     #[test]
