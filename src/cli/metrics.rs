@@ -155,10 +155,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
         profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?
     } else {
-        let m = preprocess_map(&map, &pp).map_err(|e| miette!("{file}: {e}"))?;
+        // Without form removal or filters the map is used as read (no copy of a large map).
+        let processed;
+        let m = if pp.level.degree() == 0 && !filtered {
+            &map
+        } else {
+            processed = preprocess_map(&map, &pp).map_err(|e| miette!("{file}: {e}"))?;
+            &processed
+        };
         info.insert("evaluated_nx".into(), m.nx.into());
         info.insert("evaluated_ny".into(), m.ny.into());
-        areal_parameters(&m, &set).map_err(|e| miette!("{file}: {e}"))?
+        areal_parameters(m, &set).map_err(|e| miette!("{file}: {e}"))?
     };
 
     if args.json {

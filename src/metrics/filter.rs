@@ -110,12 +110,18 @@ impl LineFilter {
         let r = self.radius as isize;
         match &self.fft {
             None => {
+                // Extend once by reflection, then plain dot products (no index arithmetic
+                // in the inner loop).
+                let ext: Vec<f64> = (0..n + 2 * self.radius)
+                    .map(|k| x[reflect(k as isize - r, n)])
+                    .collect();
                 for (i, o) in out.iter_mut().enumerate() {
-                    let mut acc = 0.0;
-                    for (k, &wk) in self.w.iter().enumerate() {
-                        acc += wk * x[reflect(i as isize + k as isize - r, n)];
-                    }
-                    *o = acc;
+                    *o = self
+                        .w
+                        .iter()
+                        .zip(&ext[i..i + self.w.len()])
+                        .map(|(a, b)| a * b)
+                        .sum();
                 }
             }
             Some((fwd, inv, kf, len)) => {

@@ -178,7 +178,8 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
             }
             let (vy, vx) = (i as f64 - cy as f64, j as f64 - cx as f64);
             let dist = ((vy * map.dy_um).powi(2) + (vx * map.dx_um).powi(2)).sqrt();
-            let steps = (4.0 * vy.abs().max(vx.abs())).ceil().max(1.0) as usize;
+            // One sample per pixel step along the ray; the crossing is interpolated linearly.
+            let steps = vy.abs().max(vx.abs()).ceil().max(1.0) as usize;
             let mut prev = r0;
             let mut found = 1.0;
             for k in 1..=steps {
