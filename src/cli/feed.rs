@@ -1,12 +1,261 @@
-//! `crest feed`.
+//! `crest feed`: predict the feed the machine really reaches along every tool path of a
+//! file (kinematics.md §7), from the machine's axis limits, cycle time and look-ahead.
+//!
+//! Every tool path of the file is planned on its own, rapids included, starting and ending
+//! at rest; `t_s` restarts at 0 for each path and the totals add the paths up. Exit status
+//! 1 when a path fails the §7 self-check (an interpolator fallback was needed).
 
 use super::Outcome;
+use crate::kinematics::{FeedPlan, Level, Machine, MachineError, plan_input, plan_poses};
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 /// Options of `crest feed`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Tool-path file (CLSF or contact12).
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    /// Machine description (`machine.toml`, kinematics.md §3.2).
+    #[arg(long, value_name = "MACHINE.TOML")]
+    pub machine: PathBuf,
+    /// Planner: `jerk` (jerk-limited look-ahead interpolator, §6.3) or `acc`
+    /// (acceleration-limited, §6.1).
+    #[arg(long, value_enum, default_value_t = LevelArg::Jerk)]
+    pub level: LevelArg,
+    /// Print one JSON object on stdout (totals, per path and per posture).
+    #[arg(long)]
+    pub json: bool,
+    /// Apply MSYS: plan in the absolute frame instead of the MCS (the machine's part frame
+    /// is then the CLSF's absolute system).
+    #[arg(long)]
+    pub absolute: bool,
+    /// Write the per-posture table as CSV.
+    #[arg(short = 'o', long = "output", value_name = "POSES.CSV")]
+    pub output: Option<PathBuf>,
+}
+
+/// The `--level` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum LevelArg {
+    /// Jerk-limited look-ahead interpolator at the cycle time.
+    Jerk,
+    /// Acceleration-limited look-ahead (no jerk).
+    Acc,
+}
+
+/// Read `path` as a machine description; errors name the file and line.
+pub fn read_machine(path: &Path) -> miette::Result<Machine> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| miette::miette!("{}: cannot read the machine file: {e}", path.display()))?;
+    Machine::from_toml_str(&text).map_err(|e| {
+        let file = path.display();
+        match &e {
+            MachineError::Missing { line, .. } | MachineError::Invalid { line, .. } => {
+                let msg = e.to_string();
+                let msg = msg
+                    .strip_prefix(&format!("line {line}: "))
+                    .unwrap_or(&msg)
+                    .to_string();
+                miette::miette!("{file}:{line}:1: {msg}")
+            }
+            _ => miette::miette!("{file}: {e}"),
+        }
+    })
+}
 
 /// Run `crest feed`.
-pub fn run(_args: Args) -> miette::Result<Outcome> {
-    Err(miette::miette!("crest feed is not built yet"))
+pub fn run(args: Args) -> miette::Result<Outcome> {
+    let machine = read_machine(&args.machine)?;
+    let opts = crate::toolpath::LowerOptions {
+        apply_msys: args.absolute,
+        ..Default::default()
+    };
+    let program = super::input::read_program_with(&args.file, opts)?;
+    let level = match args.level {
+        LevelArg::Jerk => Level::Jerk,
+        LevelArg::Acc => Level::Acceleration,
+    };
+    let file = args.file.display().to_string();
+    let mut plans = Vec::with_capacity(program.paths.len());
+    for path in &program.paths {
+        let input = plan_input(path);
+        let plan = plan_poses(&input, &machine, level).map_err(|e| {
+            let msg = e.to_string();
+            let line = e.line();
+            let msg = msg
+                .strip_prefix(&format!("line {line}: "))
+                .unwrap_or(&msg)
+                .to_string();
+            miette::miette!("{file}:{line}:1: {msg} (tool path \"{}\")", path.name)
+        })?;
+        plans.push((path, input, plan));
+    }
+    let names = machine.joint_names();
+    if let Some(out) = &args.output {
+        crate::io::write_atomic(out, |w| write_csv(w, &plans, &names))
+            .map_err(|e| miette::miette!("{}: cannot write: {e}", out.display()))?;
+    }
+    let total: f64 = plans.iter().map(|(_, _, p)| p.total_time_s).sum();
+    let programmed: f64 = plans.iter().map(|(_, _, p)| p.programmed_time_s).sum();
+    let ratio = if programmed > 0.0 {
+        total / programmed
+    } else {
+        f64::NAN
+    };
+    let all_ok = plans.iter().all(|(_, _, p)| p.self_check_ok());
+    if args.json {
+        let paths: Vec<serde_json::Value> = plans
+            .iter()
+            .map(|(path, input, plan)| path_json(&path.name, input, plan, &names))
+            .collect();
+        let v = serde_json::json!({
+            "file": file,
+            "machine": machine.name,
+            "level": match level { Level::Jerk => "jerk", Level::Acceleration => "acc" },
+            "total_time_s": total,
+            "programmed_time_s": programmed,
+            "time_ratio": json_num(ratio),
+            "self_check_ok": all_ok,
+            "paths": paths,
+        });
+        let mut stdout = std::io::stdout().lock();
+        serde_json::to_writer(&mut stdout, &v).map_err(|e| miette::miette!("{e}"))?;
+        writeln!(stdout).map_err(|e| miette::miette!(e))?;
+    } else {
+        let mut stdout = std::io::stdout().lock();
+        let mut lines = String::new();
+        lines.push_str(&format!("{file} on \"{}\"\n", machine.name));
+        for (path, _, plan) in &plans {
+            let feeds: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
+            let fmax = feeds.iter().copied().fold(0.0, f64::max);
+            lines.push_str(&format!(
+                "  {:<24} {:>7} postures  time {:>10.3} s  programmed {:>10.3} s  ratio {:>6.3}  max feed {:>8.0} mm/min  switches {}  recoveries {}  fallbacks {}\n",
+                path.name,
+                plan.postures.len(),
+                plan.total_time_s,
+                plan.programmed_time_s,
+                plan.total_time_s / plan.programmed_time_s,
+                fmax,
+                plan.branch_switches,
+                plan.stop_recoveries,
+                plan.fallbacks,
+            ));
+        }
+        lines.push_str(&format!(
+            "total {total:.3} s, programmed {programmed:.3} s, ratio {ratio:.3}\n"
+        ));
+        stdout
+            .write_all(lines.as_bytes())
+            .map_err(|e| miette::miette!(e))?;
+    }
+    Ok(if all_ok {
+        Outcome::Ok
+    } else {
+        Outcome::CheckFailed
+    })
+}
+
+fn json_num(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// Joint value in interface units: mm for linear joints, degrees for rotary ones.
+fn joint_out(i: usize, q: f64) -> f64 {
+    if i < 3 { q } else { q.to_degrees() }
+}
+
+fn path_json(
+    name: &str,
+    input: &[crate::kinematics::PlanInput],
+    plan: &FeedPlan,
+    names: &[&str; 5],
+) -> serde_json::Value {
+    let postures: Vec<serde_json::Value> = plan
+        .postures
+        .iter()
+        .zip(input)
+        .enumerate()
+        .map(|(i, (p, inp))| {
+            let mut joints = serde_json::Map::new();
+            for (k, n) in names.iter().enumerate() {
+                joints.insert(n.to_string(), serde_json::json!(joint_out(k, p.joints[k])));
+            }
+            serde_json::json!({
+                "index": i,
+                "line": inp.line,
+                "t_s": p.t_s,
+                "feed_mm_min": p.feed_mm_s * 60.0,
+                "path_speed_mm_min": p.path_speed_mm_s * 60.0,
+                "programmed_feed_mm_min": json_num(inp.feed_mm_s * 60.0),
+                "limit": p.limit.label(names),
+                "branch": p.branch,
+                "joints": joints,
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "name": name,
+        "total_time_s": plan.total_time_s,
+        "programmed_time_s": plan.programmed_time_s,
+        "time_ratio": json_num(plan.total_time_s / plan.programmed_time_s),
+        "level1_time_s": plan.level1_time_s,
+        "cycles": plan.cycles,
+        "fallbacks": plan.fallbacks,
+        "stop_recoveries": plan.stop_recoveries,
+        "branch_switches": plan.branch_switches,
+        "self_check": {
+            "max_axis_ratio": plan.max_axis_ratio,
+            "max_ceiling_ratio": json_num(plan.max_ceiling_ratio),
+            "ok": plan.self_check_ok(),
+        },
+        "postures": postures,
+    })
+}
+
+type Planned<'a> = (
+    &'a crate::toolpath::Toolpath,
+    Vec<crate::kinematics::PlanInput>,
+    FeedPlan,
+);
+
+fn write_csv(w: &mut dyn Write, plans: &[Planned], names: &[&str; 5]) -> std::io::Result<()> {
+    write!(
+        w,
+        "path,index,line,t_s,feed_mm_min,path_speed_mm_min,programmed_feed_mm_min,limit,branch"
+    )?;
+    for n in names {
+        write!(w, ",{n}")?;
+    }
+    writeln!(w)?;
+    for (path, input, plan) in plans {
+        let name = path.name.replace([',', '"', '\n'], "_");
+        for (i, (p, inp)) in plan.postures.iter().zip(input).enumerate() {
+            let f = inp.feed_mm_s * 60.0;
+            let f = if f.is_finite() {
+                format!("{f}")
+            } else {
+                String::new()
+            };
+            write!(
+                w,
+                "{name},{i},{},{},{},{},{f},{},{}",
+                inp.line,
+                p.t_s,
+                p.feed_mm_s * 60.0,
+                p.path_speed_mm_s * 60.0,
+                p.limit.label(names),
+                p.branch
+            )?;
+            for k in 0..5 {
+                write!(w, ",{}", joint_out(k, p.joints[k]))?;
+            }
+            writeln!(w)?;
+        }
+    }
+    Ok(())
 }

@@ -71,6 +71,17 @@ pub enum KinematicsError {
     },
 }
 
+impl KinematicsError {
+    /// The 1-based source line of the posture at fault.
+    pub fn line(&self) -> u32 {
+        match self {
+            KinematicsError::Unreachable { line, .. }
+            | KinematicsError::Travel { line, .. }
+            | KinematicsError::BadPosture { line, .. } => *line,
+        }
+    }
+}
+
 /// Which planner to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Level {

@@ -580,6 +580,31 @@ fn jerk_cap(v: f64, a: f64, t: f64, jm: f64, vcap: f64, j_lo: f64, j_hi: f64) ->
     lo
 }
 
+/// Duration of a jerk-limited rest-to-rest move over distance d (speed ≤ vmax): the
+/// speed-up mirrors the stop profile from the peak speed.
+fn rest_to_rest(d: f64, vmax: f64, amax: f64, jmax: f64) -> f64 {
+    if d <= 0.0 {
+        return 0.0;
+    }
+    let ramp = |vp: f64| {
+        Stop::new(vp, 0.0, amax, jmax).map_or((0.0, 0.0), |p| (p.distance(), p.duration()))
+    };
+    let (dm, tm) = ramp(vmax);
+    if 2.0 * dm <= d {
+        return 2.0 * tm + (d - 2.0 * dm) / vmax;
+    }
+    let (mut lo, mut hi) = (0.0, vmax);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if 2.0 * ramp(mid).0 <= d {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    2.0 * ramp(lo).1
+}
+
 /// Time τ in [0, T] at which a constant-jerk step from (v, a) has advanced by x.
 fn crossing_time(v: f64, a: f64, j: f64, t: f64, x: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, t);
@@ -708,6 +733,26 @@ impl Sim<'_> {
             }
             let (j, fell) = self.choose(k, s, v, a);
             if fell {
+                if let Some((ps, 0.0, 0.0, pt, pnext, pk)) = prev {
+                    // Stuck at rest: a rest-to-rest move to the end of the block, in closed
+                    // form, then on from rest.
+                    let end_s = b.start[pk + 1];
+                    let dt = rest_to_rest(end_s - ps, b.vbar[pk], b.abar[pk], b.jbar[pk]);
+                    next = pnext;
+                    while next <= pk + 1 && next < self.end {
+                        out.t[next] = pt + dt;
+                        out.v[next] = 0.0;
+                        next += 1;
+                    }
+                    s = end_s;
+                    t = pt + dt;
+                    v = 0.0;
+                    a = 0.0;
+                    out.stop_recoveries += 1;
+                    cycles += 1;
+                    prev = None;
+                    continue;
+                }
                 if let Some((ps, pv, pa, pt, pnext, pk)) = prev.take() {
                     // The last state was feasible but has no feasible successor: it rode
                     // the full-stop boundary into a phase switch inside a cycle. Its stop
@@ -852,6 +897,26 @@ mod tests {
             let (_, v1, a1) = step(v, a, j, t);
             assert_relative_eq!(peak_discrete(v1, a1, jm, t), vcap, max_relative = 1e-9);
         }
+    }
+
+    #[test]
+    fn rest_to_rest_matches_k1_closed_form() {
+        // 100 mm at 5 m/min, J = 40 m/s³: L/F + 2 sqrt(F/J).
+        let f = 5000.0 / 60.0;
+        let t = rest_to_rest(100.0, f, 5000.0, 40000.0);
+        assert_relative_eq!(
+            t,
+            100.0 / f + 2.0 * (f / 40000.0f64).sqrt(),
+            max_relative = 1e-9
+        );
+        // Jerk only, short: four phases of τ with d = 2 J τ³.
+        let d = 1e-3;
+        let tau = (d / (2.0 * 40000.0f64)).cbrt();
+        assert_relative_eq!(
+            rest_to_rest(d, 83.0, 5000.0, 40000.0),
+            4.0 * tau,
+            max_relative = 1e-9
+        );
     }
 
     #[test]

@@ -371,20 +371,47 @@ impl Setup<'_> {
         let amp = (p.m[(2, 0)].powi(2) + p.m[(2, 1)].powi(2)).sqrt();
         let m22 = p.m[(2, 2)];
         let lim = thr + self.profile.runout_bound;
-        let mut lo = usize::MAX;
-        let mut hi = 0;
-        for (i, l) in self.profile.levels.iter().enumerate() {
-            if p.b.z + l.z * m22 - l.r * amp <= lim {
-                lo = lo.min(i);
-                hi = i;
+        let levels = &self.profile.levels;
+        let f = |i: usize| p.b.z + levels[i].z * m22 - levels[i].r * amp;
+        // The lowest circle: f is a linear function along the convex meridian, so it is
+        // unimodal and its sublevel sets are intervals. Coarse scan, then refine.
+        const S: usize = 8;
+        let n = levels.len();
+        let mut best = 0;
+        let mut best_f = f64::INFINITY;
+        let mut i = 0;
+        while i < n {
+            let v = f(i);
+            if v < best_f {
+                best_f = v;
+                best = i;
+            }
+            i += S;
+        }
+        let last = f(n - 1);
+        if last < best_f {
+            best_f = last;
+            best = n - 1;
+        }
+        for i in best.saturating_sub(S)..(best + S + 1).min(n) {
+            let v = f(i);
+            if v < best_f {
+                best_f = v;
+                best = i;
             }
         }
-        (lo != usize::MAX).then(|| {
-            (
-                lo.saturating_sub(1),
-                (hi + 1).min(self.profile.levels.len() - 1),
-            )
-        })
+        if best_f > lim {
+            return None;
+        }
+        let mut lo = best;
+        while lo > 0 && f(lo - 1) <= lim {
+            lo -= 1;
+        }
+        let mut hi = best;
+        while hi + 1 < n && f(hi + 1) <= lim {
+            hi += 1;
+        }
+        Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
     }
 
     /// All strips within `thr`, with their node-space bounding boxes.
@@ -615,12 +642,7 @@ impl Setup<'_> {
     ) -> (Vec<f64>, bool) {
         let (i0, j0, w, h) = tile_rect(tid, t, ntx, self.nx, self.ny);
         let mut tile = Tile::new(i0, j0, w, h);
-        let mut qc = Vec::with_capacity(w * h);
-        for r in 0..h {
-            for c in 0..w {
-                qc.push(self.nominal.q_cos(i0 + c, j0 + r));
-            }
-        }
+        let qc = self.tile_nominal(i0, j0, w, h);
         let cull = qc.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.0)) + band;
         let mut cols: Vec<[f64; 3]> = Vec::new();
         for &si in list {
@@ -644,6 +666,65 @@ impl Setup<'_> {
             }
         }
         (out, uncertain && !last)
+    }
+
+    /// Nominal height and cos β at every node of a tile: exact on a global sub-lattice
+    /// every 8 nodes, bilinear in between (the nominal is smooth at that scale: the error
+    /// is κ (8 d)²/8, 4·10⁻⁷ mm for a 20 mm radius at 1 µm). The sub-lattice is global so
+    /// the result does not depend on the tiling.
+    fn tile_nominal(&self, i0: usize, j0: usize, w: usize, h: usize) -> Vec<(f64, f64)> {
+        const K: usize = 8;
+        let (nx, ny) = (self.nx, self.ny);
+        let gi0 = i0 / K;
+        let gj0 = j0 / K;
+        let gi1 = (i0 + w - 1).div_ceil(K);
+        let gj1 = (j0 + h - 1).div_ceil(K);
+        let sw = gi1 - gi0 + 1;
+        let mut sub = Vec::with_capacity(sw * (gj1 - gj0 + 1));
+        for gj in gj0..=gj1 {
+            for gi in gi0..=gi1 {
+                sub.push(
+                    self.nominal
+                        .q_cos((gi * K).min(nx - 1), (gj * K).min(ny - 1)),
+                );
+            }
+        }
+        let lerp = |p: f64, q: f64, t: f64| p + (q - p) * t;
+        let frac = |x: usize, n: usize| {
+            let g = x / K;
+            let a = (g * K).min(n - 1);
+            let b = ((g + 1) * K).min(n - 1);
+            (
+                g,
+                if b > a {
+                    (x - a) as f64 / (b - a) as f64
+                } else {
+                    0.0
+                },
+            )
+        };
+        let mut out = Vec::with_capacity(w * h);
+        for r in 0..h {
+            let (gj, fy) = frac(j0 + r, ny);
+            let row0 = (gj - gj0) * sw;
+            let row1 = ((gj + 1).min(gj1) - gj0) * sw;
+            for c in 0..w {
+                let (gi, fx) = frac(i0 + c, nx);
+                let c0 = gi - gi0;
+                let c1 = (gi + 1).min(gi1) - gi0;
+                let (a, b, cc, d) = (
+                    sub[row0 + c0],
+                    sub[row0 + c1],
+                    sub[row1 + c0],
+                    sub[row1 + c1],
+                );
+                out.push((
+                    lerp(lerp(a.0, b.0, fx), lerp(cc.0, d.0, fx), fy),
+                    lerp(lerp(a.1, b.1, fx), lerp(cc.1, d.1, fx), fy),
+                ));
+            }
+        }
+        out
     }
 
     fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Vec<[f64; 3]>) {
