@@ -271,3 +271,42 @@ fn bad_options_are_usage_errors() {
         .code(2);
     assert!(!out.exists());
 }
+
+#[test]
+fn machine_feed_follows_the_kinematics() {
+    let file = external("nx_circle_times_from.cls");
+    let machine = repo_sample("machines/table1_ac.toml");
+    let (json, rows) = run(
+        &file,
+        &[
+            "--mode",
+            "dtheta",
+            "--dtheta-deg",
+            "90",
+            "--fz-mm",
+            "0.1",
+            "--teeth",
+            "2",
+            "--machine",
+            machine.to_str().unwrap(),
+        ],
+    );
+    let stats = &json["paths"][0]["stats"];
+    // The spindle comes from fz and the programmed 530 mm/min: 530/(2·0.1) rpm.
+    assert_eq!(stats["spindle_source"], "derived_from_feed");
+    assert!((stats["spindle_rpm"].as_f64().unwrap() - 2650.0).abs() < 1e-9);
+    // The engage starts from rest and never exceeds the programmed feed.
+    assert!(stats["variable_feed_moves"].as_u64().unwrap() > 0);
+    let feed = col("feed_mm_min");
+    assert_eq!(rows[0][feed], Some(0.0));
+    assert!(rows.iter().all(|r| r[feed].unwrap() <= 530.0 + 1e-3));
+    // θ still steps by exactly Δθ while the feed varies; the arc length per step follows
+    // the feed (ΔS = V Δθ/Ω).
+    let (th, s, t) = (col("theta_deg"), col("s_mm"), col("t_s"));
+    let omega_deg_s = 2650.0 * 6.0;
+    for k in 1..rows.len() - 1 {
+        assert!((rows[k][th].unwrap() - rows[k - 1][th].unwrap() - 90.0).abs() < 2e-6);
+        assert!((rows[k][th].unwrap() - omega_deg_s * rows[k][t].unwrap()).abs() < 1e-3);
+        assert!(rows[k][s].unwrap() >= rows[k - 1][s].unwrap());
+    }
+}
