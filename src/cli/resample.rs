@@ -57,6 +57,11 @@ pub struct Args {
     /// Constant feed, mm/min, overriding the file's FEDRAT.
     #[arg(long)]
     pub feed_mm_min: Option<f64>,
+    /// Machine description (`machine.toml`): the feed at every posture is then the one
+    /// the machine really reaches (`crest feed`, kinematics.md), linear in time between
+    /// postures (model.md §5.3), instead of the programmed feed.
+    #[arg(long, value_name = "MACHINE.toml", conflicts_with = "feed_mm_min")]
+    pub machine: Option<PathBuf>,
     /// Tool-axis interpolation.
     #[arg(long, value_enum, default_value = "slerp")]
     pub axis: AxisArg,
@@ -104,15 +109,36 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         None => (0..program.paths.len()).collect(),
     };
 
+    let machine = match &args.machine {
+        Some(m) => Some(super::feed::read_machine(m)?),
+        None => None,
+    };
+    let mut path_opts = Vec::with_capacity(selected.len());
+    for &idx in &selected {
+        let mut o = opts.clone();
+        if let Some(machine) = &machine {
+            let path = &program.paths[idx];
+            let feeds = crate::kinematics::predict_posture_feed(path, machine).map_err(|e| {
+                miette::miette!(
+                    "{}: tool path {}: feed prediction: {e}",
+                    args.file.display(),
+                    path.name
+                )
+            })?;
+            o.posture_feed_mm_min = Some(feeds);
+        }
+        path_opts.push(o);
+    }
+
     let mut failure: Option<(String, ResampleError)> = None;
     let mut per_path = Vec::new();
     let written = crate::io::write_atomic(&args.output, |w| {
         writeln!(w, "{HEADER}")?;
         let mut line = String::with_capacity(256);
-        for &idx in &selected {
+        for (&idx, opts) in selected.iter().zip(&path_opts) {
             let path = &program.paths[idx];
             let mut io_error: Option<std::io::Error> = None;
-            let result = resample_with(path, &opts, |s| {
+            let result = resample_with(path, opts, |s| {
                 if io_error.is_some() {
                     return;
                 }
@@ -168,6 +194,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "teeth": args.teeth,
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
+            "machine": args.machine.as_ref().map(|m| m.display().to_string()),
             "samples": samples,
             "runs": runs,
             "paths": paths,

@@ -70,7 +70,8 @@ use thiserror::Error;
 pub struct Sample {
     /// Index of the cutting run this sample belongs to (0-based; runs restart the clock).
     pub run: usize,
-    /// Arc length of the CL point from the start of the path's first cutting run, mm.
+    /// Arc length of the CL point along the cutting moves, mm: 0 at the start of the
+    /// path's first cutting run, accumulated over the runs (non-cutting moves add nothing).
     pub s_mm: f64,
     /// Time, s.
     pub t_s: f64,
