@@ -475,6 +475,9 @@ pub enum Model {
     /// Eq 14, and the periodic arc profile.
     #[default]
     Crest,
+    /// Z-map simulation (`crate::surface`) of one straight pass over a plane at the case's
+    /// lead, with the tool's edges (ICE) or bodies (dome); Rz and Ra on the centre line.
+    Simulate,
 }
 
 impl Model {
@@ -482,6 +485,51 @@ impl Model {
     pub fn name(self) -> &'static str {
         match self {
             Model::Crest => "crest",
+            Model::Simulate => "simulate",
+        }
+    }
+}
+
+/// The surface model of the `simulate` model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceModel {
+    /// Pondered movement: the teeth's edges sweep between spindle steps (002 §2.4.2).
+    #[default]
+    Ice,
+    /// Instantaneous positions: the revolved body of each tooth every fz (002 §2.4.1).
+    Dome,
+}
+
+/// `[simulate]` settings of a study (used by cases with `model = "simulate"`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateSpec {
+    /// `ice` (default) or `dome`.
+    #[serde(default)]
+    pub surface_model: SurfaceModel,
+    /// Grid spacing, µm (default 1).
+    #[serde(default = "default_grid_um")]
+    pub grid_um: f64,
+    /// Largest spindle step of the ICE model, degrees (default 0.5).
+    #[serde(default = "default_dtheta_deg")]
+    pub dtheta_deg: f64,
+}
+
+fn default_grid_um() -> f64 {
+    1.0
+}
+
+fn default_dtheta_deg() -> f64 {
+    0.5
+}
+
+impl Default for SimulateSpec {
+    fn default() -> Self {
+        SimulateSpec {
+            surface_model: SurfaceModel::Ice,
+            grid_um: default_grid_um(),
+            dtheta_deg: default_dtheta_deg(),
         }
     }
 }
@@ -598,6 +646,9 @@ pub struct Study {
     /// Run-out; when present it replaces the tool file's `[runout]` table entirely.
     #[serde(default)]
     pub runout: Option<RunoutSpec>,
+    /// Settings of the `simulate` model.
+    #[serde(default)]
+    pub simulate: Option<SimulateSpec>,
     /// Free text (Markdown paragraphs) printed in the report's discussion.
     #[serde(default)]
     pub notes: Option<String>,
@@ -628,6 +679,20 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ReportError> {
             "ap_mm must be a non-negative number, found {}",
             study.ap_mm
         )));
+    }
+    if let Some(sim) = &study.simulate {
+        if !(sim.grid_um.is_finite() && sim.grid_um >= 0.1 && sim.grid_um <= 50.0) {
+            return Err(err(format!(
+                "[simulate] grid_um must lie in [0.1, 50], found {}",
+                sim.grid_um
+            )));
+        }
+        if !(sim.dtheta_deg.is_finite() && sim.dtheta_deg > 0.0 && sim.dtheta_deg <= 10.0) {
+            return Err(err(format!(
+                "[simulate] dtheta_deg must lie in (0, 10], found {}",
+                sim.dtheta_deg
+            )));
+        }
     }
     if study.cases.is_empty() {
         return Err(err("the study has no [[case]]".to_string()));
@@ -920,6 +985,127 @@ pub fn crest_model(
     })
 }
 
+/// What the `simulate` model predicts for one case.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZmapPrediction {
+    /// Surface model (`ice` or `dome`).
+    pub surface_model: SurfaceModel,
+    /// Grid spacing, µm.
+    pub grid_um: f64,
+    /// Largest spindle step, degrees (ICE).
+    pub dtheta_deg: f64,
+    /// Length of the evaluated centre-line profile, mm (5 sampling lengths).
+    pub evaluation_length_mm: f64,
+    /// Rz of the centre-line profile, µm (mean of 5 sampling lengths).
+    pub rz_um: f64,
+    /// Ra of the centre-line profile, µm.
+    pub ra_um: f64,
+    /// Peak-to-valley height of the whole profile, µm.
+    pub pv_um: f64,
+    /// Grid nodes computed.
+    pub nodes: usize,
+}
+
+/// The `simulate` model: one straight pass along +x over the plane z = 0, the tool axis
+/// tilted by the lead in the feed plane (model.md §1.2: axis = (sin β, 0, cos β)), spindle
+/// phase 0 at the start, fz per tooth; a window 5λc long (λc from RSm = `rsm_mm`) and five
+/// nodes wide on the pass centre is simulated with `crate::surface::simulate`, and Rz, Ra
+/// are computed on its centre row as for the crest model (no filter; the plane has no form).
+pub fn simulate_case(
+    cutter: &Cutter,
+    lead_deg: f64,
+    ap_mm: f64,
+    fz_mm: f64,
+    rsm_mm: f64,
+    spec: &SimulateSpec,
+) -> Result<ZmapPrediction, String> {
+    use crate::math::{Point3, Vec3};
+    use crate::resample::Sample;
+    use crate::surface::{GridSpec, Model as Zmodel, Options, simulate};
+    use std::f64::consts::TAU;
+    let lc = sampling_length_mm(rsm_mm);
+    let eval = 5.0 * lc;
+    let teeth = cutter.teeth() as f64;
+    // The tool's marks reach a few revolutions back; the ball's sag does the rest.
+    let margin = 0.5 + 3.0 * teeth * fz_mm;
+    let lead = lead_deg.to_radians();
+    let axis = Vec3::new(lead.sin(), 0.0, lead.cos());
+    // Tool tip that puts the lowest point of the body on z = 0 at contact c.
+    let rc = cutter.corner_radius_mm();
+    let rd = cutter.radius_mm - rc;
+    let z = Vec3::z();
+    let down = -(z - axis * axis.z);
+    let e = if down.norm() < 1e-12 {
+        Vec3::zeros()
+    } else {
+        down.normalize()
+    };
+    let tip = |c: Point3| c - axis * rc - e * rd + z * rc;
+    // Samples every 10° of spindle; the engine subdivides to Δθ.
+    let ds = teeth * fz_mm * 10.0 / 360.0;
+    let length = eval + 2.0 * margin;
+    let n = (length / ds).ceil() as usize;
+    if n > 2_000_000 {
+        return Err(format!("the simulated pass needs {n} samples; fz is too small"));
+    }
+    let samples: Vec<Sample> = (0..=n)
+        .map(|k| {
+            let s = k as f64 * ds;
+            let c = Point3::new(s - margin, 0.0, 0.0);
+            Sample {
+                run: 0,
+                s_mm: s,
+                t_s: 0.0,
+                theta_rad: TAU * s / (teeth * fz_mm),
+                position: tip(c),
+                axis,
+                contact: Some(c),
+                normal: Some(z),
+                feed_dir: Vec3::x(),
+                feed_mm_min: 1000.0,
+            }
+        })
+        .collect();
+    let dx = spec.grid_um * 1e-3;
+    let grid = GridSpec::Window {
+        x0_mm: 0.0,
+        y0_mm: -2.0 * dx,
+        x1_mm: eval,
+        y1_mm: 2.0 * dx,
+    };
+    let model = match spec.surface_model {
+        SurfaceModel::Ice => Zmodel::Ice {
+            dtheta_rad: spec.dtheta_deg.to_radians(),
+        },
+        SurfaceModel::Dome => Zmodel::Dome,
+    };
+    let mut opts = Options::new(model, grid, dx);
+    opts.depth_mm = ap_mm.max(dx);
+    let sim = simulate(&samples, cutter, &opts, &|_, _| {}).map_err(|e| e.to_string())?;
+    let map = &sim.map;
+    if map.ny == 0 || map.nx < 2 {
+        return Err("the simulated window is empty".to_string());
+    }
+    let row = map.row(map.ny / 2);
+    if row.iter().any(|h| !h.is_finite()) {
+        return Err("the simulated centre line has nodes no tooth reached".to_string());
+    }
+    let dx_mm = map.dx_um * 1e-3;
+    let (rz, ra) = rz_ra(row, dx_mm, lc);
+    let lo = row.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Ok(ZmapPrediction {
+        surface_model: spec.surface_model,
+        grid_um: map.dx_um,
+        dtheta_deg: spec.dtheta_deg,
+        evaluation_length_mm: (row.len() - 1) as f64 * dx_mm,
+        rz_um: rz,
+        ra_um: ra,
+        pv_um: hi - lo,
+        nodes: sim.nodes_cut,
+    })
+}
+
 // ---------------------------------------------------------------------------------------
 // Comparison
 
@@ -978,8 +1164,10 @@ pub struct CaseResult {
     pub fz_mm: f64,
     /// The measurements.
     pub measured: MeasuredCase,
-    /// The crest model's prediction.
+    /// The crest model's prediction (always computed, also for reference).
     pub prediction: CrestPrediction,
+    /// The z-map prediction, for `model = "simulate"`.
+    pub zmap: Option<ZmapPrediction>,
     /// Comparisons (Rz first, then Ra, for the columns the table has).
     pub comparisons: Vec<Comparison>,
     /// Every comparison passes.
@@ -1076,24 +1264,42 @@ pub fn regress(
         };
         let fz = c.fz_mm.unwrap_or(study.fz_mm);
         let model = c.model.unwrap_or(study.model);
-        let prediction = match model {
-            Model::Crest => crest_model(
-                cutter,
-                c.lead_deg,
-                study.ap_mm,
-                fz,
-                study.rule,
-                c.side,
-                c.surface_radius_mm,
-            )
-            .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
+        let prediction = crest_model(
+            cutter,
+            c.lead_deg,
+            study.ap_mm,
+            fz,
+            study.rule,
+            c.side,
+            c.surface_radius_mm,
+        )
+        .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
+        let zmap = match model {
+            Model::Crest => None,
+            Model::Simulate => {
+                if c.surface_radius_mm.is_some() {
+                    return Err(err(format!(
+                        "case {}: the simulate model runs on a plane; remove surface_radius_mm or use model = \"crest\"",
+                        i + 1
+                    )));
+                }
+                let spec = study.simulate.unwrap_or_default();
+                Some(
+                    simulate_case(cutter, c.lead_deg, study.ap_mm, fz, prediction.fz_eff_mm, &spec)
+                        .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
+                )
+            }
+        };
+        let (sim_rz, sim_ra) = match &zmap {
+            Some(z) => (z.rz_um, z.ra_um),
+            None => (prediction.rz_um, prediction.ra_um),
         };
         let mut comparisons = Vec::new();
         if let Some(rz) = m.rz {
-            comparisons.push(Comparison::new("Rz", rz, prediction.rz_um, tolerance_pct));
+            comparisons.push(Comparison::new("Rz", rz, sim_rz, tolerance_pct));
         }
         if let Some(ra) = m.ra {
-            comparisons.push(Comparison::new("Ra", ra, prediction.ra_um, tolerance_pct));
+            comparisons.push(Comparison::new("Ra", ra, sim_ra, tolerance_pct));
         }
         let pass = comparisons.iter().all(|c| c.pass);
         cases.push(CaseResult {
@@ -1104,6 +1310,7 @@ pub fn regress(
             fz_mm: fz,
             measured: m.clone(),
             prediction,
+            zmap,
             comparisons,
             pass,
         });
@@ -1247,7 +1454,7 @@ const TABLE_HEAD: [&str; 10] = [
     "result",
 ];
 
-fn model_rows(r: &Regression) -> Vec<[String; 10]> {
+fn model_rows(r: &Regression) -> Vec<[String; 11]> {
     r.cases
         .iter()
         .map(|c| {
@@ -1260,7 +1467,22 @@ fn model_rows(r: &Regression) -> Vec<[String; 10]> {
             [
                 fmt_g(c.lead_deg),
                 c.side.name().to_string(),
-                format!("{} ({} rule)", c.model.name(), p.rule),
+                match &c.zmap {
+                    Some(z) => format!(
+                        "simulate ({}, grid {} µm{}; teeth by the {} rule)",
+                        match z.surface_model {
+                            SurfaceModel::Ice => "ICE",
+                            SurfaceModel::Dome => "dome",
+                        },
+                        fmt_g(z.grid_um),
+                        match z.surface_model {
+                            SurfaceModel::Ice => format!(", Δθ {}°", fmt_g(z.dtheta_deg)),
+                            SurfaceModel::Dome => String::new(),
+                        },
+                        p.rule
+                    ),
+                    None => format!("{} ({} rule)", c.model.name(), p.rule),
+                },
                 format!("{:.4}", p.generating_height_mm),
                 radii.join(" / "),
                 format!("{} (zc = {})", teeth_list(p), p.zc),
@@ -1268,12 +1490,16 @@ fn model_rows(r: &Regression) -> Vec<[String; 10]> {
                 format!("{:.4}", p.crest_um),
                 format!("{:.3} / {:.3}", p.contact_radius_mm, p.effective_radius_mm),
                 format!("{:.1}", 100.0 * p.cutting_speed_ratio),
+                match &c.zmap {
+                    Some(z) => format!("{:.4} / {:.4}", z.rz_um, z.ra_um),
+                    None => "—".to_string(),
+                },
             ]
         })
         .collect()
 }
 
-const MODEL_HEAD: [&str; 10] = [
+const MODEL_HEAD: [&str; 11] = [
     "lead (°)",
     "side",
     "model",
@@ -1284,6 +1510,7 @@ const MODEL_HEAD: [&str; 10] = [
     "crest hc (µm)",
     "R at contact / R_ef,max (mm)",
     "Vc,ef,max (% of Vc)",
+    "z-map Rz / Ra (µm)",
 ];
 
 /// Ranges of measured/simulated over all comparisons of one parameter.
@@ -1339,16 +1566,14 @@ fn findings(r: &Regression) -> Vec<String> {
             ));
         }
     }
-    if r.cases.iter().any(|c| matches!(c.model, Model::Crest)) {
-        out.push(
-            "The crest model is purely geometric: a rigid tool with the given run-out sweeping \
-             circular arcs. It has no plowing, elastic recovery or side flow of the material, \
-             no tool wear or edge radius, no vibration, and no measurement noise or filtering; \
-             any excess of the measured roughness over the simulated one is outside what it can \
-             explain."
-                .to_string(),
-        );
-    }
+    out.push(
+        "The models are purely geometric: a rigid tool with the given run-out sweeping its \
+         circular arcs (crest) or its edges (z-map). They have no plowing, elastic recovery or \
+         side flow of the material, no tool wear or edge radius, no vibration, and no \
+         measurement noise or filtering; any excess of the measured roughness over the \
+         simulated one is outside what they can explain."
+            .to_string(),
+    );
     out
 }
 
@@ -1386,6 +1611,20 @@ fn method_text(r: &Regression) -> Vec<String> {
             fmt_g(r.tolerance_pct)
         ),
     ];
+    if let Some(z) = r.cases.iter().find_map(|c| c.zmap.as_ref()) {
+        v.push(format!(
+            "Simulate model: one straight pass along +x over the plane z = 0, tool axis tilted by \
+             the lead in the feed plane, spindle phase 0 at the start, simulated by \
+             `crest::surface::simulate` ({} model) on a window 5λc long and 5 nodes wide at {} µm; \
+             Rz and Ra on its centre row as above (no filter). The crest-model columns stay for \
+             reference.",
+            match z.surface_model {
+                SurfaceModel::Ice => "ICE",
+                SurfaceModel::Dome => "dome",
+            },
+            fmt_g(z.grid_um)
+        ));
+    }
     v.push(format!(
         "Effective radius (002 Table 3, model.md §6): R_ef,max = R sin(β + acos((R − ap)/R)) at \
          ap = {} mm; Vc,ef/Vc = R_ef,max/R{}. It does not enter the crest; it shows how close \
