@@ -1,16 +1,16 @@
-//! The streaming resampler: one pass over the cutting runs, one sample at a time.
+//! The streaming resampler: postures in, samples out, one pass, one sample at a time.
 //!
-//! Memory does not depend on the path length: the only state kept between samples is the
-//! current move, the last sample (held back so that a grid sample falling on the end of a
-//! run is replaced by the exact end) and the last feed direction (a fallback when the
-//! tangent is degenerate).
+//! Memory does not depend on the path length: [`Resampler`] keeps the postures of the move
+//! it is about to walk and their neighbours (for the spline tangents), the current move,
+//! the last sample (held back so that a grid sample falling on the end of a run is replaced
+//! by the exact end) and the last feed direction (a fallback when the tangent is
+//! degenerate). [`resample_with`] is its in-memory form.
 
 use super::curve::{Curve, above};
 use super::{AxisInterpolation, Mode, Options, ResampleError, Sample};
 use crate::math::{Point3, Vec3, any_perpendicular, nlerp, normalize_or_none};
 use crate::toolpath::{MotionKind, Posture, Toolpath};
 use std::f64::consts::{PI, TAU};
-use std::ops::Range;
 
 /// Where the spindle speed came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -85,7 +85,8 @@ pub fn resample(path: &Toolpath, opts: &Options) -> Result<Vec<Sample>, Resample
 
 /// Resample every cutting run of `path`, handing each sample to `sink` in order.
 ///
-/// Streaming: memory is independent of the path length. Returns the counts of
+/// The in-memory form of [`Resampler`]: the spindle speed is resolved from the whole path
+/// first ([`SpindleScan`]), then the postures are pushed one by one. Returns the counts of
 /// samples, runs and degenerate cases. Fails on invalid options, a missing feed and
 /// spindle speed, a move with zero feed at both ends, or a non-finite posture.
 pub fn resample_with(
@@ -93,100 +94,31 @@ pub fn resample_with(
     opts: &Options,
     mut sink: impl FnMut(&Sample),
 ) -> Result<Stats, ResampleError> {
-    validate(path, opts)?;
-    let runs = path.cutting_runs();
-    let (rpm, spindle_source) = if runs.is_empty() {
-        (opts.rpm, opts.rpm.map(|_| SpindleSource::Option))
-    } else {
-        let (rpm, source) = resolve_spindle(path, &runs, opts)?;
-        (Some(rpm), Some(source))
-    };
-    let mut stats = Stats {
-        samples: 0,
-        runs: 0,
-        moves: 0,
-        length_mm: 0.0,
-        duration_s: 0.0,
-        spindle_rpm: rpm,
-        spindle_source,
-        feed_min_mm_min: None,
-        feed_max_mm_min: None,
-        fz_min_mm: None,
-        fz_max_mm: None,
-        arcs: 0,
-        variable_feed_moves: 0,
-        zero_length_moves: 0,
-        zero_length_runs: 0,
-        degenerate_arcs: 0,
-        axis_flips: 0,
-        normal_flips: 0,
-        normal_parallel_to_feed: 0,
-        feed_parallel_to_axis: 0,
-        partial_contact_moves: 0,
-        non_cutting_moves: 0,
-        non_cutting_runs: 0,
-    };
-    count_non_cutting(path, &mut stats);
-    let rpm = rpm.unwrap_or(0.0);
-    let clock = Clock {
-        omega: rpm * TAU / 60.0,
-        rpm,
-        teeth: opts.teeth as f64,
-        fz_mm: opts.fz_mm,
-    };
-    let mut s_offset = 0.0;
-    let mut emit = |s: &Sample, stats: &mut Stats| {
-        stats.samples += 1;
-        let fz = s.feed_mm_min / (clock.teeth * clock.rpm);
-        stats.feed_min_mm_min = Some(
-            stats
-                .feed_min_mm_min
-                .map_or(s.feed_mm_min, |m| m.min(s.feed_mm_min)),
-        );
-        stats.feed_max_mm_min = Some(
-            stats
-                .feed_max_mm_min
-                .map_or(s.feed_mm_min, |m| m.max(s.feed_mm_min)),
-        );
-        stats.fz_min_mm = Some(stats.fz_min_mm.map_or(fz, |m| m.min(fz)));
-        stats.fz_max_mm = Some(stats.fz_max_mm.map_or(fz, |m| m.max(fz)));
-        sink(s);
-    };
-    for (run_idx, run) in runs.iter().enumerate() {
-        let mut walker = RunWalker {
-            path,
-            opts,
-            clock: &clock,
-            run: run.clone(),
-            run_idx,
-            s_offset,
-            k: 0,
-            s_end: 0.0,
-            t_end: 0.0,
-            theta_end: 0.0,
-            last: None,
-            pending: None,
-            pending_is_first: false,
-            prev_feed_dir: None,
-        };
-        for i in run.start..run.end.saturating_sub(1) {
-            stats.moves += 1;
-            walker.walk_move(i, &mut stats, &mut emit)?;
+    validate(opts)?;
+    let feeds = opts.posture_feed_mm_min.as_deref();
+    if let Some(feeds) = feeds {
+        if feeds.len() != path.postures.len() {
+            return Err(ResampleError::PostureFeedLength {
+                expected: path.postures.len(),
+                got: feeds.len(),
+            });
         }
-        let length = walker.s_end;
-        if walker.finish(&mut stats, &mut emit) {
-            stats.runs += 1;
-            stats.length_mm += length;
-            stats.duration_s += walker.t_end;
-        } else {
-            stats.zero_length_runs += 1;
-        }
-        s_offset += length;
     }
-    Ok(stats)
+    let mut scan = SpindleScan::new();
+    for (i, p) in path.postures.iter().enumerate() {
+        scan.push_entry(p, feeds.map(|f| f[i]));
+    }
+    let mut r = Resampler::new(opts)?;
+    if let Some((rpm, source)) = scan.resolve(opts)? {
+        r = r.with_spindle(rpm, source);
+    }
+    for (i, p) in path.postures.iter().enumerate() {
+        r.push_entry(p, feeds.map(|f| f[i]), &mut sink)?;
+    }
+    r.finish(&mut sink)
 }
 
-fn validate(path: &Toolpath, opts: &Options) -> Result<(), ResampleError> {
+fn validate(opts: &Options) -> Result<(), ResampleError> {
     if !(opts.fz_mm.is_finite() && opts.fz_mm > 0.0) {
         return Err(ResampleError::InvalidFeedPerTooth(opts.fz_mm));
     }
@@ -208,67 +140,415 @@ fn validate(path: &Toolpath, opts: &Options) -> Result<(), ResampleError> {
             return Err(ResampleError::InvalidFeed { line: 0, value: v });
         }
     }
-    if let Some(feeds) = &opts.posture_feed_mm_min {
-        if feeds.len() != path.postures.len() {
-            return Err(ResampleError::PostureFeedLength {
-                expected: path.postures.len(),
-                got: feeds.len(),
-            });
-        }
-    }
     Ok(())
 }
 
-/// The spindle speed (rpm) and where it came from; see the module docs.
-fn resolve_spindle(
-    path: &Toolpath,
-    runs: &[Range<usize>],
-    opts: &Options,
-) -> Result<(f64, SpindleSource), ResampleError> {
-    if let Some(rpm) = opts.rpm {
-        return Ok((rpm, SpindleSource::Option));
-    }
-    let cutting = || runs.iter().flat_map(|r| (r.start + 1)..r.end);
-    let max_of = |it: &mut dyn Iterator<Item = f64>| {
-        it.filter(|v| v.is_finite() && *v > 0.0).reduce(f64::max)
-    };
-    let v_ref = opts
-        .feed_mm_min
-        .or_else(|| max_of(&mut cutting().filter_map(|i| path.postures[i].feed_mm_min)))
-        .or_else(|| {
-            let feeds = opts.posture_feed_mm_min.as_ref()?;
-            max_of(&mut cutting().map(|i| feeds[i]))
-        });
-    if let Some(v) = v_ref {
-        let rpm = v / (opts.teeth as f64 * opts.fz_mm);
-        return Ok((rpm, SpindleSource::DerivedFromFeed));
-    }
-    let spindle = runs
-        .iter()
-        .flat_map(|r| r.clone())
-        .find_map(|i| path.postures[i].spindle_rpm);
-    match spindle {
-        Some(rpm) if rpm.is_finite() && rpm > 0.0 => Ok((rpm, SpindleSource::Path)),
-        Some(rpm) => Err(ResampleError::InvalidSpindle(rpm)),
-        None => Err(ResampleError::MissingFeedAndSpindle),
-    }
+/// The spindle-speed rule of the module docs, fed one posture at a time: n = `--rpm`,
+/// else V_ref/(Z·fz) with V_ref the highest feed of the cutting moves, else the first
+/// SPINDL met in a cutting run.
+///
+/// V_ref is a maximum over the whole path, so a streaming caller that does not know the
+/// spindle speed beforehand either scans the path first or lets [`Resampler`] resolve it
+/// from the postures seen so far and compares with this scan at the end
+/// (`crest resample` does the latter and resamples again in the rare case they differ).
+#[derive(Debug, Clone, Default)]
+pub struct SpindleScan {
+    index: usize,
+    in_run: bool,
+    any_run: bool,
+    prev_spindle: Option<f64>,
+    max_fedrat: Option<f64>,
+    max_posture_feed: Option<f64>,
+    first_spindle: Option<f64>,
 }
 
-fn count_non_cutting(path: &Toolpath, stats: &mut Stats) {
-    let mut in_gap = false;
-    for p in path.postures.iter().skip(1) {
-        if p.motion == MotionKind::Cut {
-            in_gap = false;
-        } else {
-            stats.non_cutting_moves += 1;
-            if !in_gap {
-                stats.non_cutting_runs += 1;
+impl SpindleScan {
+    /// An empty scan.
+    pub fn new() -> SpindleScan {
+        SpindleScan::default()
+    }
+
+    /// Take the next posture of the path into account.
+    pub fn push(&mut self, p: &Posture) {
+        self.push_entry(p, None);
+    }
+
+    fn push_entry(&mut self, p: &Posture, posture_feed: Option<f64>) {
+        let cut = p.motion == MotionKind::Cut && self.index > 0;
+        self.index += 1;
+        let keep_max = |m: &mut Option<f64>, v: Option<f64>| {
+            if let Some(v) = v.filter(|v| v.is_finite() && *v > 0.0) {
+                *m = Some(m.map_or(v, |m: f64| m.max(v)));
             }
-            in_gap = true;
+        };
+        if cut {
+            if !self.in_run {
+                self.in_run = true;
+                self.any_run = true;
+                // The run starts at the previous posture.
+                if self.first_spindle.is_none() {
+                    self.first_spindle = self.prev_spindle;
+                }
+            }
+            if self.first_spindle.is_none() {
+                self.first_spindle = p.spindle_rpm;
+            }
+            keep_max(&mut self.max_fedrat, p.feed_mm_min);
+            keep_max(&mut self.max_posture_feed, posture_feed);
+        } else {
+            self.in_run = false;
+        }
+        self.prev_spindle = p.spindle_rpm;
+    }
+
+    /// The spindle speed (rpm) and where it came from; `None` when no cutting move has
+    /// been seen (and [`Options::rpm`] is not set).
+    pub fn resolve(&self, opts: &Options) -> Result<Option<(f64, SpindleSource)>, ResampleError> {
+        if let Some(rpm) = opts.rpm {
+            return Ok(Some((rpm, SpindleSource::Option)));
+        }
+        if !self.any_run {
+            return Ok(None);
+        }
+        let v_ref = opts
+            .feed_mm_min
+            .or(self.max_fedrat)
+            .or(self.max_posture_feed);
+        if let Some(v) = v_ref {
+            let rpm = v / (opts.teeth as f64 * opts.fz_mm);
+            return Ok(Some((rpm, SpindleSource::DerivedFromFeed)));
+        }
+        match self.first_spindle {
+            Some(rpm) if rpm.is_finite() && rpm > 0.0 => Ok(Some((rpm, SpindleSource::Path))),
+            Some(rpm) => Err(ResampleError::InvalidSpindle(rpm)),
+            None => Err(ResampleError::MissingFeedAndSpindle),
         }
     }
 }
 
+/// The options a walker needs (everything but the per-posture feeds).
+#[derive(Debug, Clone, Copy)]
+struct Params {
+    mode: Mode,
+    fz_mm: f64,
+    feed_mm_min: Option<f64>,
+    axis_interpolation: AxisInterpolation,
+    spline: bool,
+    posture_feeds: bool,
+}
+
+/// A posture held by the resampler, with its per-posture feed.
+#[derive(Debug, Clone)]
+struct Entry {
+    p: Posture,
+    feed: Option<f64>,
+}
+
+/// The open cutting run: its walker and the postures of the moves not walked yet.
+struct OpenRun {
+    walker: RunWalker,
+    /// The posture before `a` in the run (for the spline tangent at `a`).
+    before: Option<Entry>,
+    /// Start of the next move to walk.
+    a: Entry,
+    /// End of that move, once known (walked when the posture after it arrives).
+    b: Option<Entry>,
+}
+
+/// The incremental resampler: postures in, samples out, in constant memory.
+///
+/// Push the postures of one tool path in order with [`Resampler::push`], then call
+/// [`Resampler::finish`]. It keeps only the postures its current move needs (the move's
+/// ends and their neighbours, for the spline tangents) and the state of the current run,
+/// and produces exactly the samples and [`Stats`] of [`resample_with`] on the whole path
+/// when given the same spindle speed ([`Resampler::with_spindle`]). Without it, the
+/// spindle speed is resolved at the first cutting move from the postures seen so far
+/// ([`SpindleScan`]): the same as the whole path's unless a later cutting move is faster.
+///
+/// ```
+/// use crest::math::{Point3, Vec3};
+/// use crest::resample::{Mode, Options, Resampler};
+/// use crest::toolpath::{MotionKind, Posture};
+///
+/// let posture = |x: f64, motion| Posture {
+///     position: Point3::new(x, 0.0, 0.0),
+///     axis: Vec3::z(),
+///     motion,
+///     arc: None,
+///     contact: None,
+///     feed_mm_min: Some(1000.0),
+///     spindle_rpm: None,
+///     line: 0,
+/// };
+/// let mut r = Resampler::new(&Options::new(Mode::FeedPerTooth, 0.05, 4)).unwrap();
+/// let mut n = 0;
+/// r.push(&posture(0.0, MotionKind::Rapid), |_| n += 1).unwrap();
+/// r.push(&posture(1.0, MotionKind::Cut), |_| n += 1).unwrap();
+/// let stats = r.finish(|_| n += 1).unwrap();
+/// assert_eq!((n, stats.samples), (21, 21));
+/// ```
+pub struct Resampler {
+    params: Params,
+    opts_rpm: Option<f64>,
+    teeth: usize,
+    spindle: Option<(f64, SpindleSource)>,
+    clock: Option<Clock>,
+    scan: SpindleScan,
+    index: usize,
+    prev: Option<Entry>,
+    in_gap: bool,
+    run: Option<OpenRun>,
+    runs_seen: usize,
+    s_offset: f64,
+    stats: Stats,
+}
+
+impl Resampler {
+    /// A resampler for one tool path. Fails on invalid options. With
+    /// [`Options::posture_feed_mm_min`], push the postures with
+    /// [`Resampler::push_with_feed`] (the vector itself is not used).
+    pub fn new(opts: &Options) -> Result<Resampler, ResampleError> {
+        validate(opts)?;
+        Ok(Resampler {
+            params: Params {
+                mode: opts.mode,
+                fz_mm: opts.fz_mm,
+                feed_mm_min: opts.feed_mm_min,
+                axis_interpolation: opts.axis_interpolation,
+                spline: opts.spline,
+                posture_feeds: opts.posture_feed_mm_min.is_some(),
+            },
+            opts_rpm: opts.rpm,
+            teeth: opts.teeth,
+            spindle: opts.rpm.map(|rpm| (rpm, SpindleSource::Option)),
+            clock: None,
+            scan: SpindleScan::new(),
+            index: 0,
+            prev: None,
+            in_gap: false,
+            run: None,
+            runs_seen: 0,
+            s_offset: 0.0,
+            stats: Stats {
+                samples: 0,
+                runs: 0,
+                moves: 0,
+                length_mm: 0.0,
+                duration_s: 0.0,
+                spindle_rpm: None,
+                spindle_source: None,
+                feed_min_mm_min: None,
+                feed_max_mm_min: None,
+                fz_min_mm: None,
+                fz_max_mm: None,
+                arcs: 0,
+                variable_feed_moves: 0,
+                zero_length_moves: 0,
+                zero_length_runs: 0,
+                degenerate_arcs: 0,
+                axis_flips: 0,
+                normal_flips: 0,
+                normal_parallel_to_feed: 0,
+                feed_parallel_to_axis: 0,
+                partial_contact_moves: 0,
+                non_cutting_moves: 0,
+                non_cutting_runs: 0,
+            },
+        })
+    }
+
+    /// Use this spindle speed (rpm, from `source`) instead of resolving it at the first
+    /// cutting move (e.g. from a [`SpindleScan`] of the whole path).
+    pub fn with_spindle(mut self, rpm: f64, source: SpindleSource) -> Resampler {
+        self.spindle = Some((rpm, source));
+        self
+    }
+
+    /// The spindle speed in use (rpm, source), once known.
+    pub fn spindle(&self) -> Option<(f64, SpindleSource)> {
+        self.spindle
+    }
+
+    /// The next posture of the path; samples that are complete go to `sink`.
+    pub fn push(&mut self, p: &Posture, sink: impl FnMut(&Sample)) -> Result<(), ResampleError> {
+        self.push_entry(p, None, sink)
+    }
+
+    /// [`Resampler::push`] with the posture's own feed, mm/min (per-posture feeds,
+    /// [`Options::posture_feed_mm_min`]).
+    pub fn push_with_feed(
+        &mut self,
+        p: &Posture,
+        feed_mm_min: f64,
+        sink: impl FnMut(&Sample),
+    ) -> Result<(), ResampleError> {
+        self.push_entry(p, Some(feed_mm_min), sink)
+    }
+
+    fn push_entry(
+        &mut self,
+        p: &Posture,
+        feed: Option<f64>,
+        mut sink: impl FnMut(&Sample),
+    ) -> Result<(), ResampleError> {
+        let first = self.index == 0;
+        self.index += 1;
+        if self.spindle.is_none() {
+            self.scan.push_entry(p, feed);
+        }
+        let cut = p.motion == MotionKind::Cut && !first;
+        if !first {
+            if cut {
+                self.in_gap = false;
+            } else {
+                self.stats.non_cutting_moves += 1;
+                if !self.in_gap {
+                    self.stats.non_cutting_runs += 1;
+                }
+                self.in_gap = true;
+            }
+        }
+        let entry = Entry { p: p.clone(), feed };
+        if cut {
+            if self.run.is_none() {
+                let clock = self.clock()?;
+                let Some(start) = self.prev.take() else {
+                    return Err(ResampleError::InvalidPosture {
+                        line: p.line,
+                        what: "cutting move without a start",
+                    });
+                };
+                self.run = Some(OpenRun {
+                    walker: RunWalker::new(self.params, clock, self.runs_seen, self.s_offset),
+                    before: None,
+                    a: start,
+                    b: None,
+                });
+                self.runs_seen += 1;
+            }
+            let Some(run) = self.run.as_mut() else {
+                return Ok(());
+            };
+            if let Some(b) = run.b.take() {
+                self.stats.moves += 1;
+                let mut emit = emitter(&mut sink);
+                run.walker.walk_move(
+                    run.before.as_ref(),
+                    &run.a,
+                    &b,
+                    Some(&entry),
+                    &mut self.stats,
+                    &mut emit,
+                )?;
+                run.before = Some(std::mem::replace(&mut run.a, b));
+            }
+            run.b = Some(entry.clone());
+        } else {
+            self.close_run(&mut sink)?;
+        }
+        self.prev = Some(entry);
+        Ok(())
+    }
+
+    /// The clock, resolving the spindle speed now if it is not known yet.
+    fn clock(&mut self) -> Result<Clock, ResampleError> {
+        if let Some(c) = self.clock {
+            return Ok(c);
+        }
+        let (rpm, _) = match self.spindle {
+            Some(s) => s,
+            None => {
+                let opts = Options {
+                    rpm: self.opts_rpm,
+                    feed_mm_min: self.params.feed_mm_min,
+                    teeth: self.teeth,
+                    fz_mm: self.params.fz_mm,
+                    ..Options::default()
+                };
+                let s = self
+                    .scan
+                    .resolve(&opts)?
+                    .ok_or(ResampleError::MissingFeedAndSpindle)?;
+                self.spindle = Some(s);
+                s
+            }
+        };
+        let clock = Clock {
+            omega: rpm * TAU / 60.0,
+            rpm,
+            teeth: self.teeth as f64,
+            fz_mm: self.params.fz_mm,
+        };
+        self.clock = Some(clock);
+        Ok(clock)
+    }
+
+    fn close_run(&mut self, sink: &mut impl FnMut(&Sample)) -> Result<(), ResampleError> {
+        let Some(mut run) = self.run.take() else {
+            return Ok(());
+        };
+        let mut emit = emitter(sink);
+        if let Some(b) = run.b.take() {
+            self.stats.moves += 1;
+            run.walker.walk_move(
+                run.before.as_ref(),
+                &run.a,
+                &b,
+                None,
+                &mut self.stats,
+                &mut emit,
+            )?;
+        }
+        let walker = &mut run.walker;
+        let length = walker.s_end;
+        if walker.finish(&mut self.stats, &mut emit) {
+            self.stats.runs += 1;
+            self.stats.length_mm += length;
+            self.stats.duration_s += walker.t_end;
+        } else {
+            self.stats.zero_length_runs += 1;
+        }
+        self.s_offset += length;
+        Ok(())
+    }
+
+    /// Finish the path: emit the end of the open run and return the counts.
+    pub fn finish(mut self, mut sink: impl FnMut(&Sample)) -> Result<Stats, ResampleError> {
+        self.close_run(&mut sink)?;
+        let mut stats = self.stats;
+        if self.runs_seen == 0 {
+            stats.spindle_rpm = self.opts_rpm;
+            stats.spindle_source = self.opts_rpm.map(|_| SpindleSource::Option);
+        } else {
+            stats.spindle_rpm = self.spindle.map(|s| s.0);
+            stats.spindle_source = self.spindle.map(|s| s.1);
+        }
+        Ok(stats)
+    }
+}
+
+/// The sample sink with the per-sample counts (feed and feed-per-tooth range).
+fn emitter<'s>(sink: &'s mut impl FnMut(&Sample)) -> impl FnMut(&Sample, &Clock, &mut Stats) + 's {
+    move |s: &Sample, clock: &Clock, stats: &mut Stats| {
+        stats.samples += 1;
+        let fz = s.feed_mm_min / (clock.teeth * clock.rpm);
+        stats.feed_min_mm_min = Some(
+            stats
+                .feed_min_mm_min
+                .map_or(s.feed_mm_min, |m| m.min(s.feed_mm_min)),
+        );
+        stats.feed_max_mm_min = Some(
+            stats
+                .feed_max_mm_min
+                .map_or(s.feed_mm_min, |m| m.max(s.feed_mm_min)),
+        );
+        stats.fz_min_mm = Some(stats.fz_min_mm.map_or(fz, |m| m.min(fz)));
+        stats.fz_max_mm = Some(stats.fz_max_mm.map_or(fz, |m| m.max(fz)));
+        sink(s);
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
 struct Clock {
     /// Ω, rad/s.
     omega: f64,
@@ -315,8 +595,9 @@ impl SphereInterp {
     /// Same values as [`crate::math::slerp`] / [`crate::math::nlerp`].
     fn eval(&self, u: f64) -> Vec3 {
         if self.slerp && self.angle >= 1e-9 {
+            // `a` and `perp` are orthonormal, so the result is unit to rounding (~1e-16).
             let (s, c) = sin_cos(self.angle * u);
-            (self.a * c + self.perp * s).normalize()
+            self.a * c + self.perp * s
         } else {
             nlerp(&self.a, &self.b, u)
         }
@@ -329,10 +610,18 @@ fn sin_cos(x: f64) -> (f64, f64) {
     if x.abs() > 0.1 {
         return x.sin_cos();
     }
+    // Taylor coefficients 1/3!, 1/5!, … and 1/2!, 1/4!, … (Horner, no divisions).
+    const S: [f64; 4] = [1.0 / 6.0, 1.0 / 120.0, 1.0 / 5040.0, 1.0 / 362_880.0];
+    const C: [f64; 5] = [
+        1.0 / 2.0,
+        1.0 / 24.0,
+        1.0 / 720.0,
+        1.0 / 40_320.0,
+        1.0 / 3_628_800.0,
+    ];
     let x2 = x * x;
-    let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0 * (1.0 - x2 / 72.0))));
-    let c = 1.0
-        - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0 * (1.0 - x2 / 90.0))));
+    let s = x * (1.0 - x2 * (S[0] - x2 * (S[1] - x2 * (S[2] - x2 * S[3]))));
+    let c = 1.0 - x2 * (C[0] - x2 * (C[1] - x2 * (C[2] - x2 * (C[3] - x2 * C[4]))));
     (s, c)
 }
 
@@ -385,11 +674,9 @@ impl Move {
     }
 }
 
-struct RunWalker<'a> {
-    path: &'a Toolpath,
-    opts: &'a Options,
-    clock: &'a Clock,
-    run: Range<usize>,
+struct RunWalker {
+    params: Params,
+    clock: Clock,
     run_idx: usize,
     s_offset: f64,
     /// Index of the next grid sample of the run.
@@ -432,29 +719,80 @@ fn checked_feed(line: u32, v: f64) -> Result<f64, ResampleError> {
     }
 }
 
-impl RunWalker<'_> {
-    /// The feeds at the start and end of the move `i → i+1`, mm/min.
-    fn move_feeds(&self, i: usize) -> Result<(f64, f64), ResampleError> {
-        let b = &self.path.postures[i + 1];
-        if let Some(feeds) = &self.opts.posture_feed_mm_min {
-            let a = &self.path.postures[i];
+/// The unit tangent of the spline at a posture, from the moves into it and out of it
+/// (within the run): an adjacent arc's own tangent, else Bessel's (the tangent of the
+/// parabola through the neighbours), one-sided at the ends of the run.
+fn posture_tangent(
+    incoming: Option<(&Posture, &Posture)>,
+    outgoing: Option<(&Posture, &Posture)>,
+) -> Option<Vec3> {
+    let neighbour = |a: &Posture, b: &Posture, out: bool| -> Option<(Vec3, f64, bool)> {
+        if let Some(arc) = &b.arc {
+            if let Some(c) = Curve::arc(a.position, b.position, arc) {
+                let (t0, t1) = c.end_tangents();
+                return Some((if out { t0 } else { t1 }, c.len(), true));
+            }
+        }
+        let d = b.position - a.position;
+        let len = d.norm();
+        normalize_or_none(&d, 1e-12).map(|d| (d, len, false))
+    };
+    let incoming = incoming.and_then(|(a, b)| neighbour(a, b, false));
+    let outgoing = outgoing.and_then(|(a, b)| neighbour(a, b, true));
+    match (incoming, outgoing) {
+        (Some((t, _, true)), _) | (_, Some((t, _, true))) => Some(t),
+        (Some((din, lin, _)), Some((dout, lout, _))) => {
+            normalize_or_none(&(din * lout + dout * lin), 1e-9).or(Some(dout))
+        }
+        (Some((t, _, _)), None) | (None, Some((t, _, _))) => Some(t),
+        (None, None) => None,
+    }
+}
+
+impl RunWalker {
+    fn new(params: Params, clock: Clock, run_idx: usize, s_offset: f64) -> RunWalker {
+        RunWalker {
+            params,
+            clock,
+            run_idx,
+            s_offset,
+            k: 0,
+            s_end: 0.0,
+            t_end: 0.0,
+            theta_end: 0.0,
+            last: None,
+            pending: None,
+            pending_is_first: false,
+            prev_feed_dir: None,
+        }
+    }
+
+    /// The feeds at the start and end of the move `a → b`, mm/min.
+    fn move_feeds(&self, a: &Entry, b: &Entry) -> Result<(f64, f64), ResampleError> {
+        if self.params.posture_feeds {
             return Ok((
-                checked_feed(a.line, feeds[i])?,
-                checked_feed(b.line, feeds[i + 1])?,
+                checked_feed(a.p.line, a.feed.unwrap_or(f64::NAN))?,
+                checked_feed(b.p.line, b.feed.unwrap_or(f64::NAN))?,
             ));
         }
-        let v = match (self.opts.feed_mm_min, b.feed_mm_min) {
+        let v = match (self.params.feed_mm_min, b.p.feed_mm_min) {
             (Some(v), _) | (None, Some(v)) => v,
             (None, None) => self.clock.teeth * self.clock.fz_mm * self.clock.rpm,
         };
-        let v = checked_feed(b.line, v)?;
+        let v = checked_feed(b.p.line, v)?;
         Ok((v, v))
     }
 
-    /// The geometry of the move `i → i+1`, or `None` for a zero-length move.
-    fn curve(&self, i: usize, stats: &mut Stats) -> Option<Curve> {
-        let a = &self.path.postures[i];
-        let b = &self.path.postures[i + 1];
+    /// The geometry of the move `a → b` (`before` precedes `a` and `next` follows `b`
+    /// in the run), or `None` for a zero-length move.
+    fn curve(
+        &self,
+        before: Option<&Posture>,
+        a: &Posture,
+        b: &Posture,
+        next: Option<&Posture>,
+        stats: &mut Stats,
+    ) -> Option<Curve> {
         if let Some(arc) = &b.arc {
             stats.arcs += 1;
             if let Some(c) = Curve::arc(a.position, b.position, arc) {
@@ -463,9 +801,9 @@ impl RunWalker<'_> {
             stats.degenerate_arcs += 1;
             return Curve::line(a.position, b.position);
         }
-        if self.opts.spline {
-            let t0 = self.posture_tangent(i);
-            let t1 = self.posture_tangent(i + 1);
+        if self.params.spline {
+            let t0 = posture_tangent(before.map(|x| (x, a)), Some((a, b)));
+            let t1 = posture_tangent(Some((a, b)), next.map(|n| (b, n)));
             if let (Some(t0), Some(t1)) = (t0, t1) {
                 return Curve::hermite(a.position, b.position, t0, t1);
             }
@@ -473,59 +811,24 @@ impl RunWalker<'_> {
         Curve::line(a.position, b.position)
     }
 
-    /// The unit tangent of the spline at posture `j`: an adjacent arc's own tangent,
-    /// else Bessel's (the tangent of the parabola through the neighbours), one-sided at
-    /// the ends of the run.
-    fn posture_tangent(&self, j: usize) -> Option<Vec3> {
-        let ps = &self.path.postures;
-        let neighbour = |from: usize| -> Option<(Vec3, f64, bool)> {
-            let (a, b) = (&ps[from], &ps[from + 1]);
-            if let Some(arc) = &b.arc {
-                if let Some(c) = Curve::arc(a.position, b.position, arc) {
-                    let (t0, t1) = c.end_tangents();
-                    return Some((if from == j { t0 } else { t1 }, c.len(), true));
-                }
-            }
-            let d = b.position - a.position;
-            let len = d.norm();
-            normalize_or_none(&d, 1e-12).map(|d| (d, len, false))
-        };
-        let incoming = if j > self.run.start {
-            neighbour(j - 1)
-        } else {
-            None
-        };
-        let outgoing = if j + 1 < self.run.end {
-            neighbour(j)
-        } else {
-            None
-        };
-        match (incoming, outgoing) {
-            (Some((t, _, true)), _) | (_, Some((t, _, true))) => Some(t),
-            (Some((din, lin, _)), Some((dout, lout, _))) => {
-                normalize_or_none(&(din * lout + dout * lin), 1e-9).or(Some(dout))
-            }
-            (Some((t, _, _)), None) | (None, Some((t, _, _))) => Some(t),
-            (None, None) => None,
-        }
-    }
-
     fn walk_move(
         &mut self,
-        i: usize,
+        before: Option<&Entry>,
+        ea: &Entry,
+        eb: &Entry,
+        next: Option<&Entry>,
         stats: &mut Stats,
-        emit: &mut impl FnMut(&Sample, &mut Stats),
+        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
     ) -> Result<(), ResampleError> {
-        let a = &self.path.postures[i];
-        let b = &self.path.postures[i + 1];
+        let (a, b) = (&ea.p, &eb.p);
         let axis_a = checked_axis(a)?;
         let axis_b = checked_axis(b)?;
-        let Some(curve) = self.curve(i, stats) else {
+        let Some(curve) = self.curve(before.map(|e| &e.p), a, b, next.map(|e| &e.p), stats) else {
             stats.zero_length_moves += 1;
             return Ok(());
         };
         let len = curve.len();
-        let (va, vb) = self.move_feeds(i)?;
+        let (va, vb) = self.move_feeds(ea, eb)?;
         if !above(va + vb, 0.0) {
             return Err(ResampleError::ZeroFeedMove { line: b.line });
         }
@@ -534,7 +837,7 @@ impl RunWalker<'_> {
         }
         let (va, vb) = (va / 60.0, vb / 60.0);
         let dt = 2.0 * len / (va + vb);
-        let kind = self.opts.axis_interpolation;
+        let kind = self.params.axis_interpolation;
         let (axis, flipped) = SphereInterp::new(axis_a, axis_b, kind);
         stats.axis_flips += u64::from(flipped);
         let contact = match (&a.contact, &b.contact) {
@@ -573,9 +876,9 @@ impl RunWalker<'_> {
         };
         let s_end = mv.s0 + len;
         let theta_end = mv.theta0 + self.clock.omega * dt;
-        match self.opts.mode {
+        match self.params.mode {
             Mode::FeedPerTooth => {
-                let step = self.opts.fz_mm;
+                let step = self.params.fz_mm;
                 loop {
                     let s = self.k as f64 * step;
                     if s >= s_end {
@@ -615,11 +918,11 @@ impl RunWalker<'_> {
         tau: f64,
         theta: f64,
         stats: &mut Stats,
-        emit: &mut impl FnMut(&Sample, &mut Stats),
+        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
     ) {
         let sample = self.sample(mv, s, sigma, tau, theta, stats);
         if let Some(p) = self.pending.take() {
-            emit(&p, stats);
+            emit(&p, &self.clock, stats);
         }
         self.pending_is_first = self.k == 0;
         self.pending = Some(sample);
@@ -693,24 +996,28 @@ impl RunWalker<'_> {
 
     /// Emit the held-back sample and the exact end of the run; false for a run of zero
     /// length (nothing emitted).
-    fn finish(&mut self, stats: &mut Stats, emit: &mut impl FnMut(&Sample, &mut Stats)) -> bool {
+    fn finish(
+        &mut self,
+        stats: &mut Stats,
+        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
+    ) -> bool {
         let Some(mv) = self.last else {
             return false;
         };
         let end = self.sample(&mv, self.s_end, mv.len, mv.dt, self.theta_end, stats);
         if let Some(p) = self.pending.take() {
             // A grid sample within 1e-6 step of the end is the end itself.
-            let at_end = match self.opts.mode {
-                Mode::FeedPerTooth => p.s_mm >= end.s_mm - 1e-6 * self.opts.fz_mm,
+            let at_end = match self.params.mode {
+                Mode::FeedPerTooth => p.s_mm >= end.s_mm - 1e-6 * self.params.fz_mm,
                 Mode::SpindleStep { dtheta_rad } => {
                     p.theta_rad >= end.theta_rad - 1e-6 * dtheta_rad
                 }
             };
             if !at_end || self.pending_is_first {
-                emit(&p, stats);
+                emit(&p, &self.clock, stats);
             }
         }
-        emit(&end, stats);
+        emit(&end, &self.clock, stats);
         true
     }
 }

@@ -60,7 +60,7 @@
 mod curve;
 mod engine;
 
-pub use engine::{SpindleSource, Stats, resample, resample_with};
+pub use engine::{Resampler, SpindleScan, SpindleSource, Stats, resample, resample_with};
 
 use crate::math::{Point3, Vec3};
 use thiserror::Error;
