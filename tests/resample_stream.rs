@@ -5,8 +5,8 @@
 
 use crest::math::{Point3, Vec3};
 use crest::resample::{
-    AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan,
-    SpindleSource, Stats, resample_with,
+    AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan, SpindleSource,
+    Stats, resample_with,
 };
 use crest::toolpath::{ArcMove, Contact, MotionKind, Posture, Toolpath};
 use proptest::prelude::*;

@@ -9,8 +9,15 @@
 //! cutting runs of a tool path, t and θ restart at every run.
 
 use super::Outcome;
-use crate::resample::{AxisInterpolation, Mode, Options, ResampleError, Sample, resample_with};
-use std::path::PathBuf;
+use super::input::{detect, stream_from};
+use crate::resample::{
+    AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan, SpindleSource,
+    Stats, resample_with,
+};
+use crate::toolpath::{LowerOptions, Posture, Program, Toolpath};
+use std::fs::File;
+use std::io::{BufReader, Write};
+use std::path::{Path, PathBuf};
 
 /// The CSV header, in column order.
 pub const HEADER: &str = "s_mm,t_s,theta_deg,x,y,z,i,j,k,cx,cy,cz,nx,ny,nz,fx,fy,fz,feed_mm_min";
@@ -81,7 +88,6 @@ pub struct Args {
 
 /// Run `crest resample`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let program = super::input::read_program(&args.file)?;
     let mode = match args.mode {
         ModeArg::Fz => Mode::FeedPerTooth,
         ModeArg::Dtheta => Mode::SpindleStep {
@@ -97,6 +103,29 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     opts.rpm = args.rpm;
     opts.feed_mm_min = args.feed_mm_min;
 
+    // The predicted feed needs the whole path (feed planning): in memory. Otherwise the
+    // file is read, resampled and written posture by posture.
+    let per_path = if args.machine.is_some() {
+        resample_in_memory(&args, &opts)?
+    } else {
+        resample_streaming(&args, &opts)?
+    };
+    report(&args, &opts, &per_path);
+    Ok(Outcome::Ok)
+}
+
+/// What was done to one tool path: 0-based index in the file, name, tool, postures, counts.
+struct PathReport {
+    index: usize,
+    name: String,
+    tool: String,
+    postures: usize,
+    stats: Stats,
+}
+
+/// Resample with the whole file in memory (needed for the predicted feed).
+fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<Vec<PathReport>> {
+    let program = super::input::read_program(&args.file)?;
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -133,56 +162,331 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let mut failure: Option<(String, ResampleError)> = None;
     let mut per_path = Vec::new();
     let written = crate::io::write_atomic(&args.output, |w| {
-        writeln!(w, "{HEADER}")?;
-        let mut line = String::with_capacity(256);
+        let mut out = CsvOut::new(w);
+        out.header()?;
         for (&idx, opts) in selected.iter().zip(&path_opts) {
             let path = &program.paths[idx];
-            let mut io_error: Option<std::io::Error> = None;
-            let result = resample_with(path, opts, |s| {
-                if io_error.is_some() {
-                    return;
-                }
-                line.clear();
-                format_sample(&mut line, s);
-                if let Err(e) = w.write_all(line.as_bytes()) {
-                    io_error = Some(e);
-                }
-            });
-            if let Some(e) = io_error {
-                return Err(e);
-            }
+            let result = resample_with(path, opts, |s| out.sample(s));
+            out.check()?;
             match result {
-                Ok(stats) => per_path.push((idx, stats)),
+                Ok(stats) => per_path.push(PathReport {
+                    index: idx,
+                    name: path.name.clone(),
+                    tool: path.tool_name.clone(),
+                    postures: path.postures.len(),
+                    stats,
+                }),
                 Err(e) => {
                     failure = Some((path.name.clone(), e));
                     return Err(std::io::Error::other("resampling failed"));
                 }
             }
         }
-        Ok(())
+        out.flush()
     });
     if let Some((name, e)) = failure {
-        return Err(miette::miette!(
-            "{}: tool path {}: {e}",
-            args.file.display(),
-            if name.is_empty() { "(unnamed)" } else { &name }
-        ));
+        return Err(path_error(&args.file, &name, e));
     }
     written.map_err(|e| miette::miette!("{}: {e}", args.output.display()))?;
+    Ok(per_path)
+}
 
-    let samples: u64 = per_path.iter().map(|(_, s)| s.samples).sum();
-    let runs: usize = per_path.iter().map(|(_, s)| s.runs).sum();
+/// The spindle speed of every streamed tool path (in order), when known beforehand.
+type Spindles = Vec<Result<Option<(f64, SpindleSource)>, ResampleError>>;
+
+/// One streaming pass: which tool path to resample (`target`, among the tool paths that
+/// have postures, in file order; `None` = all) and the spindle speeds found by an earlier
+/// pass (`None` = resolve each at its first cutting move).
+struct Pass<'a> {
+    target: Option<Option<usize>>,
+    spindles: Option<&'a Spindles>,
+}
+
+/// What a pass found out.
+enum PassResult {
+    Done(Vec<PathReport>),
+    /// Resample again: the tool path to resample (same meaning as [`Pass::target`]) and
+    /// the spindle speeds of the whole paths.
+    Again(Option<Option<usize>>, Option<Spindles>),
+}
+
+/// The tool path being streamed.
+struct Current {
+    ordinal: usize,
+    resampler: Option<Resampler>,
+    /// A scan of the whole path, when its spindle speed is resolved lazily.
+    scan: Option<SpindleScan>,
+    /// An error met while the spindle speed was provisional.
+    lazy_error: Option<ResampleError>,
+}
+
+/// Resample while reading: the file is lowered posture by posture and every posture goes
+/// straight to a [`Resampler`]; memory does not depend on the path length.
+///
+/// The spindle speed derived from the feed uses the highest feed of the whole path; it is
+/// taken at the first cutting move and checked against a scan of the whole path at the
+/// end. In the rare case they differ (a later cutting move faster than the first), or when
+/// `--path` has to skip tool paths without postures, the file is resampled again with what
+/// the first pass found; the output is replaced only when everything succeeded.
+fn resample_streaming(args: &Args, opts: &Options) -> miette::Result<Vec<PathReport>> {
+    // Invalid options are reported before anything is read.
+    Resampler::new(opts).map_err(|e| miette::miette!("{}: {e}", args.file.display()))?;
+    let first = Pass {
+        target: args.path.map(|n| Some(n.saturating_sub(1))),
+        spindles: None,
+    };
+    match stream_pass(args, opts, &first)? {
+        PassResult::Done(reports) => Ok(reports),
+        PassResult::Again(target, spindles) => {
+            let again = Pass {
+                target,
+                spindles: spindles.as_ref(),
+            };
+            match stream_pass(args, opts, &again)? {
+                PassResult::Done(reports) => Ok(reports),
+                PassResult::Again(..) => Err(miette::miette!(
+                    "{}: resampling did not settle (internal error)",
+                    args.file.display()
+                )),
+            }
+        }
+    }
+}
+
+fn stream_pass(args: &Args, opts: &Options, pass: &Pass<'_>) -> miette::Result<PassResult> {
+    let file = &args.file;
+    let kind = detect(file)?;
+    let input =
+        File::open(file).map_err(|e| miette::miette!("{}: cannot open: {e}", file.display()))?;
+    let reader = BufReader::with_capacity(1 << 16, input);
+    let lower = LowerOptions {
+        keep_postures: false,
+        ..Default::default()
+    };
+    let lazy = pass.spindles.is_none() && opts.rpm.is_none();
+    let selected = |ordinal: usize| match pass.target {
+        None => true,
+        Some(t) => t == Some(ordinal),
+    };
+
+    let mut failure: Option<miette::Report> = None;
+    let mut outcome: Option<PassResult> = None;
+    let written = crate::io::write_atomic(&args.output, |w| {
+        let mut out = CsvOut::new(w);
+        out.header()?;
+        let mut current: Option<Current> = None;
+        let mut finished: Vec<(usize, Option<Stats>, Option<SpindleScan>, bool)> = Vec::new();
+        let mut count = 0usize;
+        // Finish the current tool path: its last samples, its counts.
+        let finish = |cur: Current,
+                      out: &mut CsvOut<'_>,
+                      finished: &mut Vec<(usize, Option<Stats>, Option<SpindleScan>, bool)>|
+         -> Result<(), ResampleError> {
+            let mut stats = None;
+            let mut redo = cur.lazy_error.is_some();
+            if let (Some(r), None) = (cur.resampler, &cur.lazy_error) {
+                match r.finish(|s| out.sample(s)) {
+                    Ok(s) => stats = Some(s),
+                    Err(e) if lazy => {
+                        let _ = e;
+                        redo = true;
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+            finished.push((cur.ordinal, stats, cur.scan, redo));
+            Ok(())
+        };
+        let mut error: Option<(String, ResampleError)> = None;
+        let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
+            if path.stats.postures == 1 {
+                if let Some(cur) = current.take() {
+                    if let Err(e) = finish(cur, &mut out, &mut finished) {
+                        error = Some((path.name.clone(), e));
+                        return Err(std::io::Error::other("resampling failed"));
+                    }
+                }
+                let ordinal = count;
+                count += 1;
+                let mut resampler = None;
+                if selected(ordinal) {
+                    let mut r = Resampler::new(opts).map_err(std::io::Error::other)?;
+                    if let Some(spindles) = pass.spindles {
+                        match spindles.get(ordinal) {
+                            Some(Ok(Some((rpm, source)))) => r = r.with_spindle(*rpm, *source),
+                            Some(Err(e)) => {
+                                error = Some((path.name.clone(), e.clone()));
+                                return Err(std::io::Error::other("resampling failed"));
+                            }
+                            _ => {}
+                        }
+                    }
+                    resampler = Some(r);
+                }
+                current = Some(Current {
+                    ordinal,
+                    resampler,
+                    scan: lazy.then(SpindleScan::new),
+                    lazy_error: None,
+                });
+            }
+            let Some(cur) = current.as_mut() else {
+                return Ok(());
+            };
+            if let Some(scan) = cur.scan.as_mut() {
+                scan.push(p);
+            }
+            if cur.lazy_error.is_none() {
+                if let Some(r) = cur.resampler.as_mut() {
+                    if let Err(e) = r.push(p, |s| out.sample(s)) {
+                        if lazy {
+                            cur.lazy_error = Some(e);
+                        } else {
+                            error = Some((path.name.clone(), e));
+                            return Err(std::io::Error::other("resampling failed"));
+                        }
+                    }
+                }
+            }
+            out.check()
+        };
+        let streamed = stream_from(file, kind, reader, lower, &mut sink);
+        let program: Program = match streamed {
+            Ok(p) => p,
+            Err(e) => {
+                failure = Some(match error.take() {
+                    Some((name, e)) => path_error(file, &name, e),
+                    None => e,
+                });
+                return Err(std::io::Error::other("resampling failed"));
+            }
+        };
+        if let Some(cur) = current.take() {
+            if let Err(e) = finish(cur, &mut out, &mut finished) {
+                let name = program
+                    .paths
+                    .iter()
+                    .filter(|p| p.stats.postures > 0)
+                    .nth(count.saturating_sub(1))
+                    .map(|p| p.name.clone())
+                    .unwrap_or_default();
+                failure = Some(path_error(file, &name, e));
+                return Err(std::io::Error::other("resampling failed"));
+            }
+        }
+        out.flush()?;
+
+        // Which tool paths were streamed (those with postures), by ordinal.
+        let streamed_paths: Vec<usize> = (0..program.paths.len())
+            .filter(|&i| program.paths[i].stats.postures > 0)
+            .collect();
+        let wanted: Vec<usize> = match args.path {
+            Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
+            Some(n) => {
+                failure = Some(miette::miette!(
+                    "{}: --path {n} is out of range: the file has {} tool path(s)",
+                    file.display(),
+                    program.paths.len()
+                ));
+                return Err(std::io::Error::other("bad --path"));
+            }
+            None => (0..program.paths.len()).collect(),
+        };
+        let target = args
+            .path
+            .map(|n| streamed_paths.iter().position(|&i| i == n - 1));
+        let spindles = || -> Option<Spindles> {
+            let scans: Spindles = finished
+                .iter()
+                .map(|(_, _, scan, _)| match scan {
+                    Some(scan) => scan.resolve(opts),
+                    None => Ok(None),
+                })
+                .collect();
+            lazy.then_some(scans)
+        };
+        if target != pass.target {
+            outcome = Some(PassResult::Again(target, spindles()));
+            return Err(std::io::Error::other("again"));
+        }
+        if lazy {
+            let settled = finished.iter().all(|(_, stats, scan, redo)| {
+                let Some(stats) = stats else {
+                    return !redo;
+                };
+                let used = stats.spindle_rpm.zip(stats.spindle_source);
+                match scan.as_ref().map(|s| s.resolve(opts)) {
+                    Some(Ok(resolved)) => resolved == used,
+                    Some(Err(_)) => false,
+                    None => true,
+                }
+            });
+            if !settled {
+                outcome = Some(PassResult::Again(target, spindles()));
+                return Err(std::io::Error::other("again"));
+            }
+        }
+        let mut reports = Vec::new();
+        for idx in wanted {
+            let p = &program.paths[idx];
+            let stats = streamed_paths
+                .iter()
+                .position(|&i| i == idx)
+                .and_then(|ordinal| finished.iter().find(|f| f.0 == ordinal))
+                .and_then(|f| f.1.clone());
+            let stats = match stats {
+                Some(s) => s,
+                // A tool path without postures: nothing resampled.
+                None => Resampler::new(opts)
+                    .and_then(|r| r.finish(|_| {}))
+                    .map_err(std::io::Error::other)?,
+            };
+            reports.push(PathReport {
+                index: idx,
+                name: p.name.clone(),
+                tool: p.tool_name.clone(),
+                postures: p.stats.postures,
+                stats,
+            });
+        }
+        outcome = Some(PassResult::Done(reports));
+        Ok(())
+    });
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    match (written, outcome) {
+        (Ok(()), Some(done @ PassResult::Done(_))) => Ok(done),
+        (Err(_), Some(again @ PassResult::Again(..))) => Ok(again),
+        (Err(e), _) => Err(miette::miette!("{}: {e}", args.output.display())),
+        (Ok(()), _) => Err(miette::miette!(
+            "{}: resampling did not finish (internal error)",
+            file.display()
+        )),
+    }
+}
+
+fn path_error(file: &Path, name: &str, e: ResampleError) -> miette::Report {
+    miette::miette!(
+        "{}: tool path {}: {e}",
+        file.display(),
+        if name.is_empty() { "(unnamed)" } else { name }
+    )
+}
+
+fn report(args: &Args, opts: &Options, per_path: &[PathReport]) {
+    let samples: u64 = per_path.iter().map(|p| p.stats.samples).sum();
+    let runs: usize = per_path.iter().map(|p| p.stats.runs).sum();
     if args.json {
         let paths: Vec<_> = per_path
             .iter()
-            .map(|(idx, stats)| {
-                let p = &program.paths[*idx];
+            .map(|p| {
                 serde_json::json!({
-                    "index": idx + 1,
+                    "index": p.index + 1,
                     "name": p.name,
-                    "tool": p.tool_name,
-                    "postures": p.postures.len(),
-                    "stats": stats,
+                    "tool": p.tool,
+                    "postures": p.postures,
+                    "stats": p.stats,
                 })
             })
             .collect();
@@ -213,41 +517,166 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             );
         }
     }
-    Ok(Outcome::Ok)
 }
 
-/// Append one CSV row (with the newline) for `s`.
-fn format_sample(out: &mut String, s: &Sample) {
-    use std::fmt::Write as _;
+/// The CSV sink: rows are formatted into a buffer that goes to the output in 64 KiB
+/// blocks; the first write error is kept and reported by [`CsvOut::check`].
+struct CsvOut<'w> {
+    w: &'w mut dyn Write,
+    buf: Vec<u8>,
+    error: Option<std::io::Error>,
+}
+
+impl<'w> CsvOut<'w> {
+    const BLOCK: usize = 1 << 16;
+
+    fn new(w: &'w mut dyn Write) -> CsvOut<'w> {
+        CsvOut {
+            w,
+            buf: Vec::with_capacity(Self::BLOCK + 512),
+            error: None,
+        }
+    }
+
+    fn header(&mut self) -> std::io::Result<()> {
+        self.buf.extend_from_slice(HEADER.as_bytes());
+        self.buf.push(b'\n');
+        Ok(())
+    }
+
+    fn sample(&mut self, s: &Sample) {
+        if self.error.is_some() {
+            return;
+        }
+        format_sample(&mut self.buf, s);
+        if self.buf.len() >= Self::BLOCK {
+            if let Err(e) = self.w.write_all(&self.buf) {
+                self.error = Some(e);
+            }
+            self.buf.clear();
+        }
+    }
+
+    /// The first write error, if any.
+    fn check(&mut self) -> std::io::Result<()> {
+        match self.error.take() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.check()?;
+        self.w.write_all(&self.buf)?;
+        self.buf.clear();
+        Ok(())
+    }
+}
+
+/// Decimals of the columns: lengths and angles 6, time and unit vectors 9, feed 3.
+const LEN: u32 = 6;
+const UNIT: u32 = 9;
+
+/// Append one CSV row (with the newline) for `s`: the digits of `{:.6}` (lengths, θ),
+/// `{:.9}` (t, unit vectors) and `{:.3}` (feed).
+fn format_sample(out: &mut Vec<u8>, s: &Sample) {
     let p = &s.position;
     let a = &s.axis;
     let f = &s.feed_dir;
-    let _ = write!(
-        out,
-        "{:.6},{:.9},{:.6},{:.6},{:.6},{:.6},{:.9},{:.9},{:.9},",
-        s.s_mm,
-        s.t_s,
-        s.theta_rad.to_degrees(),
-        p.x,
-        p.y,
-        p.z,
-        a.x,
-        a.y,
-        a.z
-    );
+    fn num(out: &mut Vec<u8>, v: f64, dec: u32) {
+        push_fixed(out, v, dec);
+        out.push(b',');
+    }
+    num(out, s.s_mm, LEN);
+    num(out, s.t_s, UNIT);
+    num(out, s.theta_rad.to_degrees(), LEN);
+    num(out, p.x, LEN);
+    num(out, p.y, LEN);
+    num(out, p.z, LEN);
+    num(out, a.x, UNIT);
+    num(out, a.y, UNIT);
+    num(out, a.z, UNIT);
     match &s.contact {
         Some(c) => {
-            let _ = write!(out, "{:.6},{:.6},{:.6},", c.x, c.y, c.z);
+            num(out, c.x, LEN);
+            num(out, c.y, LEN);
+            num(out, c.z, LEN);
         }
-        None => out.push_str(",,,"),
+        None => out.extend_from_slice(b",,,"),
     }
     match &s.normal {
         Some(n) => {
-            let _ = write!(out, "{:.9},{:.9},{:.9},", n.x, n.y, n.z);
+            num(out, n.x, UNIT);
+            num(out, n.y, UNIT);
+            num(out, n.z, UNIT);
         }
-        None => out.push_str(",,,"),
+        None => out.extend_from_slice(b",,,"),
     }
-    let _ = writeln!(out, "{:.9},{:.9},{:.9},{:.3}", f.x, f.y, f.z, s.feed_mm_min);
+    num(out, f.x, UNIT);
+    num(out, f.y, UNIT);
+    num(out, f.z, UNIT);
+    push_fixed(out, s.feed_mm_min, 3);
+    out.push(b'\n');
+}
+
+const POW10: [f64; 10] = [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9];
+
+/// "00", "01", …, "99".
+const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
+/// Append `v` with exactly `dec` decimals (`dec ≤ 9`) as `format!("{v:.dec$}")` does:
+/// the sign of negative values (and −0) kept, ties to even. The rounding is done on
+/// v·10^dec, so a value within a rounding error of a half-way point may differ from
+/// `format!` in the last digit. Values beyond 2^53/10^dec and non-finite ones go through
+/// `format!` itself.
+fn push_fixed(out: &mut Vec<u8>, v: f64, dec: u32) {
+    let dec = dec.min(9);
+    let scaled = v.abs() * POW10[dec as usize];
+    if !(scaled < 9.0e15) {
+        let _ = write!(out, "{v:.prec$}", prec = dec as usize);
+        return;
+    }
+    let mut r = scaled.round();
+    if r - scaled == 0.5 && r % 2.0 != 0.0 {
+        // A tie rounded away from zero: to even instead.
+        r -= 1.0;
+    }
+    let q = r as u64;
+    if v.is_sign_negative() {
+        out.push(b'-');
+    }
+    let p = POW10[dec as usize] as u64;
+    push_digits(out, q / p, 1);
+    if dec > 0 {
+        out.push(b'.');
+        push_digits(out, q % p, dec as usize);
+    }
+}
+
+/// Append the decimal digits of `v`, zero-padded to at least `width` digits.
+fn push_digits(out: &mut Vec<u8>, mut v: u64, width: usize) {
+    let mut buf = [b'0'; 20];
+    let mut k = buf.len();
+    while v >= 100 {
+        let r = (v % 100) as usize * 2;
+        v /= 100;
+        k -= 2;
+        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+    }
+    if v >= 10 {
+        let r = v as usize * 2;
+        k -= 2;
+        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+    } else {
+        k -= 1;
+        buf[k] = b'0' + v as u8;
+    }
+    let k = k.min(buf.len() - width.min(buf.len()));
+    out.extend_from_slice(&buf[k..]);
 }
 
 #[cfg(test)]
@@ -269,13 +698,61 @@ mod tests {
             feed_dir: Vec3::x(),
             feed_mm_min: 1000.0,
         };
-        let mut row = String::new();
+        let mut row = Vec::new();
         format_sample(&mut row, &s);
+        let row = String::from_utf8(row).unwrap();
         assert_eq!(
             row,
             "1.500000,0.250000000,180.000000,1.000000,2.000000,3.000000,\
              0.000000000,0.000000000,1.000000000,,,,,,,1.000000000,0.000000000,0.000000000,1000.000\n"
         );
         assert_eq!(row.split(',').count(), HEADER.split(',').count());
+    }
+
+    #[test]
+    fn numbers_print_as_format_does() {
+        let mut seed: u64 = 7;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            1.5,
+            2.5,
+            0.0078125,
+            -0.0078125,
+            1e-12,
+            -1e-12,
+            999_999.999_999_5,
+            1e7 + 0.25,
+            3.8e8,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+        ];
+        for _ in 0..20_000 {
+            let mag = 10f64.powf(next() * 14.0 - 6.0);
+            values.push((next() - 0.5) * mag);
+        }
+        for v in values {
+            for dec in [3, 6, 9] {
+                let mut b = Vec::new();
+                push_fixed(&mut b, v, dec);
+                let got = String::from_utf8(b).unwrap();
+                let want = format!("{v:.prec$}", prec = dec as usize);
+                // Only a product v·10^dec within rounding of a half-way point may differ.
+                let scaled = v.abs() * 10f64.powi(dec as i32);
+                let near_tie =
+                    ((scaled - scaled.floor()) - 0.5).abs() < 4.0 * f64::EPSILON * scaled.max(1.0);
+                assert!(got == want || near_tie, "{v} {dec}: {got} vs {want}");
+            }
+        }
     }
 }
