@@ -636,7 +636,7 @@ const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
 fn push_fixed(out: &mut Vec<u8>, v: f64, dec: u32) {
     let dec = dec.min(9);
     let scaled = v.abs() * POW10[dec as usize];
-    if !(scaled < 9.0e15) {
+    if scaled.is_nan() || scaled >= 9.0e15 {
         let _ = write!(out, "{v:.prec$}", prec = dec as usize);
         return;
     }
