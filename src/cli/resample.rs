@@ -629,31 +629,39 @@ const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
 8081828384858687888990919293949596979899";
 
 /// Append `v` with exactly `dec` decimals (`dec ≤ 9`) as `format!("{v:.dec$}")` does:
-/// the sign of negative values (and −0) kept, ties to even. The rounding is done on
-/// v·10^dec, so a value within a rounding error of a half-way point may differ from
-/// `format!` in the last digit. Values beyond 2^53/10^dec and non-finite ones go through
-/// `format!` itself.
+/// the sign of negative values (and −0) kept, ties to even. The integer part is split off
+/// exactly, so only a fraction within 2^-33 of a half-way point of the last digit could
+/// round differently from `format!`. Values of 2^53 and beyond and non-finite ones go
+/// through `format!` itself. No libm calls: this prints 40 numbers a sample.
 fn push_fixed(out: &mut Vec<u8>, v: f64, dec: u32) {
-    let dec = dec.min(9);
-    let scaled = v.abs() * POW10[dec as usize];
-    if scaled.is_nan() || scaled >= 9.0e15 {
-        let _ = write!(out, "{v:.prec$}", prec = dec as usize);
+    let dec = dec.min(9) as usize;
+    let a = v.abs();
+    if a.is_nan() || a >= 9_007_199_254_740_992.0 {
+        let _ = write!(out, "{v:.dec$}");
         return;
     }
-    let mut r = scaled.round();
-    if r - scaled == 0.5 && r % 2.0 != 0.0 {
-        // A tie rounded away from zero: to even instead.
-        r -= 1.0;
+    // Exact: the truncation, and the fraction (a − ⌊a⌋ is representable).
+    let mut int = a as u64;
+    let frac = a - int as f64;
+    let p = POW10[dec] as u64;
+    let scaled = frac * POW10[dec];
+    let mut q = scaled as u64;
+    let rem = scaled - q as f64;
+    let odd = if dec == 0 { int % 2 == 1 } else { q % 2 == 1 };
+    if rem > 0.5 || (rem == 0.5 && odd) {
+        q += 1;
     }
-    let q = r as u64;
+    if q >= p {
+        int += 1;
+        q -= p;
+    }
     if v.is_sign_negative() {
         out.push(b'-');
     }
-    let p = POW10[dec as usize] as u64;
-    push_digits(out, q / p, 1);
+    push_digits(out, int, 1);
     if dec > 0 {
         out.push(b'.');
-        push_digits(out, q % p, dec as usize);
+        push_digits(out, q, dec);
     }
 }
 
@@ -733,6 +741,9 @@ mod tests {
             999_999.999_999_5,
             1e7 + 0.25,
             3.8e8,
+            38_981_340.000_002_5,
+            0.999_999_999_9,
+            -0.000_000_000_4,
             1e300,
             f64::NAN,
             f64::INFINITY,
@@ -742,15 +753,15 @@ mod tests {
             values.push((next() - 0.5) * mag);
         }
         for v in values {
-            for dec in [3, 6, 9] {
+            for dec in [0, 3, 6, 9] {
                 let mut b = Vec::new();
                 push_fixed(&mut b, v, dec);
                 let got = String::from_utf8(b).unwrap();
                 let want = format!("{v:.prec$}", prec = dec as usize);
-                // Only a product v·10^dec within rounding of a half-way point may differ.
-                let scaled = v.abs() * 10f64.powi(dec as i32);
-                let near_tie =
-                    ((scaled - scaled.floor()) - 0.5).abs() < 4.0 * f64::EPSILON * scaled.max(1.0);
+                // Only a fraction within rounding of a half-way point may differ.
+                let a = v.abs();
+                let scaled = (a - a.trunc()) * 10f64.powi(dec as i32);
+                let near_tie = ((scaled - scaled.floor()) - 0.5).abs() < 1e-9;
                 assert!(got == want || near_tie, "{v} {dec}: {got} vs {want}");
             }
         }
