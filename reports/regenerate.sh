@@ -10,3 +10,6 @@ sh reports/trials-r7/regenerate.sh
 # measured roughness), hence `|| true`.
 target/release/crest report --measured samples/measured/marin2023-table2.csv \
   --study samples/studies/marin2023.toml -o reports/marin2023 --tolerance-pct 20 || true
+# The same table against the simulated surface (z-map of the edges); also exits 1.
+target/release/crest report --measured samples/measured/marin2023-table2.csv \
+  --study samples/studies/marin2023-simulate.toml -o reports/marin2023-simulate --tolerance-pct 20 || true
