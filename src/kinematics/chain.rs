@@ -57,6 +57,50 @@ fn signed_angle(a: &Vec3, from: &Vec3, to: &Vec3) -> Option<f64> {
     Some(a.dot(&f.cross(&t)).atan2(f.dot(&t)))
 }
 
+/// Up to two rotary-axis indices, in machine-file order (no heap allocation).
+#[derive(Debug, Clone, Copy, Default)]
+struct AxisSet {
+    idx: [usize; 2],
+    n: usize,
+}
+
+impl AxisSet {
+    fn push(&mut self, i: usize) {
+        if self.n < 2 {
+            self.idx[self.n] = i;
+            self.n += 1;
+        }
+    }
+
+    fn iter(&self) -> std::slice::Iter<'_, usize> {
+        self.idx[..self.n].iter()
+    }
+
+    fn len(&self) -> usize {
+        self.n
+    }
+}
+
+/// Up to two rotary solutions (see [`Machine::rotary_solutions`]), without allocation.
+#[derive(Debug, Clone, Copy, Default)]
+struct Solutions {
+    sols: [[Option<f64>; 2]; 2],
+    n: usize,
+}
+
+impl Solutions {
+    fn push(&mut self, s: [Option<f64>; 2]) {
+        if self.n < 2 {
+            self.sols[self.n] = s;
+            self.n += 1;
+        }
+    }
+
+    fn as_slice(&self) -> &[[Option<f64>; 2]] {
+        &self.sols[..self.n]
+    }
+}
+
 /// A tool posture in the part frame: tip and unit axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
@@ -73,14 +117,18 @@ impl Machine {
         self.rotary[i].sign * q
     }
 
-    /// Indices of the table axes (base → part) and head axes (base → spindle).
-    fn sides(&self) -> (Vec<usize>, Vec<usize>) {
-        let t = (0..2)
-            .filter(|&i| self.rotary[i].side == Side::Table)
-            .collect();
-        let h = (0..2)
-            .filter(|&i| self.rotary[i].side == Side::Head)
-            .collect();
+    /// Indices of the table axes (base → part) and head axes (base → spindle). Fixed-size,
+    /// no allocation: this runs several times per posture.
+    fn sides(&self) -> (AxisSet, AxisSet) {
+        let mut t = AxisSet::default();
+        let mut h = AxisSet::default();
+        for i in 0..2 {
+            if self.rotary[i].side == Side::Table {
+                t.push(i);
+            } else {
+                h.push(i);
+            }
+        }
         (t, h)
     }
 
@@ -163,10 +211,16 @@ impl Machine {
     /// `u` on the tool, or `None` when the orientation is out of reach. A `None` angle
     /// inside a solution means that axis is undefined at this posture (singular).
     pub fn rotary_solutions(&self, u: &Vec3) -> Option<Vec<[Option<f64>; 2]>> {
+        self.rotary_solutions_fixed(u)
+            .map(|s| s.as_slice().to_vec())
+    }
+
+    /// [`Machine::rotary_solutions`] without allocation (the IKT hot path).
+    fn rotary_solutions_fixed(&self, u: &Vec3) -> Option<Solutions> {
         let t0 = self.dir_home;
         let (tab, head) = self.sides();
         let [r0, r1] = &self.rotary;
-        let mut out = Vec::with_capacity(2);
+        let mut out = Solutions::default();
         // Each branch first fixes the "first-solved" axis `f`, then the other `o`.
         match (tab.len(), head.len()) {
             (2, 0) => {
@@ -286,10 +340,11 @@ impl<'m> IkTracker<'m> {
 
     /// Solve the next posture (tip `p`, unit axis `u`, part frame).
     pub fn solve(&mut self, p: &Point3, u: &Vec3) -> Result<Solved, IkFailure> {
-        let sols = self
+        let fixed = self
             .machine
-            .rotary_solutions(u)
+            .rotary_solutions_fixed(u)
             .ok_or(IkFailure::Unreachable)?;
+        let sols = fixed.as_slice();
         let prev = self.prev.unwrap_or([0.0; 5]);
         let mut best: Option<(f64, Joints, usize, bool)> = None;
         for (b, s) in sols.iter().enumerate() {
