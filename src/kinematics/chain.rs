@@ -207,6 +207,35 @@ impl Machine {
         }
     }
 
+    /// Velocity of the tool tip relative to the part (part frame, mm per unit of the
+    /// parameter) when the joints move as `dq` from `q`: the exact derivative of
+    /// [`Machine::forward`]'s tip, propagated through the chain (a rotation by θ about the
+    /// line (c, a) maps a point velocity w to R w + θ̇ a × (x' − c)).
+    pub fn tip_velocity(&self, q: &Joints, dq: &Joints) -> Vec3 {
+        let (tab, head) = self.sides();
+        // Tip in the machine frame: linear displacement plus the head chain.
+        let mut x = self.tip_home;
+        let mut dx = Vec3::zeros();
+        for &i in head.iter().rev() {
+            let r = &self.rotary[i];
+            let th = self.rot(i, q[3 + i]);
+            let dth = r.sign * dq[3 + i];
+            x = rotate_point(&r.axis, &r.point, th, &x);
+            dx = rotate(&r.axis, th, &dx) + r.axis.cross(&(x - r.point)) * dth;
+        }
+        let mut p = Point3::from(self.linear_disp(q)) + x.coords;
+        let mut dp = dx + self.linear_disp(dq);
+        // Undo the table chain (outermost first).
+        for &i in tab.iter() {
+            let r = &self.rotary[i];
+            let th = -self.rot(i, q[3 + i]);
+            let dth = -r.sign * dq[3 + i];
+            p = rotate_point(&r.axis, &r.point, th, &p);
+            dp = rotate(&r.axis, th, &dp) + r.axis.cross(&(p - r.point)) * dth;
+        }
+        dp
+    }
+
     /// The rotary solutions (up to two, raw angles in rad) putting the part-frame tool axis
     /// `u` on the tool, or `None` when the orientation is out of reach. A `None` angle
     /// inside a solution means that axis is undefined at this posture (singular).
@@ -451,6 +480,41 @@ mod tests {
         assert_relative_eq!(got[0].1, -30.0, epsilon = 1e-9);
         assert_relative_eq!(got[1].0, -30.0, epsilon = 1e-9);
         assert_relative_eq!(got[1].1, 150.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn tip_velocity_is_the_derivative_of_forward() {
+        // Table–table AC, the 45° nutating variant, and a head/table split (A on the head).
+        let nut = include_str!("../../samples/machines/table1_nutating45.toml");
+        let cut = TABLE_I_AC_TOML.rfind("side = \"table\"").unwrap();
+        let split = format!(
+            "{}side = \"head\"{}",
+            &TABLE_I_AC_TOML[..cut],
+            &TABLE_I_AC_TOML[cut + "side = \"table\"".len()..]
+        );
+        for text in [TABLE_I_AC_TOML, nut, split.as_str()] {
+            let m = Machine::from_toml_str(text).unwrap();
+            for k in 0..20 {
+                let f = k as f64;
+                let q = [
+                    3.0 * f.sin(),
+                    -20.0 + f,
+                    5.0 * f.cos(),
+                    0.3 * (0.7 * f).sin(),
+                    1.3 * f,
+                ];
+                let dq = [0.2 * f.cos(), 0.9, -0.1 * f, 0.05 * f.sin(), 0.3 - 0.02 * f];
+                let h = 1e-5;
+                let (mut qp, mut qm) = (q, q);
+                for i in 0..5 {
+                    qp[i] += dq[i] * h;
+                    qm[i] -= dq[i] * h;
+                }
+                let fd = (m.forward(&qp).tip - m.forward(&qm).tip) / (2.0 * h);
+                let an = m.tip_velocity(&q, &dq);
+                assert!((fd - an).norm() < 1e-6 * (1.0 + an.norm()), "{fd} vs {an}");
+            }
+        }
     }
 
     #[test]

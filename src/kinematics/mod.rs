@@ -269,20 +269,13 @@ pub fn plan_poses(
 }
 
 /// Eq 6: speed of the tool tip relative to the part when the joints move as q̇ = g·ṡ,
-/// by a central difference of the forward kinematics to the part frame.
+/// from the derivative of the forward kinematics to the part frame
+/// ([`Machine::tip_velocity`]).
 pub fn cl_speed(machine: &Machine, q: &Joints, g: &Joints, path_speed: f64) -> f64 {
     if path_speed == 0.0 {
         return 0.0;
     }
-    let h = 1e-4; // mm of path parameter
-    let mut qp = *q;
-    let mut qm = *q;
-    for i in 0..5 {
-        qp[i] += g[i] * h;
-        qm[i] -= g[i] * h;
-    }
-    let d = machine.forward(&qp).tip - machine.forward(&qm).tip;
-    d.norm() / (2.0 * h) * path_speed
+    machine.tip_velocity(q, g).norm() * path_speed
 }
 
 /// Turn a tool path into planner input: the programmed feed of each move (rapids and

@@ -190,11 +190,20 @@ impl Stop {
     }
 
     /// Does the profile pass position `x` (from its start) at a speed ≤ `c`?
+    #[cfg(test)]
     fn under(&self, x: f64, c: f64) -> bool {
+        self.under_kind(x, c).is_some()
+    }
+
+    /// [`Stop::under`] telling how it passes: `None` = it does not, `Some(true)` = the peak
+    /// is below `c` or `x` lies after the falling crossing of `c` (then every later position
+    /// with a ceiling ≥ `c` passes too: the speed only falls after the peak),
+    /// `Some(false)` = `x` lies before the rising crossing (no such implication).
+    fn under_kind(&self, x: f64, c: f64) -> Option<bool> {
         let c = c * (1.0 + REL) + 1e-12;
         let pk = self.peak();
         if pk <= c {
-            return true;
+            return Some(true);
         }
         let j = self.j;
         // Falling crossing: first time after the peak at which the speed is ≤ c.
@@ -212,16 +221,16 @@ impl Stop {
         };
         let df = self.at(tf).0;
         if x >= df * (1.0 - 1e-12) - 1e-12 {
-            return true;
+            return Some(true);
         }
         if self.v0 <= c {
             // Rising crossing inside phase 1.
             let disc = (self.a0 * self.a0 - 2.0 * j * (c - self.v0)).max(0.0);
             let tr = ((self.a0 - disc.sqrt()) / j).clamp(0.0, t_pk);
             let dr = self.at(tr).0;
-            return x <= dr;
+            return (x <= dr).then_some(false);
         }
-        false
+        None
     }
 
     /// Time at which the profile reaches position x (x within the profile): the phase is
@@ -330,6 +339,7 @@ impl Chunks {
 struct Sim<'b> {
     b: &'b Blocks,
     ch: &'b Chunks,
+
     cycle: f64,
     lookahead: usize,
     /// Last block of the segment being planned (exclusive).
@@ -479,6 +489,13 @@ impl Sim<'_> {
         let mut releasable = true;
         let a_stop = b.abar[k1].min(prof.ap.max(a1.abs()));
         let mut p = k1 + 1;
+        // Dominance (exact, the tests are monotone in the ceiling): a posture whose ceiling
+        // is at least that of an earlier posture that passed `under` after the peak passes
+        // too, and one whose ceiling and braking deceleration are at least those of an
+        // earlier releasable posture is releasable too (brake_dist falls with c and A, the
+        // room grows with x). Only the running minima of the ceilings cost an evaluation.
+        let mut under_ok = f64::INFINITY;
+        let (mut rel_c, mut rel_a) = (f64::INFINITY, f64::INFINITY);
         while p < self.end && b.start[p] <= s1 + dist {
             // Skip a chunk where no ceiling is below the peak and no ā below the stop's
             // deceleration: none of the tests below can fire there.
@@ -497,8 +514,12 @@ impl Sim<'_> {
             }
             let x = b.start[p] - s1;
             let c = b.ceil[p];
-            if c < pk && !prof.under(x, c) {
-                return Tier::Rejected;
+            if c < pk && c < under_ok {
+                match prof.under_kind(x, c) {
+                    None => return Tier::Rejected,
+                    Some(true) => under_ok = c,
+                    Some(false) => {}
+                }
             }
             if a_stop > b.abar[p] * (1.0 + REL) {
                 let (_, _, ae) = prof.at(prof.time_at(x));
@@ -508,8 +529,12 @@ impl Sim<'_> {
             }
             if releasable && c < pk {
                 let (am, jm) = (prof.ap.max(1e-300).max(b.abar[p].min(b.abar[k1])), prof.j);
-                if brake_dist(v1, a1, c, am, jm) > x * (1.0 + 1e-12) + 1e-12 {
-                    releasable = false;
+                if !(c >= rel_c && am >= rel_a) {
+                    if brake_dist(v1, a1, c, am, jm) > x * (1.0 + 1e-12) + 1e-12 {
+                        releasable = false;
+                    } else if c < rel_c {
+                        (rel_c, rel_a) = (c, am);
+                    }
                 }
             }
             p += 1;
@@ -613,6 +638,9 @@ impl Sim<'_> {
             return (good, false);
         }
         let mut bad = cands[i - 1];
+        // All 30 steps: the greedy choice rides the feasibility boundary, and stopping at a
+        // bracket of even 1e-7 of the jerk limit changes the plan by 0.2 % (more unplanned
+        // stops) on the 001 parabola.
         for _ in 0..BISECT {
             let mid = 0.5 * (good + bad);
             if mid == good || mid == bad {
@@ -779,6 +807,7 @@ pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing
         let sim = Sim {
             b,
             ch: &ch,
+
             cycle: cycle_time,
             lookahead: lookahead_blocks,
             end: w[1],
