@@ -237,3 +237,103 @@ fn feed_and_crest_along_a_synthetic_path() {
         );
     }
 }
+
+#[test]
+fn runout_against_tool_height() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("r.png");
+    let out = crest()
+        .args(["plot", "runout", "--tool"])
+        .arg(sample("ball-r5-presetter.toml"))
+        .args([
+            "--lead-deg",
+            "5,15",
+            "--heights-mm",
+            "0.5,2",
+            "--json",
+            "-o",
+        ])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let curves = v["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 2);
+    // Only the presetter radii (−10, −15, −24, −25 µm) deviate. A radius deviation δ of a
+    // ball lies along the ball's normal at κ (z = R(1 − cos κ)); the surface normal at lead β
+    // sees δ cos(κ − β): the spread is (25 − 10) cos(κ − β) µm.
+    for c in curves {
+        let lead = c["lead_deg"].as_f64().unwrap().to_radians();
+        let marks = c["marks"].as_array().unwrap();
+        assert_eq!(marks.len(), 2);
+        for m in marks {
+            let z = m["height_mm"].as_f64().unwrap();
+            let kappa = (1.0 - z / 5.0).acos();
+            let expect = 15.0 * (kappa - lead).cos();
+            let d = m["runout_um"].as_f64().unwrap();
+            assert!((d - expect).abs() < 1e-6, "z {z}: {d} vs {expect}");
+        }
+    }
+    let bytes = std::fs::read(&png).unwrap();
+    assert!(bytes.len() > 10_000 && bytes.starts_with(b"\x89PNG"));
+    let svg = dir.path().join("r.svg");
+    crest()
+        .args(["plot", "runout", "--tool"])
+        .arg(sample("ball-r5-presetter.toml"))
+        .arg("-o")
+        .arg(&svg)
+        .assert()
+        .success();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    for t in [
+        "Lateral run-out against tool height",
+        "tool height z",
+        "lead 25°",
+    ] {
+        assert!(text.contains(t), "missing {t}");
+    }
+    // A height beyond the ball end is bad input: exit 2, no picture.
+    let bad = dir.path().join("bad.svg");
+    crest()
+        .args(["plot", "runout", "--tool"])
+        .arg(sample("ball-r5-presetter.toml"))
+        .args(["--heights-mm", "7", "-o"])
+        .arg(&bad)
+        .assert()
+        .code(2);
+    assert!(!bad.exists());
+}
+
+#[test]
+fn closed_stdout_is_not_a_failure() {
+    // `crest plot … --json | head -c 1`: the reader goes away before the JSON is written.
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("r.svg");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_crest"))
+        .args(["plot", "runout", "--tool"])
+        .arg(sample("ball-r5-presetter.toml"))
+        .args(["--json", "-o"])
+        .arg(&svg)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{:?}: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

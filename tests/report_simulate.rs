@@ -28,7 +28,12 @@ fn ice_pass_reproduces_the_exact_crest_and_ra() {
     // Only tooth 1 cuts: marks 0.2 mm apart, crest 1.0021 µm (model.md R2/R3). The grid
     // (2 µm) and the spindle step (1°) cost at most a few per cent.
     assert!((z.rz_um - crest.crest_um).abs() < 0.03, "Rz {}", z.rz_um);
-    assert!((z.ra_um - crest.ra_um).abs() < 0.02, "Ra {} vs {}", z.ra_um, crest.ra_um);
+    assert!(
+        (z.ra_um - crest.ra_um).abs() < 0.02,
+        "Ra {} vs {}",
+        z.ra_um,
+        crest.ra_um
+    );
 }
 
 #[test]
@@ -77,7 +82,15 @@ fn report_with_the_simulate_model() {
     let bad = assert_cmd::Command::cargo_bin("crest")
         .unwrap()
         .current_dir(dir.path())
-        .args(["report", "--measured", "t.csv", "--study", "s.toml", "-o", "bad"])
+        .args([
+            "report",
+            "--measured",
+            "t.csv",
+            "--study",
+            "s.toml",
+            "-o",
+            "bad",
+        ])
         .assert()
         .code(2);
     let err = String::from_utf8_lossy(&bad.get_output().stderr).to_string();

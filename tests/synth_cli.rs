@@ -81,6 +81,51 @@ fn r6_trials_give_the_exact_steps() {
 }
 
 #[test]
+fn feed_end_writes_one_fedrat_per_move() {
+    // 001 Fig 6: the feed falls linearly from 4000 to 500 mm/min along each 10 mm pass.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.cls");
+    let v = json(&synth(
+        &[
+            "plane",
+            "--tilt-deg",
+            "1",
+            "--stepover-mm",
+            "3",
+            "--size-mm",
+            "10,3",
+            "--point-step-mm",
+            "2",
+            "--feed-mm-min",
+            "4000",
+            "--feed-end-mm-min",
+            "500",
+            "--rpm",
+            "15000",
+            "--json",
+        ],
+        "torus-r5-rc1.5.toml",
+        &out,
+    ));
+    assert_eq!(v["passes"], 2);
+    assert_eq!(v["feed_end_mm_min"], 500.0);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let feeds: Vec<f64> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("FEDRAT/MMPM,"))
+        .map(|f| f.trim().parse().unwrap())
+        .collect();
+    // Per pass: 4000 (engage and first point), 3300, 2600, 1900, 1200, 500; the second
+    // pass starts again at 4000.
+    let pass = [4000.0, 3300.0, 2600.0, 1900.0, 1200.0, 500.0];
+    let want: Vec<f64> = pass.iter().chain(pass.iter()).copied().collect();
+    assert_eq!(feeds.len(), want.len(), "{feeds:?}");
+    for (f, w) in feeds.iter().zip(&want) {
+        assert!((f - w).abs() < 1e-6, "{feeds:?}");
+    }
+}
+
+#[test]
 fn contact12_has_one_line_per_contact_point() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.txt");

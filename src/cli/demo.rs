@@ -235,8 +235,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     write_file(&report, |w| w.write_all(md.as_bytes()))?;
     wrote.push((report, "this summary".into()));
 
-    println!("crest demo: the 002 case study on a plane, with 10 µm of run-out");
-    println!(
+    outln!("crest demo: the 002 case study on a plane, with 10 µm of run-out");
+    outln!(
         "  teeth cutting: {} of {teeth}, feed marks {:.3} mm apart, crest {:.3} µm (closed form), Rz {:.3} µm (simulated)",
         analysis.zc,
         analysis.fz_effective_mm,
@@ -244,7 +244,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         rz_feed.rz
     );
     for (p, what) in &wrote {
-        println!("  wrote {}: {what}", p.display());
+        outln!("  wrote {}: {what}", p.display());
     }
     Ok(Outcome::Ok)
 }

@@ -175,9 +175,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             units.insert(p.symbol().into(), p.unit().into());
         }
         info.insert("units".into(), units.into());
-        println!("{}", serde_json::Value::Object(info));
+        outln!("{}", serde_json::Value::Object(info));
     } else {
-        println!(
+        outln!(
             "{file}: {}×{} nodes, dx {} µm, dy {} µm, level {}",
             map.nx,
             map.ny,
@@ -186,7 +186,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             pp.level.label()
         );
         if filtered {
-            println!(
+            outln!(
                 "filters: λs {:?} µm, λc {:?} µm; {}",
                 pp.lambda_s_um,
                 pp.lambda_c_um,
@@ -194,7 +194,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             );
         }
         if let Some(spec) = args.profile {
-            println!(
+            outln!(
                 "profile {} ({} sampling lengths)",
                 spec_label(spec),
                 args.sections
@@ -206,7 +206,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             } else {
                 "undefined".into()
             };
-            println!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
+            outln!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
         }
     }
     Ok(Outcome::Ok)

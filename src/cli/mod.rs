@@ -5,6 +5,14 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+/// Print one line on stdout (like `println!`), returning an error instead of panicking when
+/// stdout is closed (`crest … | head`); `main` turns that error into a quiet exit 0.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::print_line(format_args!($($arg)*))?
+    };
+}
+
 mod convert;
 mod demo;
 mod feed;
@@ -94,11 +102,32 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Stdout was closed by the reader (a broken pipe): not a failure of the command.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+#[error("stdout was closed")]
+pub struct StdoutClosed;
+
+/// Write one line on stdout and flush it; see [`outln!`].
+pub(crate) fn print_line(args: std::fmt::Arguments<'_>) -> miette::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{args}")
+        .and_then(|()| out.flush())
+        .map_err(|e| {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                miette::Report::new(StdoutClosed)
+            } else {
+                miette::miette!("cannot write to stdout: {e}")
+            }
+        })
+}
+
 fn is_broken_pipe(e: &miette::Report) -> bool {
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>()
-            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
-    })
+    e.downcast_ref::<StdoutClosed>().is_some()
+        || e.chain().any(|c| {
+            c.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+        })
 }
 
 /// Run one parsed command line.

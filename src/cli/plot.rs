@@ -1,4 +1,4 @@
-//! `crest plot`: trochoids of the ICE elements, height maps, profiles and the feed (or crest
+//! `crest plot`: trochoids of the ICE elements, lateral run-out, height maps, profiles and the feed (or crest
 //! height) along a path, as SVG or PNG by the extension of `-o`.
 
 use super::Outcome;
@@ -20,6 +20,9 @@ pub struct Args {
 pub enum What {
     /// Trochoidal paths of ICE elements (002 Fig 14a/b) and crest heights between marks.
     Trochoid(TrochoidArgs),
+    /// Lateral run-out along the surface normal against tool height, one curve per lead
+    /// (002 Fig 14c).
+    Runout(RunoutArgs),
     /// A height map as a colour map (µm scale bar, axes in mm, missing points blank).
     Heightmap(HeightmapArgs),
     /// A profile of a height map, optionally against a measured profile.
@@ -74,6 +77,27 @@ pub struct TrochoidArgs {
     /// Spindle revolutions traced.
     #[arg(long, default_value_t = 3.0)]
     pub revolutions: f64,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// Options of `crest plot runout`.
+#[derive(Debug, clap::Args)]
+pub struct RunoutArgs {
+    /// Cutter description (tool.toml) with its run-out.
+    #[arg(long, value_name = "TOOL.toml")]
+    pub tool: PathBuf,
+    /// Lead angles, degrees (one curve each).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "5,15,25",
+        allow_negative_numbers = true
+    )]
+    pub lead_deg: Vec<f64>,
+    /// Tool heights above the tip to mark, mm (default: six heights spread over the end).
+    #[arg(long, value_delimiter = ',')]
+    pub heights_mm: Vec<f64>,
     #[command(flatten)]
     pub common: Common,
 }
@@ -159,9 +183,9 @@ fn done(common: &Common, kind: &str, extra: serde_json::Value) -> miette::Result
         if let (Some(o), serde_json::Value::Object(e)) = (obj.as_object_mut(), extra) {
             o.extend(e);
         }
-        println!("{obj}");
+        outln!("{obj}");
     } else {
-        println!("wrote {}", common.output.display());
+        outln!("wrote {}", common.output.display());
     }
     Ok(Outcome::Ok)
 }
@@ -170,6 +194,7 @@ fn done(common: &Common, kind: &str, extra: serde_json::Value) -> miette::Result
 pub fn run(args: Args) -> miette::Result<Outcome> {
     match args.what {
         What::Trochoid(a) => run_trochoid(a),
+        What::Runout(a) => run_runout(a),
         What::Heightmap(a) => run_heightmap(a),
         What::Profile(a) => run_profile(a),
         What::Feed(a) => run_feed(a),
@@ -213,6 +238,71 @@ fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
         &a.common,
         "trochoid",
         serde_json::json!({ "crests": crests }),
+    )
+}
+
+fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
+    use crate::report::runout::{lateral_chart, lateral_curves_for};
+    let format = Format::from_path(&a.common.output).ok_or_else(|| {
+        miette!(
+            "{}: unknown plot format (use .svg or .png)",
+            a.common.output.display()
+        )
+    })?;
+    if a.lead_deg.is_empty() || a.lead_deg.iter().any(|l| !l.is_finite() || l.abs() >= 90.0) {
+        return Err(miette!(
+            "--lead-deg: give leads strictly between -90 and 90 degrees"
+        ));
+    }
+    let cutter = super::synth::load_cutter(&a.tool)?;
+    let top = cutter.corner_radius_mm();
+    if let Some(z) = a
+        .heights_mm
+        .iter()
+        .find(|z| !z.is_finite() || **z < 0.0 || **z > top)
+    {
+        return Err(miette!(
+            "--heights-mm: {z} mm is outside the cutter's end (0 to {top} mm)"
+        ));
+    }
+    let marks: Vec<f64> = if a.heights_mm.is_empty() {
+        (0..6)
+            .map(|i| top * (1.0 - (10.0 + 15.0 * i as f64).to_radians().cos()))
+            .collect()
+    } else {
+        a.heights_mm.clone()
+    };
+    let curves = lateral_curves_for(&cutter, &a.lead_deg, &marks);
+    let name = a
+        .tool
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut chart = lateral_chart(&curves, &name);
+    if let Some(t) = &a.common.title {
+        chart.title = t.clone();
+    }
+    let bytes = match format {
+        Format::Svg => crate::plot::runout::render_svg(&chart).map(String::into_bytes),
+        Format::Png => crate::plot::runout::render_png(&chart),
+    }
+    .map_err(|e| miette!("{}: cannot render: {e}", a.common.output.display()))?;
+    crate::io::write_atomic(&a.common.output, |w| w.write_all(&bytes))
+        .map_err(|e| miette!("{}: cannot write: {e}", a.common.output.display()))?;
+    let json_curves: Vec<_> = curves
+        .iter()
+        .map(|c| {
+            serde_json::json!({
+                "lead_deg": c.lead_deg,
+                "max_um": c.curve.iter().map(|p| p.1).fold(0.0, f64::max),
+                "marks": c.marks.iter().map(|(z, d)| serde_json::json!({"height_mm": z, "runout_um": d})).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    done(
+        &a.common,
+        "runout",
+        serde_json::json!({ "curves": json_curves }),
     )
 }
 

@@ -162,11 +162,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     written.push(write("report.md", markdown.as_bytes())?);
 
     match json {
-        Some(j) => println!("{j}"),
+        Some(j) => outln!("{j}"),
         None => {
             for c in &reg.cases {
                 for k in &c.comparisons {
-                    println!(
+                    outln!(
                         "lead {:>5}° {:<8} {}: measured {:.3} ± {:.3} µm, simulated {:.4} µm, ratio {:.3}, {}",
                         c.lead_deg,
                         c.side.name(),
@@ -180,7 +180,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 }
             }
             for p in &written {
-                println!("wrote {}", p.display());
+                outln!("wrote {}", p.display());
             }
         }
     }

@@ -82,11 +82,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "files": written.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             "rows": rows,
         });
-        println!("{out}");
+        outln!("{out}");
     } else {
         let min_zc = rows.iter().map(|r| r.zc).min().unwrap_or(0);
         let max_zc = rows.iter().map(|r| r.zc).max().unwrap_or(0);
-        println!(
+        outln!(
             "{} cases ({} rule, tool {}): zc from {min_zc} to {max_zc} of {} teeth",
             rows.len(),
             study.rule.name(),
@@ -94,7 +94,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             cutter.teeth()
         );
         for p in &written {
-            println!("wrote {}", p.display());
+            outln!("wrote {}", p.display());
         }
     }
     Ok(Outcome::Ok)

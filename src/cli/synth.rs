@@ -72,6 +72,10 @@ pub struct Args {
     /// Programmed feed, mm/min.
     #[arg(long, value_name = "MM_PER_MIN")]
     pub feed_mm_min: f64,
+    /// Feed at the end of each pass, mm/min: the feed falls or rises linearly along every
+    /// pass from --feed-mm-min, one FEDRAT per move (001 Fig 6: 4000 → 500).
+    #[arg(long, value_name = "MM_PER_MIN")]
+    pub feed_end_mm_min: Option<f64>,
     /// Spindle speed, rpm.
     #[arg(long, value_name = "RPM")]
     pub rpm: f64,
@@ -172,6 +176,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     spec.point_step_mm = args.point_step_mm;
     spec.clearance_mm = args.clearance_mm;
     spec.feed_mm_min = args.feed_mm_min;
+    spec.feed_end_mm_min = args.feed_end_mm_min;
     spec.spindle_rpm = args.rpm;
     let synth = generate(&spec).map_err(|e| miette!("crest synth: {e}"))?;
 
@@ -212,6 +217,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "pattern": if args.zigzag { "zigzag" } else { "one-way" },
             "size_mm": [size_mm.0, size_mm.1],
             "feed_mm_min": args.feed_mm_min,
+            "feed_end_mm_min": args.feed_end_mm_min,
             "rpm": args.rpm,
         });
         println!("{report}");

@@ -147,7 +147,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "participating_teeth": a.teeth.iter().filter(|t| t.participates).map(|t| t.index).collect::<Vec<_>>(),
             "teeth": teeth,
         });
-        println!("{out}");
+        outln!("{out}");
         return Ok(Outcome::Ok);
     }
     let mut s = String::new();

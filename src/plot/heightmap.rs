@@ -4,7 +4,10 @@
 //! Large maps are block-averaged (NaN-aware) to at most a few hundred cells per side
 //! before drawing, so the SVG stays small; the colour range is that of the full map.
 
-use super::profile::{Draw, DrawResult, PlotError, label_font, render, tick_font, title_font};
+use super::profile::{
+    Draw, DrawResult, PlotError, label_font, render, tick_decimals, tick_font, tick_label,
+    title_font,
+};
 use crate::surface::HeightMap;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -99,9 +102,14 @@ impl Draw for MapChart<'_> {
             .x_label_area_size(55)
             .y_label_area_size(75)
             .build_cartesian_2d(x0..x1, y0..y1)?;
+        let (dx, dy) = (tick_decimals(x1 - x0), tick_decimals(y1 - y0));
+        let fx = move |v: &f64| tick_label(*v, dx);
+        let fy = move |v: &f64| tick_label(*v, dy);
         chart
             .configure_mesh()
             .disable_mesh()
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
             .x_desc("x [mm]")
             .y_desc("y [mm]")
             .axis_desc_style(label_font())
@@ -131,10 +139,13 @@ impl Draw for MapChart<'_> {
             .margin_right(10)
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..1.0, lo..hi)?;
+        let dz = tick_decimals(hi - lo);
+        let fz = move |v: &f64| tick_label(*v, dz);
         scale
             .configure_mesh()
             .disable_mesh()
             .disable_x_axis()
+            .y_label_formatter(&fz)
             .y_desc("height [µm]")
             .axis_desc_style(label_font())
             .label_style(tick_font())

@@ -119,6 +119,16 @@ pub(crate) fn tick_decimals(span: f64) -> usize {
     (1.0 - span.log10().floor()).clamp(0.0, 6.0) as usize
 }
 
+/// A tick label with `decimals` decimals; a value that rounds to zero prints as `0`
+/// without a sign (never `-0.0`).
+pub(crate) fn tick_label(v: f64, decimals: usize) -> String {
+    let text = format!("{v:.decimals$}");
+    match text.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+        _ => text,
+    }
+}
+
 /// A title font.
 pub(crate) fn title_font() -> TextStyle<'static> {
     (FONT, 24).into_font().into()
@@ -221,8 +231,8 @@ impl Draw for LineChart {
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)?;
         let (dx, dy) = (tick_decimals(x1 - x0), tick_decimals(y1 - y0));
-        let fx = move |v: &f64| format!("{v:.dx$}");
-        let fy = move |v: &f64| format!("{v:.dy$}");
+        let fx = move |v: &f64| tick_label(*v, dx);
+        let fy = move |v: &f64| tick_label(*v, dy);
         chart
             .configure_mesh()
             .x_label_formatter(&fx)
@@ -319,6 +329,15 @@ mod tests {
         assert_eq!(tick_decimals(5.0), 1);
         assert_eq!(tick_decimals(0.05), 3);
         assert_eq!(tick_decimals(f64::NAN), 1);
+    }
+
+    #[test]
+    fn tick_labels_never_show_minus_zero() {
+        assert_eq!(tick_label(-1e-17, 1), "0.0");
+        assert_eq!(tick_label(-0.04, 1), "0.0");
+        assert_eq!(tick_label(-0.06, 1), "-0.1");
+        assert_eq!(tick_label(0.25, 2), "0.25");
+        assert_eq!(tick_label(-3.0, 0), "-3");
     }
 
     #[test]

@@ -1046,7 +1046,9 @@ pub fn simulate_case(
     let length = eval + 2.0 * margin;
     let n = (length / ds).ceil() as usize;
     if n > 2_000_000 {
-        return Err(format!("the simulated pass needs {n} samples; fz is too small"));
+        return Err(format!(
+            "the simulated pass needs {n} samples; fz is too small"
+        ));
     }
     let samples: Vec<Sample> = (0..=n)
         .map(|k| {
@@ -1285,8 +1287,15 @@ pub fn regress(
                 }
                 let spec = study.simulate.unwrap_or_default();
                 Some(
-                    simulate_case(cutter, c.lead_deg, study.ap_mm, fz, prediction.fz_eff_mm, &spec)
-                        .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
+                    simulate_case(
+                        cutter,
+                        c.lead_deg,
+                        study.ap_mm,
+                        fz,
+                        prediction.fz_eff_mm,
+                        &spec,
+                    )
+                    .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
                 )
             }
         };

@@ -511,12 +511,22 @@ pub struct LateralCurve {
     pub marks: Vec<(f64, f64)>,
 }
 
-/// The lateral run-out curves of the tool's own run-out for each lead.
+/// The lateral run-out curves of the tool's own run-out for each lead of the study.
 pub fn lateral_curves(cutter: &Cutter, study: &Study) -> Vec<LateralCurve> {
+    lateral_curves_for(cutter, &study.leads_deg, &study.marked_heights_mm(cutter))
+}
+
+/// The lateral run-out curves of the tool's own run-out for the given leads (degrees), with
+/// markers at the given tool heights (mm): the spread over the teeth of the deviation along
+/// the surface normal, densely from the tip to the top of the corner radius.
+pub fn lateral_curves_for(
+    cutter: &Cutter,
+    leads_deg: &[f64],
+    marks_mm: &[f64],
+) -> Vec<LateralCurve> {
     let top = cutter.corner_radius_mm().max(0.05 * cutter.radius_mm);
     let spread = |z: f64, lead: f64| normal_runout_spread_mm(cutter, z, lead.to_radians()) * 1e3;
-    study
-        .leads_deg
+    leads_deg
         .iter()
         .map(|&lead| LateralCurve {
             lead_deg: lead,
@@ -526,11 +536,7 @@ pub fn lateral_curves(cutter: &Cutter, study: &Study) -> Vec<LateralCurve> {
                     (z, spread(z, lead))
                 })
                 .collect(),
-            marks: study
-                .marked_heights_mm(cutter)
-                .iter()
-                .map(|&z| (z, spread(z, lead)))
-                .collect(),
+            marks: marks_mm.iter().map(|&z| (z, spread(z, lead))).collect(),
         })
         .collect()
 }

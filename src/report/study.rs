@@ -155,6 +155,11 @@ pub struct Design {
     /// `one-way` or `zigzag`.
     #[serde(default = "default_pattern")]
     pub pattern: String,
+    /// Surface model: `ice` (the teeth's edges swept, default) or `dome`.
+    #[serde(default = "default_model")]
+    pub model: String,
+    /// Largest spindle step of the ICE model, degrees (default 0.25, as model.md R7).
+    pub dtheta_deg: Option<f64>,
     /// Response symbols (areal parameters such as `Sz`, `Sq`).
     pub responses: Vec<String>,
     /// The factors and their levels.
@@ -164,6 +169,13 @@ pub struct Design {
 fn default_pattern() -> String {
     "one-way".to_string()
 }
+
+fn default_model() -> String {
+    "ice".to_string()
+}
+
+/// Default spindle step of the ICE model, degrees (model.md R7 used 0.25°).
+pub const DEFAULT_DTHETA_DEG: f64 = 0.25;
 
 /// How the pass interval of a run is given.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -239,6 +251,40 @@ impl Design {
                     design.pattern
                 ),
             ));
+        }
+        if design.surface != "plane" {
+            return Err(at(
+                "surface",
+                format!(
+                    "crest study simulates unit cells of a plane; surface '{}' is not supported",
+                    design.surface
+                ),
+            ));
+        }
+        if !matches!(design.model.as_str(), "ice" | "dome") {
+            return Err(at(
+                "model",
+                format!("model must be ice or dome, got '{}'", design.model),
+            ));
+        }
+        if let Some(d) = design.dtheta_deg {
+            if !(d.is_finite() && d > 0.0 && d <= 90.0) {
+                return Err(at(
+                    "dtheta_deg",
+                    format!("dtheta_deg must lie in (0, 90], got {d}"),
+                ));
+            }
+        }
+        for r in &design.responses {
+            match crate::metrics::Param::from_symbol(r) {
+                Some(p) if !p.is_profile() => {}
+                _ => {
+                    return Err(at(
+                        "responses",
+                        format!("responses: '{r}' is not an areal (ISO 25178) parameter"),
+                    ));
+                }
+            }
         }
         if design.responses.is_empty() {
             return Err(at(
@@ -361,6 +407,18 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// What the evaluation of one run gives: its responses (in [`Design::responses`] order) and
+/// the feed per tooth and pass interval it used.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunOutput {
+    /// Responses.
+    pub responses: Vec<f64>,
+    /// Feed per tooth, mm.
+    pub fz_mm: f64,
+    /// Pass interval (drive-plane spacing), mm.
+    pub stepover_mm: f64,
+}
+
 /// The outcome of one run: its responses (in [`Design::responses`] order) or why it failed.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct RunResult {
@@ -368,6 +426,10 @@ pub struct RunResult {
     pub point: RunPoint,
     /// Responses; NaN where the run failed.
     pub responses: Vec<f64>,
+    /// Feed per tooth, mm (NaN when the run failed).
+    pub fz_mm: f64,
+    /// Pass interval, mm (NaN when the run failed).
+    pub stepover_mm: f64,
     /// Why the run failed, if it did.
     pub error: Option<String>,
 }
@@ -376,7 +438,7 @@ pub struct RunResult {
 /// order whatever the thread count. `tick` is called once per finished run.
 pub fn run_design<F, T>(design: &Design, eval: F, tick: T) -> Vec<RunResult>
 where
-    F: Fn(&RunPoint) -> Result<Vec<f64>, String> + Sync,
+    F: Fn(&RunPoint) -> Result<RunOutput, String> + Sync,
     T: Fn() + Sync,
 {
     use rayon::prelude::*;
@@ -388,22 +450,243 @@ where
             let out = eval(&point);
             tick();
             match out {
-                Ok(mut v) => {
-                    v.resize(n, f64::NAN);
+                Ok(mut o) => {
+                    o.responses.resize(n, f64::NAN);
                     RunResult {
                         point,
-                        responses: v,
+                        responses: o.responses,
+                        fz_mm: o.fz_mm,
+                        stepover_mm: o.stepover_mm,
                         error: None,
                     }
                 }
                 Err(e) => RunResult {
                     point,
                     responses: vec![f64::NAN; n],
+                    fz_mm: f64::NAN,
+                    stepover_mm: f64::NAN,
                     error: Some(e),
                 },
             }
         })
         .collect()
+}
+
+/// The evaluated grid of a run: the unit cell or the design's window, in the WCS (passes
+/// along +x, stepped along +y), and the extent of the path that covers it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunWindow {
+    /// Grid placement.
+    pub grid: crate::surface::GridSpec,
+    /// Field of the synthetic path: length along the passes, width across, mm.
+    pub field_mm: (f64, f64),
+}
+
+/// Highest surface height (above the plane) a run may reach, mm: passes and tooth passes
+/// that stay higher than this over the window are left out of the path, and a run whose
+/// window comes out higher fails rather than report a wrong value.
+pub const REACH_HEIGHT_MM: f64 = 0.1;
+
+/// How far from its lowest point the swept body of `cutter` (unit axis `axis_fgn` in
+/// (f, g, n)) stays within `h_mm` of the plane: (along f, across along g), mm. A pass (or a
+/// tooth pass) farther than this from a node cannot cut it lower than `h_mm`.
+pub fn reach_mm(
+    cutter: &crate::tool::Cutter,
+    axis_fgn: &crate::math::Vec3,
+    h_mm: f64,
+) -> Result<(f64, f64), String> {
+    let one = |axis: &crate::math::Vec3| -> Result<f64, String> {
+        let cs = crate::synth::CrossSection::new(cutter, axis).map_err(|e| e.to_string())?;
+        let [yb, zb] = cs.bottom();
+        let step = 0.005;
+        let mut reach: f64 = 0.0;
+        for sign in [-1.0, 1.0] {
+            let mut k = 1usize;
+            loop {
+                let y = yb + sign * step * k as f64;
+                match cs.lower(y) {
+                    Some(z) if z - zb <= h_mm && k < 100_000 => k += 1,
+                    _ => break,
+                }
+            }
+            reach = reach.max(step * k as f64);
+        }
+        Ok(reach)
+    };
+    let a = axis_fgn;
+    // Seen along g instead of f: (f, g, n) → (g, −f, n).
+    let along = one(&crate::math::Vec3::new(a.y, -a.x, a.z))?;
+    let across = one(a)?;
+    Ok((along, across))
+}
+
+/// The window of a run with feed per tooth `fz_mm` and pass interval `step_mm`: without
+/// `window_mm`, one unit cell `fz × s` (`fz × 2s` for zigzag passes) with its last column
+/// and row left out, so that the periodic surface is counted once; with it, a window of that
+/// size centred on the origin. The path field (centred on the origin) reaches `reach_mm`
+/// (along, across; see [`reach_mm`]) plus 0.2 mm beyond the window on every side.
+pub fn run_window(design: &Design, reach_mm: (f64, f64), fz_mm: f64, step_mm: f64) -> RunWindow {
+    let d = design.grid_um * 1e-3;
+    let across = if design.pattern == "zigzag" {
+        2.0 * step_mm
+    } else {
+        step_mm
+    };
+    let (grid, a, b) = match design.window_mm {
+        None => (
+            crate::surface::GridSpec::Window {
+                x0_mm: 0.0,
+                y0_mm: 0.0,
+                x1_mm: fz_mm - d,
+                y1_mm: across - d,
+            },
+            fz_mm,
+            across,
+        ),
+        Some([a, b]) => (
+            crate::surface::GridSpec::Window {
+                x0_mm: -0.5 * a,
+                y0_mm: -0.5 * b,
+                x1_mm: 0.5 * a,
+                y1_mm: 0.5 * b,
+            },
+            a,
+            b,
+        ),
+    };
+    RunWindow {
+        grid,
+        field_mm: (2.0 * (a + reach_mm.0 + 0.2), 2.0 * (b + reach_mm.1 + 0.2)),
+    }
+}
+
+/// Simulate one run of a design: the synthetic path (plane, passes along +x, tool posture
+/// by convention A, pass interval from the scallop by the exact swept envelope), resampled
+/// at a constant spindle step, the surface model of the design on [`run_window`], and the
+/// areal parameters of the raw window (no levelling: a unit cell of a plane is periodic).
+/// Every pass starts at the same spindle phase (model.md §8). The responses come back in
+/// [`Design::responses`] order.
+pub fn simulate_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<RunOutput, String> {
+    use crate::synth::{Orientation, PathSpec, Pattern, Step, Surface};
+    let lead = design.factors.lead_deg.is_some();
+    let orientation = if lead {
+        Orientation::Lead {
+            lead_rad: p.tilt_deg.to_radians(),
+        }
+    } else {
+        Orientation::TiltYaw {
+            tilt_rad: p.tilt_deg.to_radians(),
+            yaw_rad: p.yaw_deg.to_radians(),
+        }
+    };
+    let step_mm = match p.step {
+        StepSpec::StepoverMm(s) => s,
+        StepSpec::ScallopUm(h) => {
+            crate::synth::exact_step_mm(cutter, &orientation.axis_fgn(), h * 1e-3)
+                .map_err(|e| e.to_string())?
+        }
+    };
+    let z = cutter.teeth().max(1) as f64;
+    let fz_mm = p.feed_mm_min / (z * design.rpm);
+    let reach = reach_mm(cutter, &orientation.axis_fgn(), REACH_HEIGHT_MM)?;
+    let win = run_window(design, reach, fz_mm, step_mm);
+    let mut spec = PathSpec::new(
+        Surface::Plane,
+        cutter.clone(),
+        orientation,
+        Step::Stepover {
+            spacing_mm: step_mm,
+        },
+        win.field_mm,
+    );
+    spec.pattern = if design.pattern == "zigzag" {
+        Pattern::Zigzag
+    } else {
+        Pattern::OneWay
+    };
+    spec.point_step_mm = 1.0;
+    spec.clearance_mm = 1.0;
+    spec.feed_mm_min = p.feed_mm_min;
+    spec.spindle_rpm = design.rpm;
+    let synth = crate::synth::generate(&spec).map_err(|e| e.to_string())?;
+    let path = synth
+        .program
+        .paths
+        .first()
+        .ok_or_else(|| "the synthetic program has no tool path".to_string())?;
+
+    let dtheta = design.dtheta_deg.unwrap_or(DEFAULT_DTHETA_DEG).to_radians();
+    let (model, mode) = if design.model == "dome" {
+        (
+            crate::surface::Model::Dome,
+            crate::resample::Mode::FeedPerTooth,
+        )
+    } else {
+        // Resample every ≥ 8° of spindle; the engine subdivides to Δθ (as `crest simulate`).
+        let coarse = dtheta * (8f64.to_radians() / dtheta).floor().max(1.0);
+        (
+            crate::surface::Model::Ice { dtheta_rad: dtheta },
+            crate::resample::Mode::SpindleStep { dtheta_rad: coarse },
+        )
+    };
+    let ropts = crate::resample::Options::new(mode, fz_mm, cutter.teeth())
+        .with_rpm(design.rpm)
+        .with_feed_mm_min(p.feed_mm_min);
+    let samples = crate::resample::resample(path, &ropts).map_err(|e| e.to_string())?;
+    let sopts = crate::surface::Options::new(model, win.grid, design.grid_um * 1e-3);
+    let sim = crate::surface::simulate(&samples, cutter, &sopts, &|_, _| {})
+        .map_err(|e| e.to_string())?;
+    let nodes = sim.map.nx * sim.map.ny;
+    if sim.nodes_cut != nodes {
+        return Err(format!(
+            "{} of {nodes} nodes of the window were not reached",
+            nodes - sim.nodes_cut
+        ));
+    }
+    let top = sim
+        .map
+        .z_um
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    if top > 1e3 * REACH_HEIGHT_MM {
+        return Err(format!(
+            "the window reaches {top:.1} µm above the plane, beyond the {} µm the path covers",
+            1e3 * REACH_HEIGHT_MM
+        ));
+    }
+    let params: Vec<crate::metrics::Param> = design
+        .responses
+        .iter()
+        .map(|r| {
+            crate::metrics::Param::from_symbol(r)
+                .filter(|p| !p.is_profile())
+                .ok_or_else(|| format!("'{r}' is not an areal parameter"))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut set_list: Vec<&str> = params.iter().map(|p| p.symbol()).collect();
+    set_list.dedup();
+    let set =
+        crate::metrics::ParamSet::parse(&set_list.join(","), false).map_err(|e| e.to_string())?;
+    let values = crate::metrics::areal_parameters(&sim.map, &set).map_err(|e| e.to_string())?;
+    let responses = params
+        .iter()
+        .map(|p| {
+            values
+                .iter()
+                .find(|(q, _)| q == p)
+                .map_or(f64::NAN, |(_, v)| *v)
+        })
+        .collect();
+    Ok(RunOutput {
+        responses,
+        fz_mm,
+        stepover_mm: synth.stepover_mm,
+    })
 }
 
 /// Eqs 7-8 for every response of a finished design, in [`Design::responses`] order.
@@ -426,6 +709,8 @@ pub fn write_runs_csv(
 ) -> std::io::Result<()> {
     let mut head = vec!["run".to_string()];
     head.extend(design.factors().into_iter().map(|f| f.name));
+    head.push("fz_mm".into());
+    head.push("step_mm".into());
     // Response columns are named by their symbol only: units follow iso25178.md.
     head.extend(design.responses.iter().cloned());
     head.push("error".into());
@@ -433,6 +718,8 @@ pub fn write_runs_csv(
     for r in results {
         let mut row = vec![r.point.run.to_string()];
         row.extend(r.point.values.iter().map(|v| format!("{v}")));
+        row.push(fmt_value(r.fz_mm));
+        row.push(fmt_value(r.stepover_mm));
         row.extend(r.responses.iter().map(|v| fmt_value(*v)));
         row.push(
             r.error
@@ -500,16 +787,65 @@ pub fn effects_chart(design: &Design, effects: &[Effects]) -> crate::plot::profi
             crate::plot::profile::Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
         })
         .collect();
+    let series: Vec<crate::plot::profile::Series> = series;
+    let mut title = if design.title.is_empty() {
+        "Relative first-level effects (001 Eq 8)".to_string()
+    } else {
+        format!("{}: relative first-level effects (Eq 8)", design.title)
+    };
+    // A single line gets no legend: name it in the title.
+    if let [only] = series.as_slice() {
+        title = format!("{title}, {}", only.label);
+    }
     crate::plot::profile::LineChart {
-        title: if design.title.is_empty() {
-            "Relative first-level effects (001 Eq 8)".into()
-        } else {
-            format!("{}: relative first-level effects (Eq 8)", design.title)
-        },
+        title,
         x_label: format!("parameter ({})", design.responses.join(", ")),
         y_label: "EF_i1 [%]".into(),
         series,
     }
+}
+
+/// The chart of 001 Fig 12: the relative effect `EF_ij/M` (%) of one factor at each of its
+/// levels (x = the level), one series per response.
+pub fn level_chart(
+    design: &Design,
+    effects: &[Effects],
+    factor: usize,
+) -> Option<crate::plot::profile::LineChart> {
+    let f = design.factors().into_iter().nth(factor)?;
+    let series = design
+        .responses
+        .iter()
+        .zip(effects)
+        .map(|(name, e)| {
+            let y: Vec<f64> = e
+                .effects
+                .get(factor)
+                .map(|row| {
+                    row.iter()
+                        .map(|v| {
+                            if e.mean != 0.0 {
+                                100.0 * v / e.mean
+                            } else {
+                                f64::NAN
+                            }
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            crate::plot::profile::Series::new(name.clone(), &f.levels, &y)
+        })
+        .collect();
+    Some(crate::plot::profile::LineChart {
+        title: if design.title.is_empty() {
+            format!("Effect of {} (001 Eq 7 / M)", f.name)
+        } else {
+            format!("{}: effect of {} (Eq 7 / M)", design.title, f.name)
+        },
+        x_label: f.name.clone(),
+        y_label: "EF_ij / M [%]".into(),
+        series,
+    })
 }
 
 #[cfg(test)]
@@ -596,6 +932,33 @@ mod tests {
         );
     }
 
+    #[test]
+    fn reach_follows_the_effective_radii() {
+        // R 5, rc 1.5, tilt 10°, yaw 0: across, z ≈ y²/(2 R_eff) with R_eff = 21.656 mm
+        // (model.md R6); along, the corner circle rc in front: y = √(2 rc h).
+        let cutter = crate::tool::Cutter::new(
+            crate::tool::Shape::Torus {
+                corner_radius_mm: 1.5,
+            },
+            5.0,
+            1,
+            0.0,
+        );
+        let a = crate::synth::axis_convention_a(10f64.to_radians(), 0.0);
+        let h = 0.001;
+        let (along, across) = reach_mm(&cutter, &a, h).unwrap();
+        assert!(
+            (across - (2.0 * 21.656 * h).sqrt()).abs() < 0.006,
+            "{across}"
+        );
+        assert!((along - (2.0 * 1.5 * h).sqrt()).abs() < 0.006, "{along}");
+        // At tilt 1° the end face trails at slope tan 1°: 0.1 mm is reached 5.73 mm behind.
+        let a1 = crate::synth::axis_convention_a(1f64.to_radians(), 0.0);
+        let (along, _) = reach_mm(&cutter, &a1, REACH_HEIGHT_MM).unwrap();
+        let want = REACH_HEIGHT_MM / 1f64.to_radians().tan();
+        assert!((along - want).abs() < 0.05, "{along} vs {want}");
+    }
+
     fn design_err(text: &str) -> (usize, String) {
         match Design::parse(text, "d.toml") {
             Err(StudyError::Design { line, message, .. }) => (line, message),
@@ -621,16 +984,29 @@ mod tests {
         assert!(msg.contains("excludes"), "{msg}");
         let (_, msg) = design_err(&base.replace("responses = [\"Sq\"]", "responses = []"));
         assert!(msg.contains("at least one"), "{msg}");
+        let (line, msg) = design_err(&base.replace("[\"Sq\"]", "[\"Sq\", \"Ra\"]"));
+        assert_eq!(line, 5, "{msg}");
+        assert!(msg.contains("'Ra'"), "{msg}");
+        let (line, msg) = design_err(&base.replace("\"plane\"", "\"sphere\""));
+        assert_eq!(line, 1, "{msg}");
+        let (_, msg) = design_err(&format!("model = \"exact\"\n{base}"));
+        assert!(msg.contains("ice or dome"), "{msg}");
+        let (line, msg) = design_err(&format!("dtheta_deg = 0.0\n{base}"));
+        assert_eq!(line, 1, "{msg}");
     }
 
     /// A synthetic response with known effects: Sq = 1 + 0.5·[yaw 20] + 0.1·scallop.
-    fn fake(p: &RunPoint) -> Result<Vec<f64>, String> {
+    fn fake(p: &RunPoint) -> Result<RunOutput, String> {
         let h = match p.step {
             StepSpec::ScallopUm(h) => h,
             StepSpec::StepoverMm(_) => return Err("no scallop".into()),
         };
         let sq = 1.0 + 0.5 * (p.yaw_deg / 20.0) + 0.1 * h;
-        Ok(vec![6.0 * sq, sq])
+        Ok(RunOutput {
+            responses: vec![6.0 * sq, sq],
+            fz_mm: p.feed_mm_min / 15000.0,
+            stepover_mm: 0.1 * h,
+        })
     }
 
     #[test]
@@ -676,9 +1052,12 @@ mod tests {
         assert_eq!(lines.len(), 17);
         assert_eq!(
             lines[0],
-            "run,yaw_deg,tilt_deg,scallop_um,feed_mm_min,Sz,Sq,error"
+            "run,yaw_deg,tilt_deg,scallop_um,feed_mm_min,fz_mm,step_mm,Sz,Sq,error"
         );
-        assert_eq!(lines[16], "16,20,10,10,4000,15.000000,2.500000,");
+        assert_eq!(
+            lines[16],
+            "16,20,10,10,4000,0.266667,1.000000,15.000000,2.500000,"
+        );
         let mut eff = Vec::new();
         write_effects_csv(&d, &e, &mut eff).unwrap();
         let eff = String::from_utf8(eff).unwrap();
@@ -690,6 +1069,13 @@ mod tests {
         let chart = effects_chart(&d, &e);
         assert_eq!(chart.series.len(), 4);
         assert_eq!(chart.series[0].y, vec![-12.5, -12.5]);
+        // Fig 12 style: the yaw effect at its two levels, ∓0.25/2 of Sq.
+        let yaw = level_chart(&d, &e, 0).unwrap();
+        assert_eq!(yaw.series.len(), 2);
+        assert_eq!(yaw.series[1].x, vec![0.0, 20.0]);
+        assert_relative_eq!(yaw.series[1].y[0], -12.5, epsilon = 1e-9);
+        assert_relative_eq!(yaw.series[1].y[1], 12.5, epsilon = 1e-9);
+        assert!(level_chart(&d, &e, 9).is_none());
     }
 
     #[test]
@@ -702,7 +1088,11 @@ mod tests {
                 if p.run == 1 {
                     Err("boom".into())
                 } else {
-                    Ok(vec![1.0])
+                    Ok(RunOutput {
+                        responses: vec![1.0],
+                        fz_mm: 0.1,
+                        stepover_mm: 1.0,
+                    })
                 }
             },
             || {},

@@ -141,8 +141,11 @@ pub struct PathSpec {
     pub point_step_mm: f64,
     /// One-way or zigzag.
     pub pattern: Pattern,
-    /// Programmed feed, mm/min.
+    /// Programmed feed, mm/min (at the start of each pass when `feed_end_mm_min` is set).
     pub feed_mm_min: f64,
+    /// Feed at the end of each pass, mm/min: the feed then changes linearly with the
+    /// distance along the pass, one FEDRAT per move (001 Fig 6); `None` = constant.
+    pub feed_end_mm_min: Option<f64>,
     /// Spindle speed, rpm.
     pub spindle_rpm: f64,
     /// Retract distance along the tool axis between passes, mm.
@@ -175,6 +178,7 @@ impl PathSpec {
             point_step_mm: 0.5,
             pattern: Pattern::OneWay,
             feed_mm_min: 1000.0,
+            feed_end_mm_min: None,
             spindle_rpm: 10000.0,
             clearance_mm: 5.0,
         }
@@ -262,6 +266,9 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
     check_positive("the field width", spec.size_mm.1)?;
     check_positive("the point step", spec.point_step_mm)?;
     check_positive("the feed", spec.feed_mm_min)?;
+    if let Some(f) = spec.feed_end_mm_min {
+        check_positive("the feed at the end of a pass", f)?;
+    }
     check_positive("the spindle speed", spec.spindle_rpm)?;
     check_positive("the tool radius", spec.cutter.radius_mm)?;
     if !(spec.clearance_mm >= 0.0 && spec.clearance_mm.is_finite()) {
@@ -312,13 +319,13 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
     let passes = (width / stepover - 1e-9).ceil().max(0.0) as usize + 1;
 
     let mut postures = Vec::with_capacity(passes * (n_points + 2));
-    let posture = |position: Point3, axis: Vec3, motion, contact| Posture {
+    let posture = |position: Point3, axis: Vec3, motion, contact, feed: f64| Posture {
         position,
         axis,
         motion,
         arc: None,
         contact,
-        feed_mm_min: Some(spec.feed_mm_min),
+        feed_mm_min: Some(feed),
         spindle_rpm: Some(spec.spindle_rpm),
         line: 0,
     };
@@ -345,16 +352,23 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         };
         let approach = first.0 + first.1 * spec.clearance_mm;
         let retract = last.0 + last.1 * spec.clearance_mm;
-        postures.push(posture(approach, first.1, MotionKind::Rapid, None));
-        for (tip, axis, st) in &pass {
+        let f0 = spec.feed_mm_min;
+        postures.push(posture(approach, first.1, MotionKind::Rapid, None, f0));
+        for (i, (tip, axis, st)) in pass.iter().enumerate() {
             let contact = Contact {
                 point: st.cc,
                 normal: st.normal,
                 normal_derived: false,
             };
-            postures.push(posture(*tip, *axis, MotionKind::Cut, Some(contact)));
+            // The move ending at point i runs at the feed of its end along the pass.
+            let feed = match spec.feed_end_mm_min {
+                Some(f1) if pass.len() > 1 => f0 + (f1 - f0) * i as f64 / (pass.len() - 1) as f64,
+                _ => f0,
+            };
+            postures.push(posture(*tip, *axis, MotionKind::Cut, Some(contact), feed));
         }
-        postures.push(posture(retract, last.1, MotionKind::Rapid, None));
+        let f_last = spec.feed_end_mm_min.unwrap_or(f0);
+        postures.push(posture(retract, last.1, MotionKind::Rapid, None, f_last));
     }
 
     let tool = ToolData {
@@ -596,6 +610,41 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn feed_falls_linearly_along_every_pass() {
+        // 001 Fig 6: 4000 → 500 mm/min along a 10 mm pass, CC points every 1 mm.
+        let mut spec = PathSpec::new(
+            Surface::Plane,
+            torus(),
+            Orientation::TiltYaw {
+                tilt_rad: 1f64.to_radians(),
+                yaw_rad: 0.0,
+            },
+            Step::Stepover { spacing_mm: 2.0 },
+            (10.0, 4.0),
+        );
+        spec.point_step_mm = 1.0;
+        spec.pattern = Pattern::Zigzag;
+        spec.feed_mm_min = 4000.0;
+        spec.feed_end_mm_min = Some(500.0);
+        let s = generate(&spec).unwrap();
+        let path = &s.program.paths[0];
+        assert_eq!(s.passes, 3);
+        for r in path.cutting_runs() {
+            let cuts: Vec<&Posture> = path.postures[r.start + 1..r.end]
+                .iter()
+                .filter(|p| p.contact.is_some())
+                .collect();
+            assert_eq!(cuts.len(), 11);
+            for (i, p) in cuts.iter().enumerate() {
+                let want = 4000.0 - 350.0 * i as f64;
+                assert!((p.feed_mm_min.unwrap() - want).abs() < 1e-9, "{i}");
+            }
+        }
+        spec.feed_end_mm_min = Some(-1.0);
+        assert!(generate(&spec).is_err());
     }
 
     #[test]
