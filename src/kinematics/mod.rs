@@ -321,25 +321,27 @@ pub fn plan_path(
 /// Predicted CL feed per posture, mm/min (Level 2, Eq 6), same length as `path.postures`.
 /// This is what `resample` and `simulate` take as `posture_feed_mm_min`.
 ///
-/// A move that starts and ends at rest (between exact stops, or at the segment cuts of the
-/// planner) has zero feed at both postures, and a clock rebuilt from posture feeds
-/// (001 Eq 1, Δt = 2L/(V_i + V_{i+1})) would never cross it. Both ends of such a move get
-/// the move's mean feed L/Δt from the plan instead, so that it keeps its planned duration
-/// (the neighbouring moves that start or end there then run slightly faster than planned).
+/// Moves whose speed peaks far above both ends break a clock rebuilt from posture feeds
+/// (001 Eq 1, Δt = 2L/(V_i + V_{i+1})): a move that starts and ends at (or very near) rest,
+/// between exact stops or at the segment cuts of the planner, would take for ever. Where
+/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), both ends get
+/// the move's mean feed L/Δt from the plan instead, so that the move keeps about its
+/// planned duration (the neighbouring moves that start or end there then run a little
+/// faster than planned).
 pub fn predict_posture_feed(
     path: &Toolpath,
     machine: &Machine,
 ) -> Result<Vec<f64>, KinematicsError> {
     let plan = plan_path(path, machine, Level::Jerk)?;
-    let mut feed: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
-    let at_rest: Vec<bool> = feed.iter().map(|f| *f <= 1e-9).collect();
+    let planned: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
+    let mut feed = planned.clone();
     let ps = &path.postures;
-    for k in 0..feed.len().saturating_sub(1) {
-        if at_rest[k] && at_rest[k + 1] {
-            let l = (ps[k + 1].position - ps[k].position).norm();
-            let dt = plan.postures[k + 1].t_s - plan.postures[k].t_s;
-            if l > 0.0 && dt > 0.0 {
-                let v = l / dt * 60.0;
+    for k in 0..planned.len().saturating_sub(1) {
+        let l = (ps[k + 1].position - ps[k].position).norm();
+        let dt = plan.postures[k + 1].t_s - plan.postures[k].t_s;
+        if l > 0.0 && dt > 0.0 {
+            let v = l / dt * 60.0;
+            if planned[k] + planned[k + 1] < v {
                 feed[k] = feed[k].max(v);
                 feed[k + 1] = feed[k + 1].max(v);
             }
