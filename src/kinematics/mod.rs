@@ -324,26 +324,29 @@ pub fn plan_path(
 /// Moves whose speed peaks far above both ends break a clock rebuilt from posture feeds
 /// (001 Eq 1, Δt = 2L/(V_i + V_{i+1})): a move that starts and ends at (or very near) rest,
 /// between exact stops or at the segment cuts of the planner, would take for ever. Where
-/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), both ends get
-/// the move's mean feed L/Δt from the plan instead, so that the move keeps about its
-/// planned duration (the neighbouring moves that start or end there then run a little
-/// faster than planned).
+/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), the move's end
+/// posture (its start for the last move) gets the feed that makes Eq 1 give the planned
+/// time, 2L/Δt − V_i; the path's first and last postures keep their zero feed (the next
+/// move then starts a little faster than planned).
 pub fn predict_posture_feed(
     path: &Toolpath,
     machine: &Machine,
 ) -> Result<Vec<f64>, KinematicsError> {
     let plan = plan_path(path, machine, Level::Jerk)?;
-    let planned: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
-    let mut feed = planned.clone();
+    let mut feed: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
     let ps = &path.postures;
-    for k in 0..planned.len().saturating_sub(1) {
+    let n = feed.len();
+    for k in 0..n.saturating_sub(1) {
         let l = (ps[k + 1].position - ps[k].position).norm();
         let dt = plan.postures[k + 1].t_s - plan.postures[k].t_s;
         if l > 0.0 && dt > 0.0 {
             let v = l / dt * 60.0;
-            if planned[k] + planned[k + 1] < v {
-                feed[k] = feed[k].max(v);
-                feed[k + 1] = feed[k + 1].max(v);
+            if feed[k] + feed[k + 1] < v {
+                if k + 2 < n {
+                    feed[k + 1] = 2.0 * v - feed[k];
+                } else if k > 0 {
+                    feed[k] = 2.0 * v - feed[k + 1];
+                }
             }
         }
     }
