@@ -13,3 +13,8 @@ target/release/crest report --measured samples/measured/marin2023-table2.csv \
 # The same table against the simulated surface (z-map of the edges); also exits 1.
 target/release/crest report --measured samples/measured/marin2023-table2.csv \
   --study samples/studies/marin2023-simulate.toml -o reports/marin2023-simulate --tolerance-pct 20 || true
+# 001 §4: factor effects of the 16-run and the 6-level yaw designs (Fig 11, Fig 12).
+sh reports/lavernhe-doe/regenerate.sh
+# 001 Fig 6 (feed falling along a pass) and Fig 7 (extruded parabola, passes at 45°).
+sh reports/lavernhe-fig6/regenerate.sh
+sh reports/lavernhe-fig7/regenerate.sh

@@ -160,6 +160,13 @@ pub struct Design {
     pub model: String,
     /// Largest spindle step of the ICE model, degrees (default 0.25, as model.md R7).
     pub dtheta_deg: Option<f64>,
+    /// How a scallop height becomes a pass interval: `exact` (default: the exact swept
+    /// envelope of the simulated posture, convention A, model.md R6) or `convention-b` (the
+    /// exact envelope of the convention-B posture, yaw as a side tilt about f, while the
+    /// surface is still cut in convention A: a CAM system that reads the angles the other
+    /// way; it comes closer to the trials' printed steps, model.md R6).
+    #[serde(default = "default_step_rule")]
+    pub step_rule: String,
     /// Response symbols (areal parameters such as `Sz`, `Sq`).
     pub responses: Vec<String>,
     /// The factors and their levels.
@@ -168,6 +175,10 @@ pub struct Design {
 
 fn default_pattern() -> String {
     "one-way".to_string()
+}
+
+fn default_step_rule() -> String {
+    "exact".to_string()
 }
 
 fn default_model() -> String {
@@ -265,6 +276,15 @@ impl Design {
             return Err(at(
                 "model",
                 format!("model must be ice or dome, got '{}'", design.model),
+            ));
+        }
+        if !matches!(design.step_rule.as_str(), "exact" | "convention-b") {
+            return Err(at(
+                "step_rule",
+                format!(
+                    "step_rule must be exact or convention-b, got '{}'",
+                    design.step_rule
+                ),
             ));
         }
         if let Some(d) = design.dtheta_deg {
@@ -560,6 +580,16 @@ pub fn run_window(design: &Design, reach_mm: (f64, f64), fz_mm: f64, step_mm: f6
     }
 }
 
+/// The tool axis in (f, g, n) by convention B of model.md §7: lead λ about g, then a side
+/// tilt ψ about f, `a = R_f(ψ)(sin λ f + cos λ n)`.
+pub fn convention_b_axis(tilt_rad: f64, yaw_rad: f64) -> crate::math::Vec3 {
+    crate::math::Vec3::new(
+        tilt_rad.sin(),
+        -yaw_rad.sin() * tilt_rad.cos(),
+        yaw_rad.cos() * tilt_rad.cos(),
+    )
+}
+
 /// Simulate one run of a design: the synthetic path (plane, passes along +x, tool posture
 /// by convention A, pass interval from the scallop by the exact swept envelope), resampled
 /// at a constant spindle step, the surface model of the design on [`run_window`], and the
@@ -586,8 +616,12 @@ pub fn simulate_run(
     let step_mm = match p.step {
         StepSpec::StepoverMm(s) => s,
         StepSpec::ScallopUm(h) => {
-            crate::synth::exact_step_mm(cutter, &orientation.axis_fgn(), h * 1e-3)
-                .map_err(|e| e.to_string())?
+            let axis = if design.step_rule == "convention-b" {
+                convention_b_axis(p.tilt_deg.to_radians(), p.yaw_deg.to_radians())
+            } else {
+                orientation.axis_fgn()
+            };
+            crate::synth::exact_step_mm(cutter, &axis, h * 1e-3).map_err(|e| e.to_string())?
         }
     };
     let z = cutter.teeth().max(1) as f64;
@@ -957,6 +991,34 @@ mod tests {
         let (along, _) = reach_mm(&cutter, &a1, REACH_HEIGHT_MM).unwrap();
         let want = REACH_HEIGHT_MM / 1f64.to_radians().tan();
         assert!((along - want).abs() < 0.05, "{along} vs {want}");
+    }
+
+    #[test]
+    fn convention_b_gives_the_r6_step_of_test_4() {
+        // model.md R6, test 4 (B): yaw 20°, tilt 10°, h = 10 µm → s = 0.5259 mm; A: 1.2385.
+        let cutter = crate::tool::Cutter::new(
+            crate::tool::Shape::Torus {
+                corner_radius_mm: 1.5,
+            },
+            5.0,
+            1,
+            0.0,
+        );
+        let (l, p) = (10f64.to_radians(), 20f64.to_radians());
+        let b = crate::synth::exact_step_mm(&cutter, &convention_b_axis(l, p), 0.01).unwrap();
+        assert!((b - 0.5259).abs() < 1e-3, "{b}");
+        let a = crate::synth::exact_step_mm(&cutter, &crate::synth::axis_convention_a(l, p), 0.01)
+            .unwrap();
+        assert!((a - 1.2385).abs() < 1e-3, "{a}");
+        // Without yaw the conventions agree.
+        let a0 = crate::synth::axis_convention_a(l, 0.0);
+        assert!((convention_b_axis(l, 0.0) - a0).norm() < 1e-15);
+        let (_, msg) = design_err(&format!(
+            "step_rule = \"cam\"\n{}",
+            "surface = \"plane\"\ntool = \"t\"\nrpm = 1.0\ngrid_um = 1.0\nresponses = [\"Sq\"]\n\
+             [factors]\nscallop_um = [5.0]\nfeed_mm_min = [1.0]\n"
+        ));
+        assert!(msg.contains("convention-b"), "{msg}");
     }
 
     fn design_err(text: &str) -> (usize, String) {
