@@ -324,9 +324,9 @@ pub fn plan_path(
 /// Moves whose speed peaks far above both ends break a clock rebuilt from posture feeds
 /// (001 Eq 1, Δt = 2L/(V_i + V_{i+1})): a move that starts and ends at (or very near) rest,
 /// between exact stops or at the segment cuts of the planner, would take for ever. Where
-/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), the move's end
-/// posture (its start for the last move) gets the feed that makes Eq 1 give the planned
-/// time, 2L/Δt − V_i; the path's first and last postures keep their zero feed (the next
+/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), the feed
+/// move's end posture (its start when the end is an exact stop) gets the feed that makes
+/// Eq 1 give the planned time, 2L/Δt − V_i; exact stops keep their zero feed (the next
 /// move then starts a little faster than planned).
 pub fn predict_posture_feed(
     path: &Toolpath,
@@ -336,15 +336,21 @@ pub fn predict_posture_feed(
     let mut feed: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
     let ps = &path.postures;
     let n = feed.len();
+    let is_feed = |m: MotionKind| matches!(m, MotionKind::Cut | MotionKind::Cycle);
     for k in 0..n.saturating_sub(1) {
+        if !is_feed(ps[k + 1].motion) {
+            continue; // rapids are not resampled
+        }
         let l = (ps[k + 1].position - ps[k].position).norm();
         let dt = plan.postures[k + 1].t_s - plan.postures[k].t_s;
         if l > 0.0 && dt > 0.0 {
             let v = l / dt * 60.0;
             if feed[k] + feed[k + 1] < v {
-                if k + 2 < n {
+                // Exact stops (path ends, feed/rapid changes) keep their zero feed.
+                let end_stops = k + 2 >= n || !is_feed(ps[k + 2].motion);
+                if !end_stops {
                     feed[k + 1] = 2.0 * v - feed[k];
-                } else if k > 0 {
+                } else if k > 0 && is_feed(ps[k].motion) {
                     feed[k] = 2.0 * v - feed[k + 1];
                 }
             }
