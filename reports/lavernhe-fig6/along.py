@@ -88,6 +88,7 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    plt.rcParams["svg.hashsalt"] = "crest"  # reproducible ids
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     ax[0].plot(mid, spacing, ".", ms=4, label="crest spacing (simulated)")
     xs = np.linspace(x[0], x[-1], 2000)
@@ -102,7 +103,7 @@ def main():
     ax[1].legend()
     fig.suptitle("001 Fig 6: feed falling linearly along the pass")
     fig.tight_layout()
-    fig.savefig(f"{out}/along.svg")
+    fig.savefig(f"{out}/along.svg", metadata={"Date": None})
 
 
 if __name__ == "__main__":
