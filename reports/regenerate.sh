@@ -18,3 +18,6 @@ sh reports/lavernhe-doe/regenerate.sh
 # 001 Fig 6 (feed falling along a pass) and Fig 7 (extruded parabola, passes at 45°).
 sh reports/lavernhe-fig6/regenerate.sh
 sh reports/lavernhe-fig7/regenerate.sh
+
+# Feed prediction on the 000 hyperbolic paraboloid (issue 8): Fig 5 and Fig 11.
+sh reports/feed-paraboloid/regenerate.sh

@@ -44,6 +44,37 @@ pub enum LevelArg {
     Acc,
 }
 
+/// The `--feed` values of `crest resample` and `crest simulate`: which feed drives the
+/// clock and the feed per tooth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeedSource {
+    /// The programmed feed (FEDRAT, or `--feed-mm-min`).
+    Programmed,
+    /// The feed the machine of `--machine` really reaches (`crest feed`, Level 2, Eq 6).
+    Predicted,
+}
+
+/// Resolve `--feed` and `--machine` of `resample` / `simulate`: the machine to plan on, or
+/// `None` for the programmed feed. `--feed predicted` needs `--machine`; `--machine` alone
+/// means `--feed predicted`; `--feed programmed` with `--machine` is refused (the machine
+/// would be ignored).
+pub fn resolve_feed_source(
+    feed: Option<FeedSource>,
+    machine: Option<&Path>,
+) -> miette::Result<Option<Machine>> {
+    match (feed, machine) {
+        (Some(FeedSource::Predicted), None) => Err(miette::miette!(
+            "--feed predicted needs the machine: add --machine MACHINE.toml"
+        )),
+        (Some(FeedSource::Programmed), Some(m)) => Err(miette::miette!(
+            "--machine {} is only used with --feed predicted (drop --feed programmed or --machine)",
+            m.display()
+        )),
+        (Some(FeedSource::Predicted) | None, Some(m)) => Ok(Some(read_machine(m)?)),
+        (Some(FeedSource::Programmed) | None, None) => Ok(None),
+    }
+}
+
 /// Read `path` as a machine description; errors name the file and line.
 pub fn read_machine(path: &Path) -> miette::Result<Machine> {
     let text = std::fs::read_to_string(path)

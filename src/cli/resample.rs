@@ -64,9 +64,14 @@ pub struct Args {
     /// Constant feed, mm/min, overriding the file's FEDRAT.
     #[arg(long)]
     pub feed_mm_min: Option<f64>,
-    /// Machine description (`machine.toml`): the feed at every posture is then the one
-    /// the machine really reaches (`crest feed`, kinematics.md), linear in time between
-    /// postures (model.md §5.3), instead of the programmed feed.
+    /// Which feed drives the clock and the spacing: `programmed` (FEDRAT or
+    /// `--feed-mm-min`) or `predicted` (the feed the machine of `--machine` really reaches,
+    /// `crest feed`, kinematics.md; linear in time between postures, model.md §5.3).
+    /// Default: `programmed`, or `predicted` when `--machine` is given.
+    #[arg(long, value_enum, value_name = "SOURCE")]
+    pub feed: Option<super::feed::FeedSource>,
+    /// Machine description (`machine.toml`) for `--feed predicted` (given alone, it implies
+    /// `--feed predicted`).
     #[arg(long, value_name = "MACHINE.toml", conflicts_with = "feed_mm_min")]
     pub machine: Option<PathBuf>,
     /// Tool-axis interpolation.
@@ -138,10 +143,7 @@ fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<Vec<PathRep
         None => (0..program.paths.len()).collect(),
     };
 
-    let machine = match &args.machine {
-        Some(m) => Some(super::feed::read_machine(m)?),
-        None => None,
-    };
+    let machine = super::feed::resolve_feed_source(args.feed, args.machine.as_deref())?;
     let mut path_opts = Vec::with_capacity(selected.len());
     for &idx in &selected {
         let mut o = opts.clone();
@@ -499,6 +501,7 @@ fn report(args: &Args, opts: &Options, per_path: &[PathReport]) {
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
             "machine": args.machine.as_ref().map(|m| m.display().to_string()),
+            "feed": if machine.is_some() { "predicted" } else { "programmed" },
             "samples": samples,
             "runs": runs,
             "paths": paths,

@@ -50,6 +50,16 @@ pub struct Args {
     /// Feed per tooth, mm (default: feed / (teeth × rpm)).
     #[arg(long, value_name = "F")]
     pub fz_mm: Option<f64>,
+    /// Which feed moves the tool: `programmed` (FEDRAT, or `--feed-mm-min`) or `predicted`
+    /// (the feed the machine of `--machine` really reaches, `crest feed`, kinematics.md;
+    /// the spindle speed stays fixed, so the feed per tooth follows the feed).
+    /// Default: `programmed`, or `predicted` when `--machine` is given.
+    #[arg(long, value_enum, value_name = "SOURCE")]
+    pub feed: Option<super::feed::FeedSource>,
+    /// Machine description (`machine.toml`) for `--feed predicted` (given alone, it implies
+    /// `--feed predicted`). With `--feed-mm-min V`, the machine is planned at V.
+    #[arg(long, value_name = "MACHINE.TOML")]
+    pub machine: Option<PathBuf>,
     /// Surface model.
     #[arg(long, value_enum)]
     pub model: ModelName,
@@ -335,6 +345,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     };
     let program = super::input::read_program(&args.file)?;
     let cutting = resolve_cutting(&args, &process, &program, cutter.teeth())?;
+    let machine = super::feed::resolve_feed_source(args.feed, args.machine.as_deref())?;
     let ap_mm = args.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
         return Err(miette!("--ap-mm must be positive, got {ap_mm}"));
@@ -374,7 +385,19 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     for &i in &paths {
         let path = &program.paths[i];
         let first_run = samples.last().map_or(0, |s| s.run + 1);
-        let mut got = resample::resample(path, &ropts).map_err(|e| {
+        let mut popts = ropts.clone();
+        if let Some(m) = &machine {
+            popts.posture_feed_mm_min =
+                Some(predicted_feed(path, m, cutting.feed_mm_min).map_err(|e| {
+                    miette!(
+                        "{}: tool path {} ({}): feed prediction: {e}",
+                        args.file.display(),
+                        i + 1,
+                        path.name
+                    )
+                })?);
+        }
+        let mut got = resample::resample(path, &popts).map_err(|e| {
             miette!(
                 "{}: tool path {} ({}): {e}",
                 args.file.display(),
@@ -427,7 +450,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
     let elapsed = started.elapsed().as_secs_f64();
     if args.json {
-        let j = summary(&args, &sim, &cutting, ap_mm, samples.len(), elapsed);
+        let mut j = summary(&args, &sim, &cutting, ap_mm, samples.len(), elapsed);
+        j["feed"] = feed_summary(&args, machine.is_some(), &samples);
         println!("{j}");
     } else {
         let st = HeightStats::of(&sim.map.z_um);
@@ -445,6 +469,57 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
     }
     Ok(Outcome::Ok)
+}
+
+/// The predicted feed per posture (mm/min) of `path` on `machine`; with a feed override
+/// the machine is planned at that programmed feed.
+fn predicted_feed(
+    path: &crate::toolpath::Toolpath,
+    machine: &crate::kinematics::Machine,
+    feed_override: Option<f64>,
+) -> Result<Vec<f64>, crate::kinematics::KinematicsError> {
+    match feed_override {
+        Some(f) => {
+            let mut p = path.clone();
+            for q in &mut p.postures {
+                q.feed_mm_min = Some(f);
+            }
+            crate::kinematics::predict_posture_feed(&p, machine)
+        }
+        None => crate::kinematics::predict_posture_feed(path, machine),
+    }
+}
+
+/// The `feed` object of the JSON summary: which feed was used, the machine, the cutting
+/// time of the resampled runs and the feed range of the samples.
+fn feed_summary(args: &Args, predicted: bool, samples: &[Sample]) -> serde_json::Value {
+    // t restarts at every run: the cutting time is the sum of the runs' last stamps.
+    let mut cut_time = 0.0;
+    let mut run_end = 0.0f64;
+    let mut run = None;
+    let (mut fmin, mut fmax, mut fsum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+    for s in samples {
+        if run != Some(s.run) {
+            cut_time += run_end;
+            run_end = 0.0;
+            run = Some(s.run);
+        }
+        run_end = run_end.max(s.t_s);
+        fmin = fmin.min(s.feed_mm_min);
+        fmax = fmax.max(s.feed_mm_min);
+        fsum += s.feed_mm_min;
+    }
+    cut_time += run_end;
+    serde_json::json!({
+        "source": if predicted { "predicted" } else { "programmed" },
+        "machine": args.machine.as_ref().map(|m| m.display().to_string()),
+        "cut_time_s": num(cut_time),
+        "sample_feed_mm_min": {
+            "min": num(fmin),
+            "max": num(fmax),
+            "mean": num(fsum / samples.len().max(1) as f64),
+        },
+    })
 }
 
 /// Basic statistics of the finite heights, µm.

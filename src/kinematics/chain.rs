@@ -57,6 +57,50 @@ fn signed_angle(a: &Vec3, from: &Vec3, to: &Vec3) -> Option<f64> {
     Some(a.dot(&f.cross(&t)).atan2(f.dot(&t)))
 }
 
+/// Up to two rotary-axis indices, in machine-file order (no heap allocation).
+#[derive(Debug, Clone, Copy, Default)]
+struct AxisSet {
+    idx: [usize; 2],
+    n: usize,
+}
+
+impl AxisSet {
+    fn push(&mut self, i: usize) {
+        if self.n < 2 {
+            self.idx[self.n] = i;
+            self.n += 1;
+        }
+    }
+
+    fn iter(&self) -> std::slice::Iter<'_, usize> {
+        self.idx[..self.n].iter()
+    }
+
+    fn len(&self) -> usize {
+        self.n
+    }
+}
+
+/// Up to two rotary solutions (see [`Machine::rotary_solutions`]), without allocation.
+#[derive(Debug, Clone, Copy, Default)]
+struct Solutions {
+    sols: [[Option<f64>; 2]; 2],
+    n: usize,
+}
+
+impl Solutions {
+    fn push(&mut self, s: [Option<f64>; 2]) {
+        if self.n < 2 {
+            self.sols[self.n] = s;
+            self.n += 1;
+        }
+    }
+
+    fn as_slice(&self) -> &[[Option<f64>; 2]] {
+        &self.sols[..self.n]
+    }
+}
+
 /// A tool posture in the part frame: tip and unit axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
@@ -73,14 +117,18 @@ impl Machine {
         self.rotary[i].sign * q
     }
 
-    /// Indices of the table axes (base → part) and head axes (base → spindle).
-    fn sides(&self) -> (Vec<usize>, Vec<usize>) {
-        let t = (0..2)
-            .filter(|&i| self.rotary[i].side == Side::Table)
-            .collect();
-        let h = (0..2)
-            .filter(|&i| self.rotary[i].side == Side::Head)
-            .collect();
+    /// Indices of the table axes (base → part) and head axes (base → spindle). Fixed-size,
+    /// no allocation: this runs several times per posture.
+    fn sides(&self) -> (AxisSet, AxisSet) {
+        let mut t = AxisSet::default();
+        let mut h = AxisSet::default();
+        for i in 0..2 {
+            if self.rotary[i].side == Side::Table {
+                t.push(i);
+            } else {
+                h.push(i);
+            }
+        }
         (t, h)
     }
 
@@ -159,14 +207,49 @@ impl Machine {
         }
     }
 
+    /// Velocity of the tool tip relative to the part (part frame, mm per unit of the
+    /// parameter) when the joints move as `dq` from `q`: the exact derivative of
+    /// [`Machine::forward`]'s tip, propagated through the chain (a rotation by θ about the
+    /// line (c, a) maps a point velocity w to R w + θ̇ a × (x' − c)).
+    pub fn tip_velocity(&self, q: &Joints, dq: &Joints) -> Vec3 {
+        let (tab, head) = self.sides();
+        // Tip in the machine frame: linear displacement plus the head chain.
+        let mut x = self.tip_home;
+        let mut dx = Vec3::zeros();
+        for &i in head.iter().rev() {
+            let r = &self.rotary[i];
+            let th = self.rot(i, q[3 + i]);
+            let dth = r.sign * dq[3 + i];
+            x = rotate_point(&r.axis, &r.point, th, &x);
+            dx = rotate(&r.axis, th, &dx) + r.axis.cross(&(x - r.point)) * dth;
+        }
+        let mut p = Point3::from(self.linear_disp(q)) + x.coords;
+        let mut dp = dx + self.linear_disp(dq);
+        // Undo the table chain (outermost first).
+        for &i in tab.iter() {
+            let r = &self.rotary[i];
+            let th = -self.rot(i, q[3 + i]);
+            let dth = -r.sign * dq[3 + i];
+            p = rotate_point(&r.axis, &r.point, th, &p);
+            dp = rotate(&r.axis, th, &dp) + r.axis.cross(&(p - r.point)) * dth;
+        }
+        dp
+    }
+
     /// The rotary solutions (up to two, raw angles in rad) putting the part-frame tool axis
     /// `u` on the tool, or `None` when the orientation is out of reach. A `None` angle
     /// inside a solution means that axis is undefined at this posture (singular).
     pub fn rotary_solutions(&self, u: &Vec3) -> Option<Vec<[Option<f64>; 2]>> {
+        self.rotary_solutions_fixed(u)
+            .map(|s| s.as_slice().to_vec())
+    }
+
+    /// [`Machine::rotary_solutions`] without allocation (the IKT hot path).
+    fn rotary_solutions_fixed(&self, u: &Vec3) -> Option<Solutions> {
         let t0 = self.dir_home;
         let (tab, head) = self.sides();
         let [r0, r1] = &self.rotary;
-        let mut out = Vec::with_capacity(2);
+        let mut out = Solutions::default();
         // Each branch first fixes the "first-solved" axis `f`, then the other `o`.
         match (tab.len(), head.len()) {
             (2, 0) => {
@@ -286,10 +369,11 @@ impl<'m> IkTracker<'m> {
 
     /// Solve the next posture (tip `p`, unit axis `u`, part frame).
     pub fn solve(&mut self, p: &Point3, u: &Vec3) -> Result<Solved, IkFailure> {
-        let sols = self
+        let fixed = self
             .machine
-            .rotary_solutions(u)
+            .rotary_solutions_fixed(u)
             .ok_or(IkFailure::Unreachable)?;
+        let sols = fixed.as_slice();
         let prev = self.prev.unwrap_or([0.0; 5]);
         let mut best: Option<(f64, Joints, usize, bool)> = None;
         for (b, s) in sols.iter().enumerate() {
@@ -396,6 +480,41 @@ mod tests {
         assert_relative_eq!(got[0].1, -30.0, epsilon = 1e-9);
         assert_relative_eq!(got[1].0, -30.0, epsilon = 1e-9);
         assert_relative_eq!(got[1].1, 150.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn tip_velocity_is_the_derivative_of_forward() {
+        // Table–table AC, the 45° nutating variant, and a head/table split (A on the head).
+        let nut = include_str!("../../samples/machines/table1_nutating45.toml");
+        let cut = TABLE_I_AC_TOML.rfind("side = \"table\"").unwrap();
+        let split = format!(
+            "{}side = \"head\"{}",
+            &TABLE_I_AC_TOML[..cut],
+            &TABLE_I_AC_TOML[cut + "side = \"table\"".len()..]
+        );
+        for text in [TABLE_I_AC_TOML, nut, split.as_str()] {
+            let m = Machine::from_toml_str(text).unwrap();
+            for k in 0..20 {
+                let f = k as f64;
+                let q = [
+                    3.0 * f.sin(),
+                    -20.0 + f,
+                    5.0 * f.cos(),
+                    0.3 * (0.7 * f).sin(),
+                    1.3 * f,
+                ];
+                let dq = [0.2 * f.cos(), 0.9, -0.1 * f, 0.05 * f.sin(), 0.3 - 0.02 * f];
+                let h = 1e-5;
+                let (mut qp, mut qm) = (q, q);
+                for i in 0..5 {
+                    qp[i] += dq[i] * h;
+                    qm[i] -= dq[i] * h;
+                }
+                let fd = (m.forward(&qp).tip - m.forward(&qm).tip) / (2.0 * h);
+                let an = m.tip_velocity(&q, &dq);
+                assert!((fd - an).norm() < 1e-6 * (1.0 + an.norm()), "{fd} vs {an}");
+            }
+        }
     }
 
     #[test]

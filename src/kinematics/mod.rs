@@ -269,20 +269,13 @@ pub fn plan_poses(
 }
 
 /// Eq 6: speed of the tool tip relative to the part when the joints move as q̇ = g·ṡ,
-/// by a central difference of the forward kinematics to the part frame.
+/// from the derivative of the forward kinematics to the part frame
+/// ([`Machine::tip_velocity`]).
 pub fn cl_speed(machine: &Machine, q: &Joints, g: &Joints, path_speed: f64) -> f64 {
     if path_speed == 0.0 {
         return 0.0;
     }
-    let h = 1e-4; // mm of path parameter
-    let mut qp = *q;
-    let mut qm = *q;
-    for i in 0..5 {
-        qp[i] += g[i] * h;
-        qm[i] -= g[i] * h;
-    }
-    let d = machine.forward(&qp).tip - machine.forward(&qm).tip;
-    d.norm() / (2.0 * h) * path_speed
+    machine.tip_velocity(q, g).norm() * path_speed
 }
 
 /// Turn a tool path into planner input: the programmed feed of each move (rapids and
@@ -327,12 +320,43 @@ pub fn plan_path(
 
 /// Predicted CL feed per posture, mm/min (Level 2, Eq 6), same length as `path.postures`.
 /// This is what `resample` and `simulate` take as `posture_feed_mm_min`.
+///
+/// Moves whose speed peaks far above both ends break a clock rebuilt from posture feeds
+/// (001 Eq 1, Δt = 2L/(V_i + V_{i+1})): a move that starts and ends at (or very near) rest,
+/// between exact stops or at the segment cuts of the planner, would take for ever. Where
+/// Eq 1 would take more than twice the planned time (V_i + V_{i+1} < L/Δt), the feed
+/// move's end posture (its start when the end is an exact stop) gets the feed that makes
+/// Eq 1 give the planned time, 2L/Δt − V_i; exact stops keep their zero feed (the next
+/// move then starts a little faster than planned).
 pub fn predict_posture_feed(
     path: &Toolpath,
     machine: &Machine,
 ) -> Result<Vec<f64>, KinematicsError> {
     let plan = plan_path(path, machine, Level::Jerk)?;
-    Ok(plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect())
+    let mut feed: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
+    let ps = &path.postures;
+    let n = feed.len();
+    let is_feed = |m: MotionKind| matches!(m, MotionKind::Cut | MotionKind::Cycle);
+    for k in 0..n.saturating_sub(1) {
+        if !is_feed(ps[k + 1].motion) {
+            continue; // rapids are not resampled
+        }
+        let l = (ps[k + 1].position - ps[k].position).norm();
+        let dt = plan.postures[k + 1].t_s - plan.postures[k].t_s;
+        if l > 0.0 && dt > 0.0 {
+            let v = l / dt * 60.0;
+            if feed[k] + feed[k + 1] < v {
+                // Exact stops (path ends, feed/rapid changes) keep their zero feed.
+                let end_stops = k + 2 >= n || !is_feed(ps[k + 2].motion);
+                if !end_stops {
+                    feed[k + 1] = 2.0 * v - feed[k];
+                } else if k > 0 && is_feed(ps[k].motion) {
+                    feed[k] = 2.0 * v - feed[k + 1];
+                }
+            }
+        }
+    }
+    Ok(feed)
 }
 
 /// Helper for tests and examples: a pose from tip coordinates and tool-axis tilt and
