@@ -110,12 +110,16 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
     // The predicted feed needs the whole path (feed planning): in memory. Otherwise the
     // file is read, resampled and written posture by posture.
-    let per_path = if args.machine.is_some() {
+    // The predicted feed needs the whole path (`--machine`, `--feed predicted`, and the
+    // invalid combinations, reported there as before): in memory.
+    let in_memory =
+        args.machine.is_some() || matches!(args.feed, Some(super::feed::FeedSource::Predicted));
+    let (per_path, predicted) = if in_memory {
         resample_in_memory(&args, &opts)?
     } else {
-        resample_streaming(&args, &opts)?
+        (resample_streaming(&args, &opts)?, false)
     };
-    report(&args, &opts, &per_path);
+    report(&args, &opts, &per_path, predicted);
     Ok(Outcome::Ok)
 }
 
@@ -129,7 +133,8 @@ struct PathReport {
 }
 
 /// Resample with the whole file in memory (needed for the predicted feed).
-fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<Vec<PathReport>> {
+/// Returns the reports and whether the feed was predicted.
+fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathReport>, bool)> {
     let program = super::input::read_program(&args.file)?;
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
@@ -190,7 +195,7 @@ fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<Vec<PathRep
         return Err(path_error(&args.file, &name, e));
     }
     written.map_err(|e| miette::miette!("{}: {e}", args.output.display()))?;
-    Ok(per_path)
+    Ok((per_path, machine.is_some()))
 }
 
 /// The spindle speed of every streamed tool path (in order), when known beforehand.
@@ -476,7 +481,7 @@ fn path_error(file: &Path, name: &str, e: ResampleError) -> miette::Report {
     )
 }
 
-fn report(args: &Args, opts: &Options, per_path: &[PathReport]) {
+fn report(args: &Args, opts: &Options, per_path: &[PathReport], predicted: bool) {
     let samples: u64 = per_path.iter().map(|p| p.stats.samples).sum();
     let runs: usize = per_path.iter().map(|p| p.stats.runs).sum();
     if args.json {
@@ -501,7 +506,7 @@ fn report(args: &Args, opts: &Options, per_path: &[PathReport]) {
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
             "machine": args.machine.as_ref().map(|m| m.display().to_string()),
-            "feed": if machine.is_some() { "predicted" } else { "programmed" },
+            "feed": if predicted { "predicted" } else { "programmed" },
             "samples": samples,
             "runs": runs,
             "paths": paths,
