@@ -150,11 +150,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "self_check_ok": all_ok,
             "paths": paths,
         });
-        let mut stdout = std::io::stdout().lock();
-        serde_json::to_writer(&mut stdout, &v).map_err(|e| miette::miette!("{e}"))?;
-        writeln!(stdout).map_err(|e| miette::miette!(e))?;
+        outln!("{v}");
     } else {
-        let mut stdout = std::io::stdout().lock();
         let mut lines = String::new();
         lines.push_str(&format!("{file} on \"{}\"\n", machine.name));
         for (path, _, plan) in &plans {
@@ -176,9 +173,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         lines.push_str(&format!(
             "total {total:.3} s, programmed {programmed:.3} s, ratio {ratio:.3}\n"
         ));
-        stdout
-            .write_all(lines.as_bytes())
-            .map_err(|e| miette::miette!(e))?;
+        outln!("{}", lines.trim_end_matches('\n'));
     }
     Ok(if all_ok {
         Outcome::Ok

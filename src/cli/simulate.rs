@@ -452,10 +452,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if args.json {
         let mut j = summary(&args, &sim, &cutting, ap_mm, samples.len(), elapsed);
         j["feed"] = feed_summary(&args, machine.is_some(), &samples);
-        println!("{j}");
+        outln!("{j}");
     } else {
         let st = HeightStats::of(&sim.map.z_um);
-        println!(
+        outln!(
             "{}: {} × {} nodes at {} µm, {} cut; heights {:.4}..{:.4} µm (Sq {:.4} µm); {:.2} s",
             args.output.display(),
             sim.map.nx,

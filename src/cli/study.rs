@@ -162,9 +162,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             },
             "time_s": num(elapsed),
         });
-        println!("{j}");
+        outln!("{j}");
     } else {
-        println!(
+        outln!(
             "{}: {n_runs} runs in {elapsed:.1} s; wrote {}, {} and {} chart(s)",
             file,
             runs_csv.display(),
@@ -178,7 +178,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 .zip(&e.relative_first)
                 .map(|(f, v)| format!("{} {:+.1} %", f.name, 100.0 * v))
                 .collect();
-            println!("  {name}: mean {:.4}; EF_i1/M {}", e.mean, rel.join(", "));
+            outln!("  {name}: mean {:.4}; EF_i1/M {}", e.mean, rel.join(", "));
         }
     }
     Ok(Outcome::Ok)

@@ -220,9 +220,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "feed_end_mm_min": args.feed_end_mm_min,
             "rpm": args.rpm,
         });
-        println!("{report}");
+        outln!("{report}");
     } else {
-        println!(
+        outln!(
             "wrote {}: {} passes of {} points, stepover {:.4} mm, {} postures",
             args.output.display(),
             synth.passes,

@@ -217,6 +217,6 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             t.effective_radius_error_pct
         );
     }
-    print!("{s}");
+    outln!("{}", s.trim_end_matches('\n'));
     Ok(Outcome::Ok)
 }
