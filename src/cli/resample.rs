@@ -119,7 +119,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     } else {
         (resample_streaming(&args, &opts)?, false)
     };
-    report(&args, &opts, &per_path, predicted);
+    report(&args, &opts, &per_path, predicted)?;
     Ok(Outcome::Ok)
 }
 
@@ -481,7 +481,12 @@ fn path_error(file: &Path, name: &str, e: ResampleError) -> miette::Report {
     )
 }
 
-fn report(args: &Args, opts: &Options, per_path: &[PathReport], predicted: bool) {
+fn report(
+    args: &Args,
+    opts: &Options,
+    per_path: &[PathReport],
+    predicted: bool,
+) -> miette::Result<()> {
     let samples: u64 = per_path.iter().map(|p| p.stats.samples).sum();
     let runs: usize = per_path.iter().map(|p| p.stats.runs).sum();
     if args.json {
@@ -511,9 +516,9 @@ fn report(args: &Args, opts: &Options, per_path: &[PathReport], predicted: bool)
             "runs": runs,
             "paths": paths,
         });
-        println!("{out}");
+        outln!("{out}");
     } else {
-        println!(
+        outln!(
             "{}: {samples} samples in {runs} cutting run(s) of {} tool path(s)",
             args.output.display(),
             per_path.len()
@@ -525,6 +530,7 @@ fn report(args: &Args, opts: &Options, per_path: &[PathReport], predicted: bool)
             );
         }
     }
+    Ok(())
 }
 
 /// The CSV sink: rows are formatted into a buffer that goes to the output in 64 KiB
