@@ -242,7 +242,7 @@ fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
 }
 
 fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
-    use crate::report::runout::{lateral_chart, lateral_curves_for};
+    use crate::report::runout::{default_marked_heights_mm, lateral_chart, lateral_curves_for};
     let format = Format::from_path(&a.common.output).ok_or_else(|| {
         miette!(
             "{}: unknown plot format (use .svg or .png)",
@@ -266,9 +266,7 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
         ));
     }
     let marks: Vec<f64> = if a.heights_mm.is_empty() {
-        (0..6)
-            .map(|i| top * (1.0 - (10.0 + 15.0 * i as f64).to_radians().cos()))
-            .collect()
+        default_marked_heights_mm(&cutter)
     } else {
         a.heights_mm.clone()
     };

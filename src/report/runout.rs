@@ -426,10 +426,7 @@ impl Study {
         if !self.tool_heights_mm.is_empty() {
             return self.tool_heights_mm.clone();
         }
-        let c = cutter.corner_radius_mm();
-        (0..6)
-            .map(|i| c * (1.0 - (10.0 + 15.0 * i as f64).to_radians().cos()))
-            .collect()
+        default_marked_heights_mm(cutter)
     }
 
     /// A label for the series a case belongs to: every swept key except the x axis (and,
@@ -509,6 +506,15 @@ pub struct LateralCurve {
     pub curve: Vec<(f64, f64)>,
     /// (tool height mm, spread µm) at the marked heights.
     pub marks: Vec<(f64, f64)>,
+}
+
+/// Six tool heights spread over the end, mm: where the corner's normal is 10°, 25°, …, 85°
+/// from the axis.
+pub fn default_marked_heights_mm(cutter: &Cutter) -> Vec<f64> {
+    let c = cutter.corner_radius_mm();
+    (0..6)
+        .map(|i| c * (1.0 - (10.0 + 15.0 * i as f64).to_radians().cos()))
+        .collect()
 }
 
 /// The lateral run-out curves of the tool's own run-out for each lead of the study.

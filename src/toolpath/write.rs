@@ -106,6 +106,69 @@ const DIGIT_PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
 6061626364656667686970717273747576777879\
 8081828384858687888990919293949596979899";
 
+/// Append `v` with exactly `dec` decimals (`dec ≤ 9`) as `format!("{v:.dec$}")` does:
+/// the sign of negative values (and −0) kept, ties to even. The integer part is split off
+/// exactly, so only a fraction within 2^-33 of a half-way point of the last digit could
+/// round differently from `format!`. Values of 2^53 and beyond and non-finite ones go
+/// through `format!` itself. No libm calls and one copy a number: this prints 40 numbers
+/// a sample in `crest resample`. [`push_fixed`] is the
+/// variant that trims trailing zeros and rounds half away from zero (CLSF and contact12).
+pub fn push_decimals(out: &mut Vec<u8>, v: f64, dec: u32) {
+    let dec = dec.min(9) as usize;
+    let a = v.abs();
+    if a.is_nan() || a >= 9_007_199_254_740_992.0 {
+        let _ = write!(out, "{v:.dec$}");
+        return;
+    }
+    // Exact: the truncation, and the fraction (a − ⌊a⌋ is representable).
+    let mut int = a as u64;
+    let frac = a - int as f64;
+    let p = POW10[dec];
+    let scaled = frac * p as f64;
+    let mut q = scaled as u64;
+    let rem = scaled - q as f64;
+    let odd = if dec == 0 { int % 2 == 1 } else { q % 2 == 1 };
+    if rem > 0.5 || (rem == 0.5 && odd) {
+        q += 1;
+    }
+    if q >= p {
+        int += 1;
+        q -= p;
+    }
+    // Right to left into one buffer: fraction, point, integer, sign.
+    let mut buf = [b'0'; 32];
+    let mut k = buf.len();
+    if dec > 0 {
+        let start = k - dec;
+        while k > start + 1 {
+            let r = (q % 100) as usize * 2;
+            q /= 100;
+            k -= 2;
+            buf[k] = DIGIT_PAIRS[r];
+            buf[k + 1] = DIGIT_PAIRS[r + 1];
+        }
+        if k > start {
+            k -= 1;
+            buf[k] = b'0' + (q % 10) as u8;
+        }
+        k -= 1;
+        buf[k] = b'.';
+    }
+    loop {
+        k -= 1;
+        buf[k] = b'0' + (int % 10) as u8;
+        int /= 10;
+        if int == 0 {
+            break;
+        }
+    }
+    if v.is_sign_negative() {
+        k -= 1;
+        buf[k] = b'-';
+    }
+    out.extend_from_slice(&buf[k..]);
+}
+
 /// Format one number (tests, messages).
 pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
     let mut b = Vec::new();
@@ -450,6 +513,56 @@ mod tests {
             let again: f64 = printed.parse().unwrap_or(f64::NAN);
             assert_eq!(fixed(again, LENGTH_DECIMALS), printed);
             assert_eq!(again, v, "{s}");
+        }
+    }
+
+    #[test]
+    fn numbers_print_as_format_does() {
+        let mut seed: u64 = 7;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            1.5,
+            2.5,
+            0.0078125,
+            -0.0078125,
+            1e-12,
+            -1e-12,
+            999_999.999_999_5,
+            1e7 + 0.25,
+            3.8e8,
+            38_981_340.000_002_5,
+            0.999_999_999_9,
+            -0.000_000_000_4,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+        ];
+        for _ in 0..20_000 {
+            let mag = 10f64.powf(next() * 14.0 - 6.0);
+            values.push((next() - 0.5) * mag);
+        }
+        for v in values {
+            for dec in [0, 3, 6, 9] {
+                let mut b = Vec::new();
+                push_decimals(&mut b, v, dec);
+                let got = String::from_utf8(b).unwrap();
+                let want = format!("{v:.prec$}", prec = dec as usize);
+                // Only a fraction within rounding of a half-way point may differ.
+                let a = v.abs();
+                let scaled = (a - a.trunc()) * 10f64.powi(dec as i32);
+                let near_tie = ((scaled - scaled.floor()) - 0.5).abs() < 1e-9;
+                assert!(got == want || near_tie, "{v} {dec}: {got} vs {want}");
+            }
         }
     }
 }
