@@ -9,6 +9,7 @@
 //! in closed form. The stop profiles are evaluated in closed form, not by integration.
 
 use super::blocks::{Blocks, Limit};
+use rayon::prelude::*;
 
 /// Bisection steps on the jerk (§6.3 step 2).
 const BISECT: usize = 30;
@@ -103,6 +104,8 @@ pub fn plan_acc_only(b: &Blocks) -> Timing {
 struct Stop {
     v0: f64,
     a0: f64,
+    /// The limits the profile was built with: A and J.
+    amax: f64,
     j: f64,
     ap: f64,
     t1: f64,
@@ -122,6 +125,7 @@ impl Stop {
             return Some(Stop {
                 v0: v,
                 a0: a,
+                amax,
                 j: jmax,
                 ap: 0.0,
                 t1: 0.0,
@@ -140,6 +144,7 @@ impl Stop {
         Some(Stop {
             v0: v,
             a0: a,
+            amax,
             j: jmax,
             ap,
             t1,
@@ -192,18 +197,21 @@ impl Stop {
     /// Does the profile pass position `x` (from its start) at a speed ≤ `c`?
     #[cfg(test)]
     fn under(&self, x: f64, c: f64) -> bool {
-        self.under_kind(x, c).is_some()
+        self.under_kind(x, c).0.is_some()
     }
 
     /// [`Stop::under`] telling how it passes: `None` = it does not, `Some(true)` = the peak
     /// is below `c` or `x` lies after the falling crossing of `c` (then every later position
     /// with a ceiling ≥ `c` passes too: the speed only falls after the peak),
-    /// `Some(false)` = `x` lies before the rising crossing (no such implication).
-    fn under_kind(&self, x: f64, c: f64) -> Option<bool> {
+    /// `Some(false)` = `x` lies before the rising crossing (no such implication). The second
+    /// value is the slack in mm: the distance from `x` to the nearer crossing on the
+    /// passing side (negative when `x` lies between the crossings), infinite when the peak
+    /// is below `c`.
+    fn under_kind(&self, x: f64, c: f64) -> (Option<bool>, f64) {
         let c = c * (1.0 + REL) + 1e-12;
         let pk = self.peak();
         if pk <= c {
-            return Some(true);
+            return (Some(true), f64::INFINITY);
         }
         let j = self.j;
         // Falling crossing: first time after the peak at which the speed is ≤ c.
@@ -219,18 +227,19 @@ impl Stop {
             let disc = (self.ap * self.ap - 2.0 * j * (v2 - c)).max(0.0);
             self.t1 + self.t2 + ((self.ap - disc.sqrt()) / j).clamp(0.0, self.t3)
         };
-        let df = self.at(tf).0;
-        if x >= df * (1.0 - 1e-12) - 1e-12 {
-            return Some(true);
+        let df = self.at(tf).0 * (1.0 - 1e-12) - 1e-12;
+        if x >= df {
+            return (Some(true), x - df);
         }
         if self.v0 <= c {
             // Rising crossing inside phase 1.
             let disc = (self.a0 * self.a0 - 2.0 * j * (c - self.v0)).max(0.0);
             let tr = ((self.a0 - disc.sqrt()) / j).clamp(0.0, t_pk);
             let dr = self.at(tr).0;
-            return (x <= dr).then_some(false);
+            let slack = (dr - x).max(x - df);
+            return ((x <= dr).then_some(false), slack);
         }
-        None
+        (None, x - df)
     }
 
     /// Time at which the profile reaches position x (x within the profile): the phase is
@@ -300,7 +309,6 @@ fn brake_dist(v: f64, a: f64, c: f64, amax: f64, jmax: f64) -> f64 {
 }
 
 /// One cycle of constant jerk from (v, a): (Δs, v', a') after time τ.
-#[inline]
 fn step(v: f64, a: f64, j: f64, tau: f64) -> (f64, f64, f64) {
     (
         v * tau + a * tau * tau / 2.0 + j * tau.powi(3) / 6.0,
@@ -339,11 +347,12 @@ impl Chunks {
 struct Sim<'b> {
     b: &'b Blocks,
     ch: &'b Chunks,
-
     cycle: f64,
     lookahead: usize,
     /// Last block of the segment being planned (exclusive).
     end: usize,
+    /// Find the boundary jerk by the plain bisection (the reference of the tests).
+    bisect_only: bool,
 }
 
 /// How acceptable a next state is.
@@ -354,9 +363,56 @@ enum Tier {
     Releasable = 2,
 }
 
+/// What a caller of [`Sim::evaluate`] needs to know.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Need {
+    /// The tier, whatever it is (the candidate jerks).
+    Classify,
+    /// Only whether the state is feasible (releasability is not tested).
+    Feasible,
+    /// Only whether it is releasable (stops at the first ceiling that is not).
+    Releasable,
+}
+
+/// The constraints that keep a state below the tier asked for. Every constraint is
+/// monotone in the jerk (met at a jerk, met at every lower one), so the boundary jerk is
+/// set by one of those violated at the rejected end of the bracket; the search solves their
+/// slacks together ([`Sim::slack`]).
+#[derive(Clone, Copy, PartialEq, Eq, Debug, Default)]
+struct Bind {
+    /// A constraint without a slack function was violated (the search bisects).
+    other: bool,
+    /// The speed inside the step against the lowest v̄ of the step's blocks.
+    step_speed: bool,
+    /// The speed at the crossing of posture p during the step against its ceiling.
+    crossing: Option<usize>,
+    /// The stop's end against the end of the look-ahead window or of the segment.
+    window: bool,
+    /// The peak speed ahead against v̄ of the blocks m0..=m1 that it reaches.
+    peak: Option<(usize, usize)>,
+    /// The full stop passing postures p0..=p1 under their ceilings.
+    under: Option<(usize, usize)>,
+    /// Braking to the ceilings of postures p0..=p1 with zero acceleration before them
+    /// (releasable).
+    release: Option<(usize, usize)>,
+}
+
+/// Widen an index range to include `i`.
+fn widen(r: Option<(usize, usize)>, i: usize) -> Option<(usize, usize)> {
+    Some(r.map_or((i, i), |(a, b)| (a.min(i), b.max(i))))
+}
+
+/// The verdict of [`Sim::evaluate`]: the tier, the constraints that keep the state below
+/// the tier asked for, and the limits (A, J) of the state's stop profile.
+#[derive(Clone, Copy, Debug)]
+struct Eval {
+    tier: Tier,
+    bind: Bind,
+    lim: (f64, f64),
+}
+
 impl Sim<'_> {
     /// Block containing s, searching forward from `k` (never past `end − 1`).
-    #[inline]
     fn block_at(&self, mut k: usize, s: f64) -> usize {
         while k + 1 < self.end && self.b.start[k + 1] <= s {
             k += 1;
@@ -418,15 +474,26 @@ impl Sim<'_> {
         Some(prof)
     }
 
-    /// Classify the state after one cycle of jerk j from (s, v, a) in block k.
-    fn evaluate(&self, k: usize, s: f64, v: f64, a: f64, j: f64) -> Tier {
+    /// Classify the state after one cycle of jerk j from (s, v, a) in block k, and name the
+    /// constraints that keep it below the tier asked for (see [`Eval`]). `need` says what
+    /// the caller asks: [`Need::Classify`] and [`Need::Releasable`] compute the full tier,
+    /// [`Need::Feasible`] skips the releasability tests.
+    fn evaluate(&self, k: usize, s: f64, v: f64, a: f64, j: f64, need: Need) -> Eval {
         let b = self.b;
         let t = self.cycle;
+        let mut bind = Bind::default();
+        let mut lim = (0.0, 0.0);
+        let reject = |bind: Bind, lim: (f64, f64)| Eval {
+            tier: Tier::Rejected,
+            bind,
+            lim,
+        };
         let (ds, v1, a1) = step(v, a, j, t);
         let s1 = s + ds;
         let s_end = b.start[self.end];
         if v1 < -1e-12 * (1.0 + v.abs()) || s1 >= s_end {
-            return Tier::Rejected;
+            bind.other = true;
+            return reject(bind, lim);
         }
         let v1 = v1.max(0.0);
         let k1 = self.block_at(k, s1);
@@ -436,10 +503,12 @@ impl Sim<'_> {
             vmax = vmax.max(v - a * a / (2.0 * j));
         }
         if vmax > self.min_vbar(k, k1) * (1.0 + REL) {
-            return Tier::Rejected;
+            bind.step_speed = true;
+            return reject(bind, lim);
         }
         if a1.abs() > b.abar[k1] * (1.0 + REL) {
-            return Tier::Rejected;
+            bind.other = true;
+            return reject(bind, lim);
         }
         // Ceilings of postures crossed during the step, at the crossing instant.
         for p in (k + 1)..=k1 {
@@ -455,11 +524,13 @@ impl Sim<'_> {
             let tau = crossing_time(v, a, j, t, sp - s);
             let vc = v + a * tau + j * tau * tau / 2.0;
             if vc > c * (1.0 + REL) + 1e-12 {
-                return Tier::Rejected;
+                bind.crossing = Some(p);
+                return reject(bind, lim);
             }
             // Entering block p: the acceleration must be within its ā from here on.
             if (a + j * tau).abs() > b.abar[p] * (1.0 + REL) {
-                return Tier::Rejected;
+                bind.other = true;
+                return reject(bind, lim);
             }
         }
         // The peak speed ahead (positive acceleration released at the block's jerk).
@@ -471,22 +542,25 @@ impl Sim<'_> {
             let mut m = k1;
             while m < self.end && b.start[m] < s1 + dpk {
                 if vpk > b.vbar[m] * (1.0 + REL) {
-                    return Tier::Rejected;
+                    bind.peak = widen(bind.peak, m);
                 }
                 m += 1;
             }
         }
         let Some(prof) = self.stop_from(k1, s1, v1, a1, MARGIN) else {
-            return Tier::Rejected;
+            bind.other = true;
+            return reject(bind, lim);
         };
+        lim = (prof.amax, prof.j);
         let dist = prof.distance();
         let limit = self.window_end(k1).min(s_end);
         if s1 + dist > limit + 1e-12 * (1.0 + limit.abs()) {
-            return Tier::Rejected;
+            bind.window = true;
+            return reject(bind, lim);
         }
         // Acceleration on entering later blocks (only matters when |a'| exceeds their ā).
         let pk = prof.peak();
-        let mut releasable = true;
+        let check_release = need != Need::Feasible;
         let a_stop = b.abar[k1].min(prof.ap.max(a1.abs()));
         let mut p = k1 + 1;
         // Dominance (exact, the tests are monotone in the ceiling): a posture whose ceiling
@@ -494,6 +568,7 @@ impl Sim<'_> {
         // too, and one whose ceiling and braking deceleration are at least those of an
         // earlier releasable posture is releasable too (brake_dist falls with c and A, the
         // room grows with x). Only the running minima of the ceilings cost an evaluation.
+        // Once a test has failed, the scan goes on to find every posture that fails it.
         let mut under_ok = f64::INFINITY;
         let (mut rel_c, mut rel_a) = (f64::INFINITY, f64::INFINITY);
         while p < self.end && b.start[p] <= s1 + dist {
@@ -514,36 +589,152 @@ impl Sim<'_> {
             }
             let x = b.start[p] - s1;
             let c = b.ceil[p];
+
             if c < pk && c < under_ok {
-                match prof.under_kind(x, c) {
-                    None => return Tier::Rejected,
-                    Some(true) => under_ok = c,
-                    Some(false) => {}
+                match prof.under_kind(x, c).0 {
+                    None => bind.under = widen(bind.under, p),
+                    Some(true) if bind.under.is_none() => under_ok = c,
+                    Some(_) => {}
                 }
             }
             if a_stop > b.abar[p] * (1.0 + REL) {
                 let (_, _, ae) = prof.at(prof.time_at(x));
                 if ae.abs() > b.abar[p] * (1.0 + REL) {
-                    return Tier::Rejected;
+                    bind.other = true;
+                    return reject(bind, lim);
                 }
             }
-            if releasable && c < pk {
+            if check_release && c < pk {
                 let (am, jm) = (prof.ap.max(1e-300).max(b.abar[p].min(b.abar[k1])), prof.j);
                 if !(c >= rel_c && am >= rel_a) {
                     if brake_dist(v1, a1, c, am, jm) > x * (1.0 + 1e-12) + 1e-12 {
-                        releasable = false;
-                    } else if c < rel_c {
+                        bind.release = widen(bind.release, p);
+                    } else if bind.release.is_none() && c < rel_c {
                         (rel_c, rel_a) = (c, am);
                     }
                 }
             }
             p += 1;
         }
-        if releasable {
+        let tier = if bind.peak.is_some() || bind.under.is_some() {
+            Tier::Rejected
+        } else if check_release && bind.release.is_none() {
             Tier::Releasable
         } else {
             Tier::Feasible
+        };
+        if tier == Tier::Rejected {
+            // The releasability of a rejected state does not matter.
+            bind.release = None;
         }
+        Eval { tier, bind, lim }
+    }
+
+    /// The slack of the constraints `bind` after a cycle of jerk j from (s, v, a) in block
+    /// k, with the stop profile's limits `lim` = (A, J) held fixed: the least over them,
+    /// each in its own units, positive when all are met. It is continuous in j and costs
+    /// no look-ahead scan, so the boundary search can solve on it and keep the full
+    /// evaluations for the verdicts. `NAN` when it cannot say.
+    #[allow(clippy::too_many_arguments)]
+    fn slack(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        j: f64,
+        bind: Bind,
+        lim: Option<(f64, f64)>,
+    ) -> f64 {
+        if bind.other {
+            return f64::NAN;
+        }
+        let b = self.b;
+        let t = self.cycle;
+        let (ds, v1, a1) = step(v, a, j, t);
+        let s1 = s + ds;
+        let v1 = v1.max(0.0);
+        let k1 = self.block_at(k, s1.min(b.start[self.end]));
+        let mut slack = f64::INFINITY;
+        if bind.step_speed {
+            let mut vmax = v.max(v1);
+            if a > 0.0 && a1 < 0.0 && j != 0.0 {
+                vmax = vmax.max(v - a * a / (2.0 * j));
+            }
+            slack = slack.min(self.min_vbar(k, k1) * (1.0 + REL) - vmax);
+        }
+        if let Some(p) = bind.crossing {
+            let x = b.start[p] - s;
+            if x > ds {
+                return f64::NAN;
+            }
+            let tau = crossing_time(v, a, j, t, x);
+            let vc = v + a * tau + j * tau * tau / 2.0;
+            slack = slack.min(b.ceil[p] * (1.0 + REL) + 1e-12 - vc);
+        }
+        if let Some((m0, m1)) = bind.peak {
+            // A block only counts when the peak is reached inside or after it.
+            let jk = b.jbar[k1];
+            let tp = a1.max(0.0) / jk;
+            let dpk = v1 * tp + a1 * tp * tp / 2.0 - jk * tp.powi(3) / 6.0;
+            let vpk = peak_discrete(v1, a1, jk, t);
+            for m in m0.max(k1)..=m1 {
+                slack = slack.min((b.vbar[m] * (1.0 + REL) - vpk).max(b.start[m] - s1 - dpk));
+            }
+        }
+        if !(bind.window || bind.under.is_some() || bind.release.is_some()) {
+            return slack;
+        }
+        let stop = match lim {
+            Some((am, jm)) => Stop::new(v1, a1, am, jm),
+            None => self.stop_from(k1, s1, v1, a1, MARGIN),
+        };
+        let Some(pr) = stop else {
+            return f64::NAN;
+        };
+        let (dist, pk) = (pr.distance(), pr.peak());
+        if bind.window {
+            let limit = self.window_end(k1).min(b.start[self.end]);
+            slack = slack.min(limit + 1e-12 * (1.0 + limit.abs()) - s1 - dist);
+        }
+        // A posture only counts inside the stopping distance and below the peak. The
+        // dominance of `evaluate` holds for the slacks too: a posture dominated by an earlier
+        // one that passes has the larger slack, so it is skipped.
+        if let Some((p0, p1)) = bind.under {
+            let mut under_ok = f64::INFINITY;
+            for p in p0.max(k1 + 1)..=p1 {
+                let (x, c) = (b.start[p] - s1, b.ceil[p]);
+                if b.start[p] > s1 + dist {
+                    break;
+                }
+                if c < pk && c < under_ok {
+                    let (kind, sl) = pr.under_kind(x, c);
+                    if kind == Some(true) {
+                        under_ok = c;
+                    }
+                    slack = slack.min(sl);
+                }
+            }
+        }
+        if let Some((p0, p1)) = bind.release {
+            let (mut rel_c, mut rel_a) = (f64::INFINITY, f64::INFINITY);
+            for p in p0.max(k1 + 1)..=p1 {
+                let (x, c) = (b.start[p] - s1, b.ceil[p]);
+                if b.start[p] > s1 + dist {
+                    break;
+                }
+                let am = pr.ap.max(1e-300).max(b.abar[p].min(b.abar[k1]));
+                if c < pk && !(c >= rel_c && am >= rel_a) {
+                    let room = x * (1.0 + 1e-12) + 1e-12;
+                    let sl = room - brake_dist(v1, a1, c, am, pr.j);
+                    if sl >= 0.0 && c < rel_c {
+                        (rel_c, rel_a) = (c, am);
+                    }
+                    slack = slack.min(sl);
+                }
+            }
+        }
+        slack
     }
 
     /// A measure of how badly a jerk violates the constraints (for the fallback tier).
@@ -596,19 +787,23 @@ impl Sim<'_> {
         let clip = |x: f64| x.clamp(j_lo, j_hi);
         let mut cands = [j_hi, clip(-a / t), clip(0.0), j_lo];
         cands.sort_by(|x, y| y.total_cmp(x));
-        let mut tiers = [Tier::Rejected; 4];
+        let mut evals = [Eval {
+            tier: Tier::Rejected,
+            bind: Bind::default(),
+            lim: (0.0, 0.0),
+        }; 4];
         let mut best = Tier::Rejected;
         for (i, &c) in cands.iter().enumerate() {
             if i > 0 && c == cands[i - 1] {
-                tiers[i] = tiers[i - 1];
+                evals[i] = evals[i - 1];
             } else {
-                tiers[i] = self.evaluate(k, s, v, a, c);
+                evals[i] = self.evaluate(k, s, v, a, c, Need::Classify);
             }
-            if tiers[i] == Tier::Releasable {
+            if evals[i].tier == Tier::Releasable {
                 best = Tier::Releasable;
                 break;
             }
-            best = best.max(tiers[i]);
+            best = best.max(evals[i].tier);
         }
         if best == Tier::Rejected {
             // Least violation on a 41-point grid.
@@ -624,7 +819,7 @@ impl Sim<'_> {
             }
             return (bj, true);
         }
-        if best == Tier::Feasible && tiers[3] == Tier::Feasible {
+        if best == Tier::Feasible && evals[3].tier == Tier::Feasible {
             // No candidate keeps every ceiling reachable with zero acceleration: the state
             // fell behind a braking profile by less than a cycle (a phase switch inside a
             // cycle). Riding the feasibility boundary from here would leave no feasible
@@ -632,28 +827,212 @@ impl Sim<'_> {
             // to win the margin back.
             return (cands[3], false);
         }
-        let i = tiers.iter().position(|&x| x >= best).unwrap_or(3);
-        let mut good = cands[i];
+        let i = evals.iter().position(|e| e.tier >= best).unwrap_or(3);
         if i == 0 {
-            return (good, false);
+            return (cands[0], false);
         }
-        let mut bad = cands[i - 1];
-        // All 30 steps: the greedy choice rides the feasibility boundary, and stopping at a
-        // bracket of even 1e-7 of the jerk limit changes the plan by 0.2 % (more unplanned
-        // stops) on the 001 parabola.
+        let good = (cands[i], evals[i]);
+        let j = self.boundary(k, s, v, a, best, good, (cands[i - 1], evals[i - 1]));
+        (j, false)
+    }
+
+    /// The largest acceptable jerk (tier ≥ `best`) between `good` (acceptable) and `bad`
+    /// (not, with its verdict). The greedy interpolator rides this boundary, so it is found
+    /// to the resolution of a 30-step bisection, 2⁻³⁰ of the bracket (stopping at even
+    /// 1e-7 of the jerk limit changes the plan of the 001 parabola by 0.2 %).
+    ///
+    /// Rather than bisecting on full evaluations, each round solves the slack of the
+    /// constraint that rejected the upper end ([`Sim::slack`]: no look-ahead scan) for its
+    /// root, then checks the root and a point half the tolerance above it with two full
+    /// evaluations. Usually that closes the bracket; if the upper check is rejected by
+    /// another constraint, the next round solves that one. The bracket only ever moves on
+    /// the verdicts of full evaluations, so the answer is acceptable whatever the slack
+    /// says; when the slack cannot say (or after a few rounds), the search bisects.
+    #[allow(clippy::too_many_arguments)]
+    fn boundary(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        best: Tier,
+        good: (f64, Eval),
+        bad: (f64, Eval),
+    ) -> f64 {
+        let need = if best == Tier::Releasable {
+            Need::Releasable
+        } else {
+            Need::Feasible
+        };
+        let tol = (bad.0 - good.0) * 0.5f64.powi(BISECT as i32);
+        // A full evaluation at x moves one end of the bracket; true if x is acceptable.
+        let probe = |x: f64, g: &mut (f64, Eval), b: &mut (f64, Eval)| {
+            let e = self.evaluate(k, s, v, a, x, need);
+            if e.tier >= best {
+                *g = (x, e);
+                true
+            } else {
+                *b = (x, e);
+                false
+            }
+        };
+        let mut rounds = 0;
+        let (mut lo, mut hi) = (good, bad);
+        while hi.0 - lo.0 > tol {
+            let root = if rounds < 4 && !self.bisect_only {
+                self.slack_root(
+                    k,
+                    s,
+                    v,
+                    a,
+                    (lo.0, hi.0),
+                    hi.1.bind,
+                    [lo.1.lim, hi.1.lim],
+                    tol / 4.0,
+                )
+            } else {
+                None
+            };
+            let Some(r) = root else {
+                let mid = 0.5 * (lo.0 + hi.0);
+                if mid <= lo.0 || mid >= hi.0 {
+                    break;
+                }
+                probe(mid, &mut lo, &mut hi);
+                continue;
+            };
+            rounds += 1;
+            // The root, then just above it: together they close the bracket.
+            if r > lo.0 && r < hi.0 && !probe(r, &mut lo, &mut hi) {
+                continue;
+            }
+            if hi.0 - lo.0 > tol {
+                let x = (lo.0 + 0.5 * tol).min(0.5 * (lo.0 + hi.0));
+                probe(x, &mut lo, &mut hi);
+            }
+        }
+        // Replay the 30-step bisection from the candidates: every midpoint at or below the
+        // accepted end of the final bracket is acceptable and every one at or above the
+        // rejected end is not (the tiers are monotone in the jerk), so only a midpoint
+        // inside it needs an evaluation. The answer is then the bisection's own, to the
+        // last bit: the greedy plan is sensitive to differences far below the bisection's
+        // resolution (a different point of the same bracket can add unplanned stops).
+        let (mut g, mut b) = (good.0, bad.0);
         for _ in 0..BISECT {
-            let mid = 0.5 * (good + bad);
-            if mid == good || mid == bad {
+            let mid = 0.5 * (g + b);
+            if mid == g || mid == b {
                 break;
             }
-            if self.evaluate(k, s, v, a, mid) >= best {
-                good = mid;
+            let ok = if mid <= lo.0 {
+                true
+            } else if mid >= hi.0 {
+                false
             } else {
-                bad = mid;
+                probe(mid, &mut lo, &mut hi)
+            };
+            if ok {
+                g = mid;
+            } else {
+                b = mid;
             }
         }
-        (good, false)
+        g
     }
+
+    /// Root of [`Sim::slack`] of the constraints `bind` on the bracket `(g, b)`, where a
+    /// full evaluation accepted g and rejected b, to `tol`: the end of the final bracket
+    /// with slack ≥ 0. The stop profile's limits change in steps with the distance it
+    /// covers, so the limits are held at those of the rejected end, then of the accepted
+    /// end, then recomputed at every point (exact, but the slack then has jumps); the
+    /// first that gives a sign change is used. `None` when none does.
+    #[allow(clippy::too_many_arguments)]
+    fn slack_root(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        (g, b): (f64, f64),
+        bind: Bind,
+        [lim_g, lim_b]: [(f64, f64); 2],
+        tol: f64,
+    ) -> Option<f64> {
+        if bind.other {
+            return None;
+        }
+        for lim in [Some(lim_b), Some(lim_g), None] {
+            let h = |j: f64| self.slack(k, s, v, a, j, bind, lim);
+            let (fg, fb) = (h(g), h(b));
+            if fg >= 0.0 && fb < 0.0 {
+                // A point where the slack cannot say counts as rejected.
+                return Some(brent(g, fg, b, fb, tol, |j| {
+                    let f = h(j);
+                    if f.is_nan() { -1.0 } else { f }
+                }));
+            }
+        }
+        None
+    }
+}
+
+/// Brent's method (zeroin: inverse quadratic interpolation, secant and bisection steps)
+/// for a root of f on a bracket with f(g) ≥ 0 > f(b). Returns the end of the final
+/// bracket where f ≥ 0; the bracket is then at most `tol` wide.
+fn brent(g: f64, fg: f64, b: f64, fb: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    // b: best estimate, a: previous, c: the other end of the bracket.
+    let (mut a, mut fa, mut b, mut fb) = (g, fg, b, fb);
+    let (mut c, mut fc) = (a, fa);
+    let mut d = b - a;
+    let mut e = d;
+    for _ in 0..100 {
+        if (fb >= 0.0) == (fc >= 0.0) {
+            (c, fc) = (a, fa);
+            d = b - a;
+            e = d;
+        }
+        if fc.abs() < fb.abs() {
+            (a, fa) = (b, fb);
+            (b, fb) = (c, fc);
+            (c, fc) = (a, fa);
+        }
+        let tol1 = 2.0 * f64::EPSILON * b.abs() + 0.25 * tol;
+        let xm = 0.5 * (c - b);
+        if xm.abs() <= tol1 || fb == 0.0 {
+            break;
+        }
+        if e.abs() >= tol1 && fa.abs() > fb.abs() {
+            let s = fb / fa;
+            let (mut p, mut q);
+            if a == c {
+                p = 2.0 * xm * s;
+                q = 1.0 - s;
+            } else {
+                let qq = fa / fc;
+                let r = fb / fc;
+                p = s * (2.0 * xm * qq * (qq - r) - (b - a) * (r - 1.0));
+                q = (qq - 1.0) * (r - 1.0) * (s - 1.0);
+            }
+            if p > 0.0 {
+                q = -q;
+            } else {
+                p = -p;
+            }
+            if 2.0 * p < (3.0 * xm * q - (tol1 * q).abs()).min((e * q).abs()) {
+                e = d;
+                d = p / q;
+            } else {
+                d = xm;
+                e = d;
+            }
+        } else {
+            d = xm;
+            e = d;
+        }
+        (a, fa) = (b, fb);
+        b += if d.abs() > tol1 { d } else { tol1.copysign(xm) };
+        fb = f(b);
+    }
+    if fb >= 0.0 { b } else { c }
 }
 
 /// Highest speed reached from (v, a > 0) when the acceleration is ramped down at −J in
@@ -682,6 +1061,77 @@ fn jerk_cap(v: f64, a: f64, t: f64, jm: f64, vcap: f64, j_lo: f64, j_hi: f64) ->
     if !ok(j_lo) {
         return f64::NEG_INFINITY;
     }
+    // Closed form: with u = a' = a + jT > 0 the discrete peak is piecewise linear in u, with
+    // slope T(n + 1) on [n·jm·T, (n + 1)·jm·T); for a' ≤ 0 it is v' itself, linear in j. The
+    // answer is accepted when it passes and a step of the search's resolution above it does
+    // not; rounding aside it always is, and the search below is the fallback.
+    let tol = (j_hi - j_lo) * f64::EPSILON * 4.0;
+    let j_closed = {
+        let q = jm * t;
+        let v_at_zero = v + a * t / 2.0; // a' = 0
+        if v_at_zero > vcap {
+            2.0 * (vcap - v - a * t) / (t * t)
+        } else {
+            let n = (-1.0 + (1.0 - 8.0 * (v_at_zero - vcap) / (q * t)).max(0.0).sqrt()) / 2.0;
+            let n = n.floor().max(0.0);
+            let p_n = v_at_zero + n * q * t / 2.0 + n * n * q * t / 2.0;
+            let u = n * q + (vcap - p_n) / (t * (n + 1.0));
+            (u - a) / t
+        }
+    };
+    let mut jc = j_closed.clamp(j_lo, j_hi);
+    for _ in 0..4 {
+        if !jc.is_finite() || ok(jc) {
+            break;
+        }
+        jc -= tol;
+    }
+    // Newton steps up on the rounding residual (slope of the peak in j: T² (n + 1)), so
+    // that the answer is the largest passing jerk to the last bits, as the search finds.
+    for _ in 0..3 {
+        let (_, v1, a1) = step(v, a, jc, t);
+        let r = vcap - peak_discrete(v1, a1, jm, t);
+        if r.is_nan() || r <= 0.0 {
+            break;
+        }
+        let n = if a1 > 0.0 {
+            (a1 / (jm * t)).floor()
+        } else {
+            0.0
+        };
+        let slope = if a1 > 0.0 {
+            t * t * (n + 1.0)
+        } else {
+            t * t / 2.0
+        };
+        let jn = (jc + r / slope).min(j_hi);
+        if jn > jc && ok(jn) {
+            jc = jn;
+        } else {
+            break;
+        }
+    }
+    // The peak is flat to rounding near the boundary: climb to its upper end.
+    if jc.is_finite() && ok(jc) {
+        let mut d = tol;
+        for _ in 0..40 {
+            if jc + d <= j_hi && ok(jc + d) {
+                jc += d;
+                d *= 2.0;
+            } else if d > tol {
+                d = (d / 4.0).max(tol);
+            } else {
+                break;
+            }
+        }
+    }
+    // Above the boundary by 2⁻³⁶ of the range (a speed change of about 1e-11 mm/s, well
+    // above the rounding of the peak) must fail.
+    let above = jc + (j_hi - j_lo) * 0.5f64.powi(36);
+    if jc.is_finite() && jc >= j_lo && ok(jc) && (above > j_hi || !ok(above)) {
+        return jc;
+    }
+
     // The peak is continuous and increasing in j: Illinois false position on
     // f(j) = peak − vcap, with a bisection step whenever the bracket fails to halve, down to
     // a bracket of 2⁻⁵⁰ of the range (the 60-step bisection this replaces stopped at 2⁻⁶⁰:
@@ -692,7 +1142,6 @@ fn jerk_cap(v: f64, a: f64, t: f64, jm: f64, vcap: f64, j_lo: f64, j_hi: f64) ->
     };
     let (mut lo, mut hi) = (j_lo, j_hi);
     let (mut flo, mut fhi) = (f(lo), f(hi));
-    let tol = (j_hi - j_lo) * f64::EPSILON * 4.0;
     let mut width = hi - lo;
     let mut side = 0i32;
     for _ in 0..120 {
@@ -778,6 +1227,16 @@ fn crossing_time(v: f64, a: f64, j: f64, t: f64, x: f64) -> f64 {
 /// Level 2 (§6.3): jerk-limited look-ahead interpolator at the cycle time. Exact stops
 /// (zero ceilings) split the path into rest-to-rest segments.
 pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing {
+    plan_jerk_with(b, cycle_time, lookahead_blocks, false)
+}
+
+/// [`plan_jerk`], optionally with the plain bisection for the boundary jerk.
+fn plan_jerk_with(
+    b: &Blocks,
+    cycle_time: f64,
+    lookahead_blocks: usize,
+    bisect_only: bool,
+) -> Timing {
     let n = b.n();
     let np = n + 1;
     let mut out = Timing {
@@ -801,19 +1260,59 @@ pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing
         }
     }
     cuts.push(n);
-    let mut t0 = 0.0;
+    // The segments start and end at rest, so they are planned apart (in parallel), each
+    // from time 0, and then put end to end.
     let ch = Chunks::new(b);
-    for w in cuts.windows(2) {
-        let sim = Sim {
-            b,
-            ch: &ch,
-
-            cycle: cycle_time,
-            lookahead: lookahead_blocks,
-            end: w[1],
-        };
-        t0 = sim.run(w[0], t0, &mut out);
+    let mut segs = Vec::with_capacity(cuts.len() - 1);
+    {
+        let (mut t, mut v, mut peak) = (&mut out.t[1..], &mut out.v[1..], &mut out.block_peak[..]);
+        for w in cuts.windows(2) {
+            let len = w[1] - w[0];
+            let (ts, tr) = std::mem::take(&mut t).split_at_mut(len);
+            let (vs, vr) = std::mem::take(&mut v).split_at_mut(len);
+            let (ps, pr) = std::mem::take(&mut peak).split_at_mut(len);
+            (t, v, peak) = (tr, vr, pr);
+            segs.push((
+                w[1],
+                SegOut {
+                    k0: w[0],
+                    t: ts,
+                    v: vs,
+                    peak: ps,
+                    cycles: 0,
+                    fallbacks: 0,
+                    stop_recoveries: 0,
+                    max_axis_ratio: 0.0,
+                },
+            ));
+        }
     }
+    let durations: Vec<f64> = segs
+        .par_iter_mut()
+        .map(|(end, seg)| {
+            let sim = Sim {
+                b,
+                ch: &ch,
+                cycle: cycle_time,
+                lookahead: lookahead_blocks,
+                end: *end,
+                bisect_only,
+            };
+            sim.run(seg)
+        })
+        .collect();
+    let mut t0 = 0.0;
+    for ((_, seg), d) in segs.iter_mut().zip(&durations) {
+        if t0 != 0.0 {
+            seg.t.iter_mut().for_each(|t| *t += t0);
+        }
+        t0 += d;
+        out.cycles += seg.cycles;
+        out.fallbacks += seg.fallbacks;
+        out.stop_recoveries += seg.stop_recoveries;
+        out.max_axis_ratio = out.max_axis_ratio.max(seg.max_axis_ratio);
+    }
+    drop(segs);
     out.total = out.t[n];
     // Self-check at the postures.
     for p in 0..np {
@@ -830,18 +1329,48 @@ pub fn plan_jerk(b: &Blocks, cycle_time: f64, lookahead_blocks: usize) -> Timing
     out
 }
 
+/// What one segment of [`plan_jerk`] writes: postures k0+1..=end (time from the
+/// segment's start, speed), blocks k0..end (peak speed), and its counters.
+struct SegOut<'a> {
+    k0: usize,
+    t: &'a mut [f64],
+    v: &'a mut [f64],
+    peak: &'a mut [f64],
+    cycles: usize,
+    fallbacks: usize,
+    stop_recoveries: usize,
+    max_axis_ratio: f64,
+}
+
+impl SegOut<'_> {
+    /// Record posture p (k0 < p ≤ end).
+    fn put(&mut self, p: usize, t: f64, v: f64) {
+        self.t[p - self.k0 - 1] = t;
+        self.v[p - self.k0 - 1] = v;
+    }
+
+    /// Time recorded at posture p (0 at k0, the segment's start).
+    fn t(&self, p: usize) -> f64 {
+        if p == self.k0 {
+            0.0
+        } else {
+            self.t[p - self.k0 - 1]
+        }
+    }
+}
+
 impl Sim<'_> {
-    /// Simulate the segment of blocks [k0, end), starting at rest at time t0. Returns the
+    /// Simulate the segment of blocks [k0, end), starting at rest at time 0. Returns the
     /// end time.
-    fn run(&self, k0: usize, t0: f64, out: &mut Timing) -> f64 {
+    fn run(&self, out: &mut SegOut) -> f64 {
+        let k0 = out.k0;
+        let t0 = 0.0;
         let b = self.b;
         let cyc = self.cycle;
         let s_end = b.start[self.end];
         let seg_len = s_end - b.start[k0];
         let eps = 1e-9 * seg_len;
         let (mut s, mut v, mut a, mut t) = (b.start[k0], 0.0f64, 0.0f64, t0);
-        out.t[k0] = t0;
-        out.v[k0] = 0.0;
         let mut k = k0;
         let mut next = k0 + 1; // next posture to record
         // Guard against a creeping simulation: far more cycles than any sane plan needs.
@@ -877,16 +1406,15 @@ impl Sim<'_> {
                                 let tp = prof.time_at(x - gap);
                                 (tg + tp, prof.at(tp).1)
                             };
-                            out.t[next] = t + tt;
-                            out.v[next] = vv.max(0.0);
+                            out.put(next, t + tt, vv.max(0.0));
                             next += 1;
                         }
                         let tend = t + tg + prof.duration();
-                        out.t[self.end] = tend.max(out.t[self.end - 1]);
-                        out.v[self.end] = 0.0;
+                        let tend = tend.max(out.t(self.end - 1));
+                        out.put(self.end, tend, 0.0);
                         self.sample(k, v, a, 0.0, out);
                         out.cycles += cycles;
-                        return out.t[self.end];
+                        return tend;
                     }
                 }
             }
@@ -899,8 +1427,7 @@ impl Sim<'_> {
                     let dt = rest_to_rest(end_s - ps, b.vbar[pk], b.abar[pk], b.jbar[pk]);
                     next = pnext;
                     while next <= pk + 1 && next < self.end {
-                        out.t[next] = pt + dt;
-                        out.v[next] = 0.0;
+                        out.put(next, pt + dt, 0.0);
                         next += 1;
                     }
                     s = end_s;
@@ -921,8 +1448,7 @@ impl Sim<'_> {
                         next = pnext;
                         while next < self.end && b.start[next] <= ps + prof.distance() {
                             let tp = prof.time_at(b.start[next] - ps);
-                            out.t[next] = pt + tp;
-                            out.v[next] = prof.at(tp).1.max(0.0);
+                            out.put(next, pt + tp, prof.at(tp).1.max(0.0));
                             next += 1;
                         }
                         s = ps + prof.distance();
@@ -943,8 +1469,7 @@ impl Sim<'_> {
             while next < self.end && b.start[next] <= s1 {
                 let tau = crossing_time(v, a, j, cyc, b.start[next] - s);
                 let (_, vc, ac) = step(v, a, j, tau);
-                out.t[next] = t + tau;
-                out.v[next] = vc.max(0.0);
+                out.put(next, t + tau, vc.max(0.0));
                 self.sample(next, vc, ac, j, out);
                 next += 1;
             }
@@ -964,15 +1489,16 @@ impl Sim<'_> {
     }
 
     /// Record a state sample in block k for the self-check and the block's peak speed.
-    fn sample(&self, k: usize, v: f64, a: f64, j: f64, out: &mut Timing) {
+    fn sample(&self, k: usize, v: f64, a: f64, j: f64, out: &mut SegOut) {
         let k = k.min(self.end - 1);
         let b = self.b;
         let rv = v / b.vaxis[k];
         let ra = a.abs() / b.abar[k];
         let rj = j.abs() / b.jbar[k];
         out.max_axis_ratio = out.max_axis_ratio.max(rv).max(ra).max(rj);
-        if v > out.block_peak[k] {
-            out.block_peak[k] = v;
+        let peak = &mut out.peak[k - out.k0];
+        if v > *peak {
+            *peak = v;
         }
     }
 }
@@ -1006,6 +1532,70 @@ pub fn limits_per_posture(b: &Blocks, timing: &Timing, lookahead_blocks: usize) 
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    /// A 5-axis zigzag in 0.2 mm blocks with the tool axis tilting back and forth (C turns
+    /// through 180° where the tilt changes sign), on the Table I AC machine: corners,
+    /// rotary-bound blocks, unplanned stops.
+    fn zigzag_blocks() -> Blocks {
+        use crate::kinematics::machine::{Machine, TABLE_I_AC_TOML};
+        use crate::kinematics::{IkTracker, pose_tilt_azimuth};
+        let m = Machine::from_toml_str(TABLE_I_AC_TOML).unwrap();
+        let mut ik = IkTracker::new(&m);
+        let (mut joints, mut pos) = (Vec::new(), Vec::new());
+        for i in 0..1500 {
+            let (pass, u) = (i / 250, (i % 250) as f64 * 0.2);
+            let x = if pass % 2 == 0 { u } else { 50.0 - u };
+            let (y, z) = (pass as f64 * 0.5, 2.0 * (x / 8.0).sin());
+            let slope = (0.25 * (x / 8.0).cos()).atan().to_degrees();
+            let az = if slope >= 0.0 { 180.0 } else { 0.0 };
+            let pose = pose_tilt_azimuth([x, y, z], 8.0 + slope.abs(), az);
+            joints.push(ik.solve(&pose.tip, &pose.axis.normalize()).unwrap().joints);
+            pos.push([x, y, z]);
+        }
+        let settings = super::super::Settings {
+            cycle_time: m.cycle_time,
+            min_block_cycles: m.min_block_cycles,
+            lookahead_blocks: 0,
+            junction_spacing_rule: true,
+        };
+        let n = joints.len();
+        Blocks::build(
+            &joints,
+            &pos,
+            &vec![5000.0 / 60.0; n - 1],
+            &vec![false; n],
+            &m.joint_limits(),
+            &settings,
+        )
+    }
+
+    #[test]
+    fn slack_search_gives_the_bisection_plan_bit_for_bit() {
+        let b = zigzag_blocks();
+        let fast = plan_jerk_with(&b, 0.003, 0, false);
+        let slow = plan_jerk_with(&b, 0.003, 0, true);
+        assert!(fast.stop_recoveries > 0, "the path should be hard");
+        assert_eq!(fast.cycles, slow.cycles);
+        assert_eq!(fast.stop_recoveries, slow.stop_recoveries);
+        assert_eq!(fast.t, slow.t);
+        assert_eq!(fast.v, slow.v);
+        assert!(fast.max_axis_ratio <= 1.0 + 1e-6, "{}", fast.max_axis_ratio);
+    }
+
+    #[test]
+    fn brent_closes_the_bracket_on_the_passing_side() {
+        // f(j) = 2 − j (root 2) and a kinked one; the answer passes and lies within tol.
+        for f in [(|j: f64| 2.0 - j) as fn(f64) -> f64, |j: f64| {
+            if j < 2.0 {
+                (2.0 - j).powi(3)
+            } else {
+                -(j - 2.0).sqrt()
+            }
+        }] {
+            let r = brent(-5.0, f(-5.0), 7.0, f(7.0), 1e-9, f);
+            assert!(f(r) >= 0.0 && (r - 2.0).abs() <= 1e-9, "{r}");
+        }
+    }
 
     #[test]
     fn stop_profile_ends_at_rest() {
