@@ -27,6 +27,7 @@ pub use blocks::{Blocks, Limit, Settings};
 pub use chain::{IkTracker, Joints, Pose};
 pub use machine::{Machine, MachineError};
 pub use plan::Timing;
+use rayon::prelude::*;
 
 use crate::math::{Point3, Vec3};
 use crate::toolpath::{MotionKind, Toolpath};
@@ -230,8 +231,9 @@ pub fn plan_poses(
     };
     let limits = plan::limits_per_posture(&blocks, &timing, machine.lookahead_blocks);
     let n = blocks.n();
+    // Eq 6 and the per-posture records are independent: in parallel.
     let postures = solved
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(p, s)| {
             let k = if p < n { p } else { n.saturating_sub(1) };

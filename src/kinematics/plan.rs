@@ -320,13 +320,36 @@ fn step(v: f64, a: f64, j: f64, tau: f64) -> (f64, f64, f64) {
 /// Blocks (and postures) per chunk of the look-ahead skip tables.
 const CHUNK: usize = 16;
 
-/// Minima of ā, j̄ (blocks) and the ceilings (postures) over chunks of [`CHUNK`] entries, so
+/// Minima of ā (blocks) and the ceilings (postures) over chunks of [`CHUNK`] entries, so
 /// that the look-ahead scans skip whole chunks that cannot bind. The minima are exact, so
 /// the scans give the same answers as visiting every entry.
+///
+/// Also, per block, the next block with a strictly lower ā (and j̄): the minimum over a run
+/// of blocks from k is the last block of that chain inside the run, so `limits_over` hops
+/// over the records instead of visiting every block.
 struct Chunks {
     abar: Vec<f64>,
-    jbar: Vec<f64>,
     ceil: Vec<f64>,
+    next_lower_a: Vec<u32>,
+    next_lower_j: Vec<u32>,
+}
+
+/// For every index, the next index with a strictly lower value (`x.len()` if none).
+fn next_lower(x: &[f64]) -> Vec<u32> {
+    let mut out = vec![x.len() as u32; x.len()];
+    let mut stack: Vec<usize> = Vec::new();
+    for (i, &xi) in x.iter().enumerate() {
+        while let Some(&top) = stack.last() {
+            if xi < x[top] {
+                out[top] = i as u32;
+                stack.pop();
+            } else {
+                break;
+            }
+        }
+        stack.push(i);
+    }
+    out
 }
 
 impl Chunks {
@@ -338,8 +361,9 @@ impl Chunks {
         };
         Chunks {
             abar: mins(&b.abar),
-            jbar: mins(&b.jbar),
             ceil: mins(&b.ceil),
+            next_lower_a: next_lower(&b.abar),
+            next_lower_j: next_lower(&b.jbar),
         }
     }
 }
@@ -420,25 +444,25 @@ impl Sim<'_> {
         k
     }
 
-    /// Minimum ā and j̄ over blocks covering [s, s + d], from block k.
+    /// Minimum ā and j̄ over blocks covering [s, s + d], from block k: the last records of
+    /// the next-lower chains from k that start before s + d.
     fn limits_over(&self, k: usize, s: f64, d: f64) -> (f64, f64) {
         let b = self.b;
-        let (mut a, mut j) = (b.abar[k], b.jbar[k]);
         let lim = s + d;
-        let mut m = k + 1;
-        while m < self.end && b.start[m] < lim {
-            // A whole chunk inside the range: its minima at once.
-            if m % CHUNK == 0 && m + CHUNK <= self.end && b.start[m + CHUNK - 1] < lim {
-                a = a.min(self.ch.abar[m / CHUNK]);
-                j = j.min(self.ch.jbar[m / CHUNK]);
-                m += CHUNK;
-                continue;
+        let last = |next: &[u32]| {
+            let mut m = k;
+            loop {
+                let nx = next[m] as usize;
+                if nx >= self.end || b.start[nx] >= lim {
+                    return m;
+                }
+                m = nx;
             }
-            a = a.min(b.abar[m]);
-            j = j.min(b.jbar[m]);
-            m += 1;
-        }
-        (a, j)
+        };
+        (
+            b.abar[last(&self.ch.next_lower_a)],
+            b.jbar[last(&self.ch.next_lower_j)],
+        )
     }
 
     fn min_vbar(&self, k0: usize, k1: usize) -> f64 {
@@ -1580,6 +1604,23 @@ mod tests {
         assert_eq!(fast.t, slow.t);
         assert_eq!(fast.v, slow.v);
         assert!(fast.max_axis_ratio <= 1.0 + 1e-6, "{}", fast.max_axis_ratio);
+    }
+
+    #[test]
+    fn next_lower_chains_give_range_minima() {
+        let x = [5.0, 3.0, 4.0, 3.0, 1.0, 2.0, 2.0, 0.5, 7.0];
+        let next = next_lower(&x);
+        assert_eq!(next, vec![1, 4, 3, 4, 7, 7, 7, 9, 9]);
+        for k in 0..x.len() {
+            for end in k..x.len() {
+                let mut m = k;
+                while (next[m] as usize) <= end {
+                    m = next[m] as usize;
+                }
+                let want = x[k..=end].iter().copied().fold(f64::INFINITY, f64::min);
+                assert_eq!(x[m], want, "{k}..={end}");
+            }
+        }
     }
 
     #[test]
