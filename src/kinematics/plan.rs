@@ -426,6 +426,10 @@ fn widen(r: Option<(usize, usize)>, i: usize) -> Option<(usize, usize)> {
     Some(r.map_or((i, i), |(a, b)| (a.min(i), b.max(i))))
 }
 
+/// The constraints (and stop limits) that bounded the last cycle's jerk from above, for
+/// the next cycle's [`Sim::follow_hint`].
+type Hint = Option<(Bind, (f64, f64))>;
+
 /// The verdict of [`Sim::evaluate`]: the tier, the constraints that keep the state below
 /// the tier asked for, and the limits (A, J) of the state's stop profile.
 #[derive(Clone, Copy, Debug)]
@@ -779,7 +783,7 @@ impl Sim<'_> {
     }
 
     /// Choose the jerk of the next cycle (§6.3 steps 1–3). Returns (jerk, fallback used).
-    fn choose(&self, k: usize, s: f64, v: f64, a: f64) -> (f64, bool) {
+    fn choose(&self, k: usize, s: f64, v: f64, a: f64, hint: Hint) -> (f64, bool, Hint) {
         let b = self.b;
         let t = self.cycle;
         let (a0, j0) = (b.abar[k], b.jbar[k]);
@@ -811,6 +815,11 @@ impl Sim<'_> {
         let clip = |x: f64| x.clamp(j_lo, j_hi);
         let mut cands = [j_hi, clip(-a / t), clip(0.0), j_lo];
         cands.sort_by(|x, y| y.total_cmp(x));
+        if let Some(h) = hint.filter(|_| !self.bisect_only) {
+            if let Some((j, next)) = self.follow_hint(k, s, v, a, &cands, h) {
+                return (j, false, next);
+            }
+        }
         let mut evals = [Eval {
             tier: Tier::Rejected,
             bind: Bind::default(),
@@ -841,7 +850,7 @@ impl Sim<'_> {
                     bj = jj;
                 }
             }
-            return (bj, true);
+            return (bj, true, None);
         }
         if best == Tier::Feasible && evals[3].tier == Tier::Feasible {
             // No candidate keeps every ceiling reachable with zero acceleration: the state
@@ -849,15 +858,16 @@ impl Sim<'_> {
             // cycle). Riding the feasibility boundary from here would leave no feasible
             // successor at the next phase switch, so brake as hard as allowed for a cycle
             // to win the margin back.
-            return (cands[3], false);
+            return (cands[3], false, None);
         }
         let i = evals.iter().position(|e| e.tier >= best).unwrap_or(3);
         if i == 0 {
-            return (cands[0], false);
+            return (cands[0], false, None);
         }
         let good = (cands[i], evals[i]);
-        let j = self.boundary(k, s, v, a, best, good, (cands[i - 1], evals[i - 1]));
-        (j, false)
+        let (j, next) = self.boundary(k, s, v, a, best, good, (cands[i - 1], evals[i - 1]));
+        // Only a releasable boundary is carried to the next cycle (see `follow_hint`).
+        (j, false, next.filter(|_| best == Tier::Releasable))
     }
 
     /// The largest acceptable jerk (tier ≥ `best`) between `good` (acceptable) and `bad`
@@ -882,7 +892,7 @@ impl Sim<'_> {
         best: Tier,
         good: (f64, Eval),
         bad: (f64, Eval),
-    ) -> f64 {
+    ) -> (f64, Hint) {
         let need = if best == Tier::Releasable {
             Need::Releasable
         } else {
@@ -935,13 +945,35 @@ impl Sim<'_> {
                 probe(x, &mut lo, &mut hi);
             }
         }
-        // Replay the 30-step bisection from the candidates: every midpoint at or below the
-        // accepted end of the final bracket is acceptable and every one at or above the
-        // rejected end is not (the tiers are monotone in the jerk), so only a midpoint
-        // inside it needs an evaluation. The answer is then the bisection's own, to the
-        // last bit: the greedy plan is sensitive to differences far below the bisection's
-        // resolution (a different point of the same bracket can add unplanned stops).
-        let (mut g, mut b) = (good.0, bad.0);
+        let j = self.replay(k, s, v, a, best, (good.0, bad.0), &mut lo, &mut hi);
+        (j, Some((hi.1.bind, hi.1.lim)))
+    }
+
+    /// Replay the 30-step bisection between the candidates `good` and `bad`, knowing a
+    /// bracket `lo` (acceptable) .. `hi` (not) from full evaluations: every midpoint at or
+    /// below `lo` is acceptable and every one at or above `hi` is not (the tiers are
+    /// monotone in the jerk), so only a midpoint inside the bracket needs an evaluation.
+    /// The answer is the bisection's own, to the last bit: the greedy plan is sensitive to
+    /// differences far below the bisection's resolution (another point of the same bracket
+    /// can add unplanned stops).
+    #[allow(clippy::too_many_arguments)]
+    fn replay(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        best: Tier,
+        (good, bad): (f64, f64),
+        lo: &mut (f64, Eval),
+        hi: &mut (f64, Eval),
+    ) -> f64 {
+        let need = if best == Tier::Releasable {
+            Need::Releasable
+        } else {
+            Need::Feasible
+        };
+        let (mut g, mut b) = (good, bad);
         for _ in 0..BISECT {
             let mid = 0.5 * (g + b);
             if mid == g || mid == b {
@@ -952,7 +984,14 @@ impl Sim<'_> {
             } else if mid >= hi.0 {
                 false
             } else {
-                probe(mid, &mut lo, &mut hi)
+                let e = self.evaluate(k, s, v, a, mid, need);
+                if e.tier >= best {
+                    *lo = (mid, e);
+                    true
+                } else {
+                    *hi = (mid, e);
+                    false
+                }
             };
             if ok {
                 g = mid;
@@ -961,6 +1000,80 @@ impl Sim<'_> {
             }
         }
         g
+    }
+
+    /// The braking cycle after a braking cycle: the constraints that bound the last jerk
+    /// (`hint`) usually bound this one too. Solve their slack over the whole jerk range,
+    /// check the root and a point just above it with two full evaluations, and if both
+    /// agree (releasable, not releasable) the candidate scan and the bisection of
+    /// [`Sim::choose`] are replayed on that bracket without evaluating them: the same jerk
+    /// to the last bit, for two evaluations instead of six to ten. `None` when the hint
+    /// does not hold (then `choose` runs as usual).
+    #[allow(clippy::too_many_arguments)]
+    fn follow_hint(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        cands: &[f64; 4],
+        (bind, lim): (Bind, (f64, f64)),
+    ) -> Option<(f64, Hint)> {
+        let (top, bottom) = (cands[0], cands[3]);
+        if top.is_nan() || bottom.is_nan() || top <= bottom {
+            return None;
+        }
+        let tol = (top - bottom) * 0.5f64.powi(BISECT as i32 + 2);
+        let r = self.slack_root(k, s, v, a, (bottom, top), bind, [lim, lim], tol / 4.0)?;
+        if r + tol >= top {
+            return None;
+        }
+        let e_lo = self.evaluate(k, s, v, a, r, Need::Releasable);
+        if e_lo.tier != Tier::Releasable {
+            return None;
+        }
+        let e_hi = self.evaluate(k, s, v, a, r + tol, Need::Releasable);
+        if e_hi.tier == Tier::Releasable {
+            return None;
+        }
+        let (mut lo, mut hi) = ((r, e_lo), (r + tol, e_hi));
+        // The first candidate at or below the boundary is the first releasable one.
+        let mut i = cands.iter().position(|&c| c <= lo.0)?;
+        while i > 0 && cands[i - 1] < hi.0 {
+            // A candidate inside the bracket: its verdict narrows the bracket.
+            let e = self.evaluate(k, s, v, a, cands[i - 1], Need::Releasable);
+            if e.tier == Tier::Releasable {
+                lo = (cands[i - 1], e);
+                i -= 1;
+            } else {
+                hi = (cands[i - 1], e);
+                break;
+            }
+        }
+        if i == 0 {
+            return Some((cands[0], None));
+        }
+        // Releasability need not hold all the way down (a hard brake may not stop without
+        // reversing), so the candidate that the scan would take is checked too.
+        // (and the one above, which the scan would have rejected).
+        let releasable =
+            |j: f64| self.evaluate(k, s, v, a, j, Need::Releasable).tier == Tier::Releasable;
+        if (cands[i] < lo.0 && !releasable(cands[i]))
+            || (cands[i - 1] > hi.0 && releasable(cands[i - 1]))
+        {
+            return None;
+        }
+        let j = self.replay(
+            k,
+            s,
+            v,
+            a,
+            Tier::Releasable,
+            (cands[i], cands[i - 1]),
+            &mut lo,
+            &mut hi,
+        );
+        Some((j, Some((hi.1.bind, hi.1.lim))))
     }
 
     /// Root of [`Sim::slack`] of the constraints `bind` on the bracket `(g, b)`, where a
@@ -1408,6 +1521,7 @@ impl Sim<'_> {
         let max_cycles = (50.0 * l1 / cyc) as usize + 100_000;
         let mut cycles = 0usize;
         let mut prev: Option<(f64, f64, f64, f64, usize, usize)> = None;
+        let mut hint: Hint = None;
         loop {
             k = self.block_at(k, s);
             // Final stop in closed form when the path end lies in the window and is due.
@@ -1442,7 +1556,8 @@ impl Sim<'_> {
                     }
                 }
             }
-            let (j, fell) = self.choose(k, s, v, a);
+            let (j, fell, next_hint) = self.choose(k, s, v, a, hint);
+            hint = next_hint;
             if fell {
                 if let Some((ps, 0.0, 0.0, pt, pnext, pk)) = prev {
                     // Stuck at rest: a rest-to-rest move to the end of the block, in closed
