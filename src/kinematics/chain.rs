@@ -83,7 +83,7 @@ impl AxisSet {
 
 /// Up to two rotary solutions (see [`Machine::rotary_solutions`]), without allocation.
 #[derive(Debug, Clone, Copy, Default)]
-struct Solutions {
+pub(crate) struct Solutions {
     sols: [[Option<f64>; 2]; 2],
     n: usize,
 }
@@ -245,7 +245,7 @@ impl Machine {
     }
 
     /// [`Machine::rotary_solutions`] without allocation (the IKT hot path).
-    fn rotary_solutions_fixed(&self, u: &Vec3) -> Option<Solutions> {
+    pub(crate) fn rotary_solutions_fixed(&self, u: &Vec3) -> Option<Solutions> {
         let t0 = self.dir_home;
         let (tab, head) = self.sides();
         let [r0, r1] = &self.rotary;
@@ -369,10 +369,17 @@ impl<'m> IkTracker<'m> {
 
     /// Solve the next posture (tip `p`, unit axis `u`, part frame).
     pub fn solve(&mut self, p: &Point3, u: &Vec3) -> Result<Solved, IkFailure> {
-        let fixed = self
-            .machine
-            .rotary_solutions_fixed(u)
-            .ok_or(IkFailure::Unreachable)?;
+        let mut solved = self.solve_rotaries(self.machine.rotary_solutions_fixed(u))?;
+        self.machine.linear_joints(&mut solved.joints, p);
+        Ok(solved)
+    }
+
+    /// The sequential part of [`IkTracker::solve`]: branch choice and unwinding from the
+    /// rotary solutions of the next posture's axis (`None`: unreachable). The linear joints
+    /// of the result are left for [`Machine::linear_joints`]; they do not depend on the
+    /// path before, so a caller can solve them, and the rotary solutions, in parallel.
+    pub(crate) fn solve_rotaries(&mut self, fixed: Option<Solutions>) -> Result<Solved, IkFailure> {
+        let fixed = fixed.ok_or(IkFailure::Unreachable)?;
         let sols = fixed.as_slice();
         let prev = self.prev.unwrap_or([0.0; 5]);
         let mut best: Option<(f64, Joints, usize, bool)> = None;
@@ -421,8 +428,7 @@ impl<'m> IkTracker<'m> {
                 best = Some((cost, q, b, singular));
             }
         }
-        let (_, mut q, branch, singular) = best.ok_or(IkFailure::Travel)?;
-        self.machine.linear_joints(&mut q, p);
+        let (_, q, branch, singular) = best.ok_or(IkFailure::Travel)?;
         // A switch only counts when the two solutions really differ.
         let distinct = sols.len() == 2
             && match (sols[0][0], sols[1][0]) {

@@ -181,26 +181,32 @@ pub fn plan_poses(
     level: Level,
 ) -> Result<FeedPlan, KinematicsError> {
     let mut ik = IkTracker::new(machine);
-    let mut solved = Vec::with_capacity(input.len());
-    for (index, p) in input.iter().enumerate() {
-        let ok = p.pose.tip.coords.iter().all(|x| x.is_finite())
+    // The first posture that is not a posture at all; errors before it come first.
+    let bad = input.iter().position(|p| {
+        !(p.pose.tip.coords.iter().all(|x| x.is_finite())
             && p.pose.axis.iter().all(|x| x.is_finite())
-            && p.pose.axis.norm() > 1e-9;
-        if !ok {
-            return Err(KinematicsError::BadPosture {
-                index,
-                line: p.line,
-            });
-        }
-        let u = p.pose.axis.normalize();
-        let s = ik.solve(&p.pose.tip, &u).map_err(|e| match e {
-            chain::IkFailure::Unreachable => KinematicsError::Unreachable {
-                index,
-                line: p.line,
-                i: u.x,
-                j: u.y,
-                k: u.z,
-            },
+            && p.pose.axis.norm() > 1e-9)
+    });
+    let good = &input[..bad.unwrap_or(input.len())];
+    // IKT in three passes: the rotary solutions of each axis (parallel), the branch choice
+    // and unwinding along the path (sequential, cheap), the linear joints (parallel).
+    let rotary: Vec<_> = good
+        .par_iter()
+        .map(|p| machine.rotary_solutions_fixed(&p.pose.axis.normalize()))
+        .collect();
+    let mut solved = Vec::with_capacity(input.len());
+    for (index, (p, fixed)) in good.iter().zip(rotary).enumerate() {
+        let s = ik.solve_rotaries(fixed).map_err(|e| match e {
+            chain::IkFailure::Unreachable => {
+                let u = p.pose.axis.normalize();
+                KinematicsError::Unreachable {
+                    index,
+                    line: p.line,
+                    i: u.x,
+                    j: u.y,
+                    k: u.z,
+                }
+            }
             chain::IkFailure::Travel => KinematicsError::Travel {
                 index,
                 line: p.line,
@@ -208,6 +214,16 @@ pub fn plan_poses(
         })?;
         solved.push(s);
     }
+    if let Some(index) = bad {
+        return Err(KinematicsError::BadPosture {
+            index,
+            line: input[index].line,
+        });
+    }
+    solved
+        .par_iter_mut()
+        .zip(input.par_iter())
+        .for_each(|(s, p)| machine.linear_joints(&mut s.joints, &p.pose.tip));
     let joints: Vec<Joints> = solved.iter().map(|s| s.joints).collect();
     let positions: Vec<[f64; 3]> = input
         .iter()
