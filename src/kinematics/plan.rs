@@ -893,22 +893,9 @@ impl Sim<'_> {
         good: (f64, Eval),
         bad: (f64, Eval),
     ) -> (f64, Hint) {
-        let need = if best == Tier::Releasable {
-            Need::Releasable
-        } else {
-            Need::Feasible
-        };
         let tol = (bad.0 - good.0) * 0.5f64.powi(BISECT as i32);
-        // A full evaluation at x moves one end of the bracket; true if x is acceptable.
-        let probe = |x: f64, g: &mut (f64, Eval), b: &mut (f64, Eval)| {
-            let e = self.evaluate(k, s, v, a, x, need);
-            if e.tier >= best {
-                *g = (x, e);
-                true
-            } else {
-                *b = (x, e);
-                false
-            }
+        let probe = |x: f64, lo: &mut (f64, Eval), hi: &mut (f64, Eval)| {
+            self.probe(k, s, v, a, best, x, lo, hi)
         };
         let mut rounds = 0;
         let (mut lo, mut hi) = (good, bad);
@@ -949,6 +936,35 @@ impl Sim<'_> {
         (j, Some((hi.1.bind, hi.1.lim)))
     }
 
+    /// A full evaluation at x for tier `best`: x becomes the new `lo` if acceptable (true),
+    /// else the new `hi`.
+    #[allow(clippy::too_many_arguments)]
+    fn probe(
+        &self,
+        k: usize,
+        s: f64,
+        v: f64,
+        a: f64,
+        best: Tier,
+        x: f64,
+        lo: &mut (f64, Eval),
+        hi: &mut (f64, Eval),
+    ) -> bool {
+        let need = if best == Tier::Releasable {
+            Need::Releasable
+        } else {
+            Need::Feasible
+        };
+        let e = self.evaluate(k, s, v, a, x, need);
+        if e.tier >= best {
+            *lo = (x, e);
+            true
+        } else {
+            *hi = (x, e);
+            false
+        }
+    }
+
     /// Replay the 30-step bisection between the candidates `good` and `bad`, knowing a
     /// bracket `lo` (acceptable) .. `hi` (not) from full evaluations: every midpoint at or
     /// below `lo` is acceptable and every one at or above `hi` is not (the tiers are
@@ -968,11 +984,6 @@ impl Sim<'_> {
         lo: &mut (f64, Eval),
         hi: &mut (f64, Eval),
     ) -> f64 {
-        let need = if best == Tier::Releasable {
-            Need::Releasable
-        } else {
-            Need::Feasible
-        };
         let (mut g, mut b) = (good, bad);
         for _ in 0..BISECT {
             let mid = 0.5 * (g + b);
@@ -984,14 +995,7 @@ impl Sim<'_> {
             } else if mid >= hi.0 {
                 false
             } else {
-                let e = self.evaluate(k, s, v, a, mid, need);
-                if e.tier >= best {
-                    *lo = (mid, e);
-                    true
-                } else {
-                    *hi = (mid, e);
-                    false
-                }
+                self.probe(k, s, v, a, best, mid, lo, hi)
             };
             if ok {
                 g = mid;
