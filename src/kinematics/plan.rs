@@ -387,6 +387,16 @@ enum Tier {
     Releasable = 2,
 }
 
+/// The interpolator's state at the start of a cycle: block k, path position s, speed v,
+/// acceleration a.
+#[derive(Clone, Copy, Debug)]
+struct State {
+    k: usize,
+    s: f64,
+    v: f64,
+    a: f64,
+}
+
 /// What a caller of [`Sim::evaluate`] needs to know.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Need {
@@ -506,7 +516,8 @@ impl Sim<'_> {
     /// constraints that keep it below the tier asked for (see [`Eval`]). `need` says what
     /// the caller asks: [`Need::Classify`] and [`Need::Releasable`] compute the full tier,
     /// [`Need::Feasible`] skips the releasability tests.
-    fn evaluate(&self, k: usize, s: f64, v: f64, a: f64, j: f64, need: Need) -> Eval {
+    fn evaluate(&self, st: State, j: f64, need: Need) -> Eval {
+        let State { k, s, v, a } = st;
         let b = self.b;
         let t = self.cycle;
         let mut bind = Bind::default();
@@ -663,17 +674,8 @@ impl Sim<'_> {
     /// each in its own units, positive when all are met. It is continuous in j and costs
     /// no look-ahead scan, so the boundary search can solve on it and keep the full
     /// evaluations for the verdicts. `NAN` when it cannot say.
-    #[allow(clippy::too_many_arguments)]
-    fn slack(
-        &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
-        j: f64,
-        bind: Bind,
-        lim: Option<(f64, f64)>,
-    ) -> f64 {
+    fn slack(&self, st: State, j: f64, bind: Bind, lim: Option<(f64, f64)>) -> f64 {
+        let State { k, s, v, a } = st;
         if bind.other {
             return f64::NAN;
         }
@@ -766,7 +768,8 @@ impl Sim<'_> {
     }
 
     /// A measure of how badly a jerk violates the constraints (for the fallback tier).
-    fn violation(&self, k: usize, s: f64, v: f64, a: f64, j: f64) -> f64 {
+    fn violation(&self, st: State, j: f64) -> f64 {
+        let State { k, s, v, a } = st;
         let b = self.b;
         let (ds, v1, a1) = step(v, a, j, self.cycle);
         let s1 = s + ds;
@@ -783,7 +786,8 @@ impl Sim<'_> {
     }
 
     /// Choose the jerk of the next cycle (§6.3 steps 1–3). Returns (jerk, fallback used).
-    fn choose(&self, k: usize, s: f64, v: f64, a: f64, hint: Hint) -> (f64, bool, Hint) {
+    fn choose(&self, st: State, hint: Hint) -> (f64, bool, Hint) {
+        let State { k, s, v, a } = st;
         let b = self.b;
         let t = self.cycle;
         let (a0, j0) = (b.abar[k], b.jbar[k]);
@@ -816,7 +820,7 @@ impl Sim<'_> {
         let mut cands = [j_hi, clip(-a / t), clip(0.0), j_lo];
         cands.sort_by(|x, y| y.total_cmp(x));
         if let Some(h) = hint.filter(|_| !self.bisect_only) {
-            if let Some((j, next)) = self.follow_hint(k, s, v, a, &cands, h) {
+            if let Some((j, next)) = self.follow_hint(st, &cands, h) {
                 return (j, false, next);
             }
         }
@@ -830,7 +834,7 @@ impl Sim<'_> {
             if i > 0 && c == cands[i - 1] {
                 evals[i] = evals[i - 1];
             } else {
-                evals[i] = self.evaluate(k, s, v, a, c, Need::Classify);
+                evals[i] = self.evaluate(st, c, Need::Classify);
             }
             if evals[i].tier == Tier::Releasable {
                 best = Tier::Releasable;
@@ -844,7 +848,7 @@ impl Sim<'_> {
             let mut bv = f64::INFINITY;
             for i in 0..=40 {
                 let jj = j_lo + (j_hi - j_lo) * i as f64 / 40.0;
-                let viol = self.violation(k, s, v, a, jj);
+                let viol = self.violation(st, jj);
                 if viol < bv {
                     bv = viol;
                     bj = jj;
@@ -865,7 +869,7 @@ impl Sim<'_> {
             return (cands[0], false, None);
         }
         let good = (cands[i], evals[i]);
-        let (j, next) = self.boundary(k, s, v, a, best, good, (cands[i - 1], evals[i - 1]));
+        let (j, next) = self.boundary(st, best, good, (cands[i - 1], evals[i - 1]));
         // Only a releasable boundary is carried to the next cycle (see `follow_hint`).
         (j, false, next.filter(|_| best == Tier::Releasable))
     }
@@ -882,35 +886,15 @@ impl Sim<'_> {
     /// another constraint, the next round solves that one. The bracket only ever moves on
     /// the verdicts of full evaluations, so the answer is acceptable whatever the slack
     /// says; when the slack cannot say (or after a few rounds), the search bisects.
-    #[allow(clippy::too_many_arguments)]
-    fn boundary(
-        &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
-        best: Tier,
-        good: (f64, Eval),
-        bad: (f64, Eval),
-    ) -> (f64, Hint) {
+    fn boundary(&self, st: State, best: Tier, good: (f64, Eval), bad: (f64, Eval)) -> (f64, Hint) {
         let tol = (bad.0 - good.0) * 0.5f64.powi(BISECT as i32);
-        let probe = |x: f64, lo: &mut (f64, Eval), hi: &mut (f64, Eval)| {
-            self.probe(k, s, v, a, best, x, lo, hi)
-        };
+        let probe =
+            |x: f64, lo: &mut (f64, Eval), hi: &mut (f64, Eval)| self.probe(st, best, x, lo, hi);
         let mut rounds = 0;
         let (mut lo, mut hi) = (good, bad);
         while hi.0 - lo.0 > tol {
             let root = if rounds < 4 && !self.bisect_only {
-                self.slack_root(
-                    k,
-                    s,
-                    v,
-                    a,
-                    (lo.0, hi.0),
-                    hi.1.bind,
-                    [lo.1.lim, hi.1.lim],
-                    tol / 4.0,
-                )
+                self.slack_root(st, (lo.0, hi.0), hi.1.bind, [lo.1.lim, hi.1.lim], tol / 4.0)
             } else {
                 None
             };
@@ -932,19 +916,15 @@ impl Sim<'_> {
                 probe(x, &mut lo, &mut hi);
             }
         }
-        let j = self.replay(k, s, v, a, best, (good.0, bad.0), &mut lo, &mut hi);
+        let j = self.replay(st, best, (good.0, bad.0), &mut lo, &mut hi);
         (j, Some((hi.1.bind, hi.1.lim)))
     }
 
     /// A full evaluation at x for tier `best`: x becomes the new `lo` if acceptable (true),
     /// else the new `hi`.
-    #[allow(clippy::too_many_arguments)]
     fn probe(
         &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
+        st: State,
         best: Tier,
         x: f64,
         lo: &mut (f64, Eval),
@@ -955,7 +935,7 @@ impl Sim<'_> {
         } else {
             Need::Feasible
         };
-        let e = self.evaluate(k, s, v, a, x, need);
+        let e = self.evaluate(st, x, need);
         if e.tier >= best {
             *lo = (x, e);
             true
@@ -972,13 +952,9 @@ impl Sim<'_> {
     /// The answer is the bisection's own, to the last bit: the greedy plan is sensitive to
     /// differences far below the bisection's resolution (another point of the same bracket
     /// can add unplanned stops).
-    #[allow(clippy::too_many_arguments)]
     fn replay(
         &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
+        st: State,
         best: Tier,
         (good, bad): (f64, f64),
         lo: &mut (f64, Eval),
@@ -995,7 +971,7 @@ impl Sim<'_> {
             } else if mid >= hi.0 {
                 false
             } else {
-                self.probe(k, s, v, a, best, mid, lo, hi)
+                self.probe(st, best, mid, lo, hi)
             };
             if ok {
                 g = mid;
@@ -1013,13 +989,9 @@ impl Sim<'_> {
     /// [`Sim::choose`] are replayed on that bracket without evaluating them: the same jerk
     /// to the last bit, for two evaluations instead of six to ten. `None` when the hint
     /// does not hold (then `choose` runs as usual).
-    #[allow(clippy::too_many_arguments)]
     fn follow_hint(
         &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
+        st: State,
         cands: &[f64; 4],
         (bind, lim): (Bind, (f64, f64)),
     ) -> Option<(f64, Hint)> {
@@ -1028,15 +1000,15 @@ impl Sim<'_> {
             return None;
         }
         let tol = (top - bottom) * 0.5f64.powi(BISECT as i32 + 2);
-        let r = self.slack_root(k, s, v, a, (bottom, top), bind, [lim, lim], tol / 4.0)?;
+        let r = self.slack_root(st, (bottom, top), bind, [lim, lim], tol / 4.0)?;
         if r + tol >= top {
             return None;
         }
-        let e_lo = self.evaluate(k, s, v, a, r, Need::Releasable);
+        let e_lo = self.evaluate(st, r, Need::Releasable);
         if e_lo.tier != Tier::Releasable {
             return None;
         }
-        let e_hi = self.evaluate(k, s, v, a, r + tol, Need::Releasable);
+        let e_hi = self.evaluate(st, r + tol, Need::Releasable);
         if e_hi.tier == Tier::Releasable {
             return None;
         }
@@ -1045,7 +1017,7 @@ impl Sim<'_> {
         let mut i = cands.iter().position(|&c| c <= lo.0)?;
         while i > 0 && cands[i - 1] < hi.0 {
             // A candidate inside the bracket: its verdict narrows the bracket.
-            let e = self.evaluate(k, s, v, a, cands[i - 1], Need::Releasable);
+            let e = self.evaluate(st, cands[i - 1], Need::Releasable);
             if e.tier == Tier::Releasable {
                 lo = (cands[i - 1], e);
                 i -= 1;
@@ -1060,18 +1032,14 @@ impl Sim<'_> {
         // Releasability need not hold all the way down (a hard brake may not stop without
         // reversing), so the candidate that the scan would take is checked too.
         // (and the one above, which the scan would have rejected).
-        let releasable =
-            |j: f64| self.evaluate(k, s, v, a, j, Need::Releasable).tier == Tier::Releasable;
+        let releasable = |j: f64| self.evaluate(st, j, Need::Releasable).tier == Tier::Releasable;
         if (cands[i] < lo.0 && !releasable(cands[i]))
             || (cands[i - 1] > hi.0 && releasable(cands[i - 1]))
         {
             return None;
         }
         let j = self.replay(
-            k,
-            s,
-            v,
-            a,
+            st,
             Tier::Releasable,
             (cands[i], cands[i - 1]),
             &mut lo,
@@ -1086,13 +1054,9 @@ impl Sim<'_> {
     /// covers, so the limits are held at those of the rejected end, then of the accepted
     /// end, then recomputed at every point (exact, but the slack then has jumps); the
     /// first that gives a sign change is used. `None` when none does.
-    #[allow(clippy::too_many_arguments)]
     fn slack_root(
         &self,
-        k: usize,
-        s: f64,
-        v: f64,
-        a: f64,
+        st: State,
         (g, b): (f64, f64),
         bind: Bind,
         [lim_g, lim_b]: [(f64, f64); 2],
@@ -1101,8 +1065,11 @@ impl Sim<'_> {
         if bind.other {
             return None;
         }
-        for lim in [Some(lim_b), Some(lim_g), None] {
-            let h = |j: f64| self.slack(k, s, v, a, j, bind, lim);
+        for (i, lim) in [Some(lim_b), Some(lim_g), None].into_iter().enumerate() {
+            if i == 1 && lim_g == lim_b {
+                continue;
+            }
+            let h = |j: f64| self.slack(st, j, bind, lim);
             let (fg, fb) = (h(g), h(b));
             if fg >= 0.0 && fb < 0.0 {
                 // A point where the slack cannot say counts as rejected.
@@ -1560,7 +1527,7 @@ impl Sim<'_> {
                     }
                 }
             }
-            let (j, fell, next_hint) = self.choose(k, s, v, a, hint);
+            let (j, fell, next_hint) = self.choose(State { k, s, v, a }, hint);
             hint = next_hint;
             if fell {
                 if let Some((ps, 0.0, 0.0, pt, pnext, pk)) = prev {
