@@ -109,122 +109,104 @@ impl Blocks {
         let np = joints.len();
         let nb = np.saturating_sub(1);
         let mut b = Blocks {
-            len: Vec::with_capacity(nb),
-            start: Vec::with_capacity(np),
-            g: Vec::with_capacity(nb),
-            vbar: Vec::with_capacity(nb),
-            vbar_by: Vec::with_capacity(nb),
-            abar: Vec::with_capacity(nb),
-            jbar: Vec::with_capacity(nb),
-            jbar_by: Vec::with_capacity(nb),
-            vaxis: Vec::with_capacity(nb),
+            len: vec![0.0; nb],
+            start: vec![0.0; np],
+            g: vec![[0.0; 5]; nb],
+            vbar: vec![0.0; nb],
+            vbar_by: vec![Limit::Feed; nb],
+            abar: vec![0.0; nb],
+            jbar: vec![0.0; nb],
+            jbar_by: vec![0; nb],
+            vaxis: vec![0.0; nb],
             ceil: vec![0.0; np],
             ceil_junction: vec![false; np],
         };
-        // Per block, independent: in parallel.
-        struct Row {
-            l: f64,
-            g: Joints,
-            still: bool,
-            v: f64,
-            by: Limit,
-            a: f64,
-            j: f64,
-            j_by: usize,
-            vax: f64,
-        }
-        let rows: Vec<Row> = (0..nb)
+        let mut still = vec![false; nb];
+        // Per block, independent: in parallel, straight into the columns.
+        (
+            &mut b.len,
+            &mut b.g,
+            &mut b.vbar,
+            &mut b.vbar_by,
+            &mut b.abar,
+            &mut b.jbar,
+            &mut b.jbar_by,
+            &mut b.vaxis,
+            &mut still,
+        )
             .into_par_iter()
-            .map(|k| {
-                let (p, q) = (positions[k], positions[k + 1]);
-                let dl =
-                    ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2)).sqrt();
-                let l = dl.max(EPS_L);
-                let mut g = [0.0; 5];
-                for i in 0..5 {
-                    g[i] = (joints[k + 1][i] - joints[k][i]) / l;
-                }
-                let (mut vax, mut vax_by) = (f64::INFINITY, 0);
-                let mut a = f64::INFINITY;
-                let (mut j, mut j_by) = (f64::INFINITY, 0);
-                for i in 0..5 {
-                    let gi = g[i].abs();
-                    if gi > 0.0 {
-                        let lim = &limits[i];
-                        if lim.vmax / gi < vax {
-                            vax = lim.vmax / gi;
-                            vax_by = i;
-                        }
-                        a = a.min(lim.amax / gi);
-                        if lim.jmax / gi < j {
-                            j = lim.jmax / gi;
-                            j_by = i;
+            .enumerate()
+            .for_each(
+                |(k, (len, g, vbar, vbar_by, abar, jbar, jbar_by, vaxis, still))| {
+                    let (p, q) = (positions[k], positions[k + 1]);
+                    let dl =
+                        ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) + (q[2] - p[2]).powi(2))
+                            .sqrt();
+                    let l = dl.max(EPS_L);
+                    for i in 0..5 {
+                        g[i] = (joints[k + 1][i] - joints[k][i]) / l;
+                    }
+                    let (mut vax, mut vax_by) = (f64::INFINITY, 0);
+                    let mut a = f64::INFINITY;
+                    let (mut j, mut j_by) = (f64::INFINITY, 0);
+                    for i in 0..5 {
+                        let gi = g[i].abs();
+                        if gi > 0.0 {
+                            let lim = &limits[i];
+                            if lim.vmax / gi < vax {
+                                vax = lim.vmax / gi;
+                                vax_by = i;
+                            }
+                            a = a.min(lim.amax / gi);
+                            if lim.jmax / gi < j {
+                                j = lim.jmax / gi;
+                                j_by = i;
+                            }
                         }
                     }
-                }
-                let still = dl < EPS_L && g.iter().all(|x| x.abs() < 1e-12);
-                let f = feed.get(k).copied().unwrap_or(f64::INFINITY);
-                // The NC drops blocks without motion, so the block-cycle rule skips them.
-                let cyc = if settings.min_block_cycles > 0.0 && !still {
-                    l / (settings.min_block_cycles * settings.cycle_time)
-                } else {
-                    f64::INFINITY
-                };
-                let (mut v, mut by) = (f, Limit::Feed);
-                if vax < v {
-                    v = vax;
-                    by = Limit::Velocity(vax_by);
-                }
-                if cyc < v {
-                    v = cyc;
-                    by = Limit::BlockCycle;
-                }
-                if !v.is_finite() {
-                    // No axis moves, no feed and no block-cycle rule: the block is free.
-                    v = 1e9;
-                }
-                if !a.is_finite() {
-                    a = 1e9;
-                }
-                if !j.is_finite() {
-                    j = 1e12;
-                }
-                Row {
-                    l,
-                    g,
-                    still,
-                    v,
-                    by,
-                    a,
-                    j,
-                    j_by,
-                    vax,
-                }
-            })
-            .collect();
+                    *still = dl < EPS_L && g.iter().all(|x| x.abs() < 1e-12);
+                    let f = feed.get(k).copied().unwrap_or(f64::INFINITY);
+                    // The NC drops blocks without motion, so the block-cycle rule skips them.
+                    let cyc = if settings.min_block_cycles > 0.0 && !*still {
+                        l / (settings.min_block_cycles * settings.cycle_time)
+                    } else {
+                        f64::INFINITY
+                    };
+                    let (mut v, mut by) = (f, Limit::Feed);
+                    if vax < v {
+                        v = vax;
+                        by = Limit::Velocity(vax_by);
+                    }
+                    if cyc < v {
+                        v = cyc;
+                        by = Limit::BlockCycle;
+                    }
+                    if !v.is_finite() {
+                        // No axis moves, no feed and no block-cycle rule: the block is free.
+                        v = 1e9;
+                    }
+                    if !a.is_finite() {
+                        a = 1e9;
+                    }
+                    if !j.is_finite() {
+                        j = 1e12;
+                    }
+                    (*len, *vbar, *vbar_by, *abar, *jbar, *jbar_by, *vaxis) =
+                        (l, v, by, a, j, j_by, vax);
+                },
+            );
         let mut s = 0.0;
-        b.start.push(0.0);
+        for (k, l) in b.len.iter().enumerate() {
+            s += l;
+            b.start[k + 1] = s;
+        }
         // Direction used for the junction on each side of a block: a block with no motion
         // at all (a repeated posture) carries its predecessor's, so it is transparent.
-        let mut g_junction: Vec<Joints> = Vec::with_capacity(nb);
-        for (k, r) in rows.iter().enumerate() {
-            g_junction.push(if r.still && k > 0 {
-                g_junction[k - 1]
-            } else {
-                r.g
-            });
-            b.len.push(r.l);
-            s += r.l;
-            b.start.push(s);
-            b.g.push(r.g);
-            b.vbar.push(r.v);
-            b.vbar_by.push(r.by);
-            b.abar.push(r.a);
-            b.jbar.push(r.j);
-            b.jbar_by.push(r.j_by);
-            b.vaxis.push(r.vax);
+        let mut from = vec![0u32; nb];
+        for k in 1..nb {
+            from[k] = if still[k] { from[k - 1] } else { k as u32 };
         }
-        drop(rows);
+        let g_junction = |k: usize| &b.g[from[k] as usize];
         let ceilings: Vec<(f64, bool)> = (1..nb)
             .into_par_iter()
             .map(|p| {
@@ -235,13 +217,12 @@ impl Blocks {
                 }
                 let lmin = b.len[p - 1].min(b.len[p]);
                 let mut junction = false;
-                for i in 0..5 {
-                    let (gp, gm) = (g_junction[p][i], g_junction[p - 1][i]);
+                let (gjp, gjm) = (g_junction(p), g_junction(p - 1));
+                for ((&gp, &gm), lim) in gjp.iter().zip(gjm).zip(limits) {
                     let dg = (gp - gm).abs();
                     if dg <= 1e-12 * (gp.abs() + gm.abs()) || dg == 0.0 {
                         continue;
                     }
-                    let lim = &limits[i];
                     let eq3 = (8.0 * lim.amax * lim.tol).sqrt() / dg;
                     if eq3 < c {
                         c = eq3;

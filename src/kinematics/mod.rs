@@ -224,13 +224,13 @@ pub fn plan_poses(
         .par_iter_mut()
         .zip(input.par_iter())
         .for_each(|(s, p)| machine.linear_joints(&mut s.joints, &p.pose.tip));
-    let joints: Vec<Joints> = solved.iter().map(|s| s.joints).collect();
+    let joints: Vec<Joints> = solved.par_iter().map(|s| s.joints).collect();
     let positions: Vec<[f64; 3]> = input
-        .iter()
+        .par_iter()
         .map(|p| [p.pose.tip.x, p.pose.tip.y, p.pose.tip.z])
         .collect();
-    let feed: Vec<f64> = input.iter().skip(1).map(|p| p.feed_mm_s).collect();
-    let stops: Vec<bool> = input.iter().map(|p| p.exact_stop).collect();
+    let feed: Vec<f64> = input.par_iter().skip(1).map(|p| p.feed_mm_s).collect();
+    let stops: Vec<bool> = input.par_iter().map(|p| p.exact_stop).collect();
     let settings = settings_of(machine);
     let blocks = Blocks::build(
         &joints,

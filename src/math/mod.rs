@@ -56,6 +56,9 @@ pub fn any_perpendicular(a: &Vec3) -> Vec3 {
 
 /// Wrap an angle to (−π, π].
 pub fn wrap_pi(a: f64) -> f64 {
+    if a > -std::f64::consts::PI && a <= std::f64::consts::PI {
+        return a;
+    }
     let two_pi = std::f64::consts::TAU;
     let mut r = a.rem_euclid(two_pi);
     if r > std::f64::consts::PI {
