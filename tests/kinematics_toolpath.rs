@@ -115,6 +115,38 @@ fn travel_limits_give_an_error_with_the_line() {
     let e = predict_posture_feed(&path, &m).unwrap_err();
     assert_eq!(e, KinematicsError::Travel { index: 1, line: 8 });
     assert!(e.to_string().starts_with("line 8:"));
+    // Far into a long path (the IKT works in chunks of postures): the same error, with
+    // the index and line of the first bad posture, before a non-finite one further on.
+    let mut long: Vec<_> = (0..40_000)
+        .map(|i| {
+            let kind = if i == 0 {
+                MotionKind::From
+            } else {
+                MotionKind::Cut
+            };
+            posture(
+                [i as f64 * 0.01, 0.0, 0.0],
+                Vec3::z(),
+                kind,
+                Some(1000.0),
+                10 + i,
+            )
+        })
+        .collect();
+    long[33_333].axis = Vec3::new(t.sin(), 0.0, t.cos());
+    long[39_000].position.x = f64::NAN;
+    let long = Toolpath {
+        postures: long,
+        ..Default::default()
+    };
+    let e = predict_posture_feed(&long, &m).unwrap_err();
+    assert_eq!(
+        e,
+        KinematicsError::Travel {
+            index: 33_333,
+            line: 33_343
+        }
+    );
     // The nutating pair cannot tilt beyond 90°.
     let m = Machine::from_toml_str(NUT).unwrap();
     let e = predict_posture_feed(&path, &m).unwrap_err();

@@ -165,6 +165,9 @@ pub struct PlanInput {
     pub line: u32,
 }
 
+/// Postures per chunk of the IKT's rotary pass.
+const IKT_CHUNK: usize = 1 << 14;
+
 fn settings_of(machine: &Machine) -> Settings {
     Settings {
         cycle_time: machine.cycle_time,
@@ -189,30 +192,57 @@ pub fn plan_poses(
     });
     let good = &input[..bad.unwrap_or(input.len())];
     // IKT in three passes: the rotary solutions of each axis (parallel), the branch choice
-    // and unwinding along the path (sequential, cheap), the linear joints (parallel).
-    let rotary: Vec<_> = good
-        .par_iter()
-        .map(|p| machine.rotary_solutions_fixed(&p.pose.axis.normalize()))
-        .collect();
-    let mut solved = Vec::with_capacity(input.len());
-    for (index, (p, fixed)) in good.iter().zip(rotary).enumerate() {
-        let s = ik.solve_rotaries(fixed).map_err(|e| match e {
-            chain::IkFailure::Unreachable => {
-                let u = p.pose.axis.normalize();
-                KinematicsError::Unreachable {
-                    index,
-                    line: p.line,
-                    i: u.x,
-                    j: u.y,
-                    k: u.z,
-                }
+    // and unwinding along the path (sequential, cheap), the linear joints (parallel). The
+    // first two go chunk by chunk, the rotary solutions of the next chunk while the branch
+    // choice runs through this one, so the solutions stay in cache.
+    let mut joints: Vec<Joints> = Vec::with_capacity(input.len());
+    let mut meta: Vec<(usize, bool, bool)> = Vec::with_capacity(input.len());
+    let chunks: Vec<&[PlanInput]> = good.chunks(IKT_CHUNK).collect();
+    let rotaries = |chunk: &[PlanInput], out: &mut Vec<_>| {
+        chunk
+            .par_iter()
+            .map(|p| machine.rotary_solutions_fixed(&p.pose.axis.normalize()))
+            .collect_into_vec(out)
+    };
+    let (mut cur, mut next) = (Vec::new(), Vec::new());
+    if let Some(first) = chunks.first() {
+        rotaries(first, &mut cur);
+    }
+    for (c, chunk) in chunks.iter().enumerate() {
+        let branch_choice = || -> Result<(), KinematicsError> {
+            for (i, (p, fixed)) in chunk.iter().zip(cur.drain(..)).enumerate() {
+                let index = c * IKT_CHUNK + i;
+                let s = ik.solve_rotaries(fixed).map_err(|e| match e {
+                    chain::IkFailure::Unreachable => {
+                        let u = p.pose.axis.normalize();
+                        KinematicsError::Unreachable {
+                            index,
+                            line: p.line,
+                            i: u.x,
+                            j: u.y,
+                            k: u.z,
+                        }
+                    }
+                    chain::IkFailure::Travel => KinematicsError::Travel {
+                        index,
+                        line: p.line,
+                    },
+                })?;
+                joints.push(s.joints);
+                meta.push((s.branch, s.switched, s.singular));
             }
-            chain::IkFailure::Travel => KinematicsError::Travel {
-                index,
-                line: p.line,
+            Ok(())
+        };
+        let ((), done) = rayon::join(
+            || {
+                if let Some(n) = chunks.get(c + 1) {
+                    rotaries(n, &mut next);
+                }
             },
-        })?;
-        solved.push(s);
+            branch_choice,
+        );
+        done?;
+        std::mem::swap(&mut cur, &mut next);
     }
     if let Some(index) = bad {
         return Err(KinematicsError::BadPosture {
@@ -220,11 +250,10 @@ pub fn plan_poses(
             line: input[index].line,
         });
     }
-    solved
+    joints
         .par_iter_mut()
         .zip(input.par_iter())
-        .for_each(|(s, p)| machine.linear_joints(&mut s.joints, &p.pose.tip));
-    let joints: Vec<Joints> = solved.par_iter().map(|s| s.joints).collect();
+        .for_each(|(q, p)| machine.linear_joints(q, &p.pose.tip));
     let positions: Vec<[f64; 3]> = input
         .par_iter()
         .map(|p| [p.pose.tip.x, p.pose.tip.y, p.pose.tip.z])
@@ -248,26 +277,27 @@ pub fn plan_poses(
     let limits = plan::limits_per_posture(&blocks, &timing, machine.lookahead_blocks);
     let n = blocks.n();
     // Eq 6 and the per-posture records are independent: in parallel.
-    let postures = solved
+    let postures = joints
         .par_iter()
+        .zip(&meta)
         .enumerate()
-        .map(|(p, s)| {
+        .map(|(p, (q, &(branch, branch_switch, singular)))| {
             let k = if p < n { p } else { n.saturating_sub(1) };
             let v = timing.v.get(p).copied().unwrap_or(0.0);
             let feed_mm_s = if n == 0 {
                 0.0
             } else {
-                cl_speed(machine, &s.joints, &blocks.g[k], v)
+                cl_speed(machine, q, &blocks.g[k], v)
             };
             PlannedPosture {
                 t_s: timing.t.get(p).copied().unwrap_or(0.0),
                 path_speed_mm_s: v,
                 feed_mm_s,
                 limit: limits.get(p).copied().unwrap_or(Limit::Stop),
-                joints: s.joints,
-                branch: s.branch,
-                branch_switch: s.switched,
-                singular: s.singular,
+                joints: *q,
+                branch,
+                branch_switch,
+                singular,
             }
         })
         .collect();
