@@ -1094,6 +1094,10 @@ impl Sim<'_> {
         if top.is_nan() || bottom.is_nan() || top <= bottom {
             return None;
         }
+        // Most often the hint no longer binds: its constraints hold at the top candidate.
+        if self.slack(st, top, bind, Some(lim)) >= 0.0 {
+            return None;
+        }
         let tol = (top - bottom) * 0.5f64.powi(BISECT as i32 + 2);
         let r = self.slack_root(st, (bottom, top), bind, [lim, lim], tol / 4.0)?;
         if r + tol >= top {
@@ -1166,8 +1170,14 @@ impl Sim<'_> {
                 continue;
             }
             let h = |j: f64| self.slack(st, j, bind, lim);
-            let (fg, fb) = (h(g), h(b));
-            if fg >= 0.0 && fb < 0.0 {
+            // The rejected end first: where the constraints hold there, they do not set
+            // the boundary (a hint that no longer binds), and the other end is not needed.
+            let fb = h(b);
+            if !(fb < 0.0) {
+                continue;
+            }
+            let fg = h(g);
+            if fg >= 0.0 {
                 // A point where the slack cannot say counts as rejected.
                 return Some(brent(g, fg, b, fb, tol, |j| {
                     let f = h(j);
