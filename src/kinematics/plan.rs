@@ -1173,7 +1173,7 @@ impl Sim<'_> {
             // The rejected end first: where the constraints hold there, they do not set
             // the boundary (a hint that no longer binds), and the other end is not needed.
             let fb = h(b);
-            if !(fb < 0.0) {
+            if fb >= 0.0 || fb.is_nan() {
                 continue;
             }
             let fg = h(g);
