@@ -57,6 +57,9 @@ fn signed_angle(a: &Vec3, from: &Vec3, to: &Vec3) -> Option<f64> {
     Some(a.dot(&f.cross(&t)).atan2(f.dot(&t)))
 }
 
+/// The LU factors of the linear axes' direction matrix.
+pub(crate) type LinearFrame = nalgebra::LU<f64, nalgebra::U3, nalgebra::U3>;
+
 /// Up to two rotary-axis indices, in machine-file order (no heap allocation).
 #[derive(Debug, Clone, Copy, Default)]
 struct AxisSet {
@@ -289,13 +292,24 @@ impl Machine {
     /// Linear joints for tip `p` (part frame) with the rotary joints already in `q`
     /// (§2.2 step 4).
     pub fn linear_joints(&self, q: &mut Joints, p: &Point3) {
-        let x = self.table_point(q, &(p + self.part_origin)) - self.head_point(q, &self.tip_home);
-        let m = nalgebra::Matrix3::from_columns(&[
+        self.linear_joints_with(&self.linear_frame(), q, p);
+    }
+
+    /// The linear axes' directions (signed) as columns, factorised for
+    /// [`Machine::linear_joints_with`].
+    pub(crate) fn linear_frame(&self) -> LinearFrame {
+        nalgebra::Matrix3::from_columns(&[
             self.linear[0].direction * self.linear[0].sign,
             self.linear[1].direction * self.linear[1].sign,
             self.linear[2].direction * self.linear[2].sign,
-        ]);
-        let sol = m.lu().solve(&x).unwrap_or_else(Vec3::zeros);
+        ])
+        .lu()
+    }
+
+    /// [`Machine::linear_joints`] with the linear frame factorised once for a whole path.
+    pub(crate) fn linear_joints_with(&self, frame: &LinearFrame, q: &mut Joints, p: &Point3) {
+        let x = self.table_point(q, &(p + self.part_origin)) - self.head_point(q, &self.tip_home);
+        let sol = frame.solve(&x).unwrap_or_else(Vec3::zeros);
         q[0] = sol.x;
         q[1] = sol.y;
         q[2] = sol.z;

@@ -250,10 +250,11 @@ pub fn plan_poses(
             line: input[index].line,
         });
     }
+    let frame = machine.linear_frame();
     joints
         .par_iter_mut()
         .zip(input.par_iter())
-        .for_each(|(q, p)| machine.linear_joints(q, &p.pose.tip));
+        .for_each(|(q, p)| machine.linear_joints_with(&frame, q, &p.pose.tip));
     let positions: Vec<[f64; 3]> = input
         .par_iter()
         .map(|p| [p.pose.tip.x, p.pose.tip.y, p.pose.tip.z])
