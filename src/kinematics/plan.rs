@@ -15,10 +15,12 @@ use rayon::prelude::*;
 const BISECT: usize = 30;
 /// Relative slack on speed checks.
 const REL: f64 = 1e-9;
-/// The stop and brake profiles of the feasibility tests use this fraction of ā and j̄.
-/// A constant jerk per cycle cannot switch phase inside a cycle, so a state on the exact
-/// boundary may have no feasible successor; the 2 % margin leaves room to catch up,
-/// while the moves themselves use the full limits.
+/// The stop and brake profiles of the feasibility tests use this fraction of ā and j̄; 1:
+/// the full limits, as the moves themselves. (A fraction below 1 would leave room to catch
+/// up where a constant jerk per cycle cannot follow a phase switch inside a cycle; instead
+/// the tests of [`Sim::evaluate`] are ones that a state's successors can keep passing by
+/// following its stop profile, and the few states left without a feasible successor run
+/// that profile in closed form, see [`Sim::run`].)
 const MARGIN: f64 = 1.0;
 /// The limits of a stop profile are the minimum over the blocks within this multiple of
 /// its distance (plus one cycle of travel). With exactly its distance (factor 1), a
