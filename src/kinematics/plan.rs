@@ -268,9 +268,9 @@ impl Stop {
 }
 
 /// Root of `pos(t) = x` on `[lo, hi]` for a non-decreasing position with derivative `vel`
-/// (`f(t)` returns both) from a first guess: safeguarded Newton, falling back to bisection when a step leaves
-/// the bracket. Converges to the last few ULP; the same answer as a 60-step bisection in a
-/// few evaluations.
+/// (`f(t)` returns both), from a first guess: safeguarded Newton, falling back to bisection
+/// when a step leaves the bracket. Converges to the last few ULP; the same answer as a
+/// 60-step bisection in a few evaluations.
 #[inline]
 fn solve_monotone(
     mut lo: f64,
