@@ -14,8 +14,9 @@
 //!                                       measured table ──report──▶ Markdown + SVG/PNG, exit status
 //! ```
 //!
-//! A stage imports only earlier stages and [`math`]. Only [`cli`], [`io`], [`plot`] and
-//! [`report`] touch files or the terminal; every other stage is pure. See `ARCHITECTURE.md`.
+//! A stage imports only earlier stages and [`math`]. Only [`io`], [`plot`] and [`report`]
+//! (and the binary's command line) touch files or the terminal; every other stage is pure.
+//! See `ARCHITECTURE.md`.
 //!
 //! ```
 //! use crest::tool::crest_height_mm;
@@ -26,16 +27,20 @@
 
 pub mod math;
 
-pub mod kinematics;
-pub mod metrics;
 pub mod parse;
-pub mod resample;
-pub mod surface;
-pub mod synth;
-pub mod tool;
 pub mod toolpath;
+pub mod resample;
+pub mod tool;
+pub mod synth;
+pub mod kinematics;
+pub mod surface;
+pub mod metrics;
+pub mod study;
 
-pub mod cli;
+pub mod config;
 pub mod io;
 pub mod plot;
 pub mod report;
+
+pub mod pipeline;
+

@@ -3,7 +3,9 @@
 //! hc = 1.0001 µm.
 
 use approx::assert_relative_eq;
-use crest::report::regression::{Rule, Side, crest_model, profile_roughness};
+use crest::study::measured::Side;
+use crest::study::regression::{crest_model, profile_roughness};
+use crest::tool::Rule;
 use crest::tool::{Cutter, Runout, Shape};
 
 fn ball(helix_deg: f64, runout: Runout) -> Cutter {

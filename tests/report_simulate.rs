@@ -2,9 +2,10 @@
 //! against the closed-form crest, on the 002 tool with the presetter radii.
 
 use approx::assert_relative_eq;
-use crest::report::regression::{
-    Rule, Side, SimulateSpec, SurfaceModel, crest_model, simulate_case,
-};
+use crest::study::measured::Side;
+use crest::study::regression::{SimulateSpec, crest_model, simulate_case};
+use crest::surface::ModelKind as SurfaceModel;
+use crest::tool::Rule;
 use crest::tool::{Cutter, Shape};
 
 fn tool_002() -> Cutter {

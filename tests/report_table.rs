@@ -2,7 +2,8 @@
 //! standard deviations crest computes reproduce the printed x̄ and σ rows to the printed
 //! rounding, and only with the sample (n − 1) convention.
 
-use crest::report::regression::{Side, Stat, parse_measured, summarize};
+use crest::io::measured::parse_measured;
+use crest::study::measured::{Side, Stat, summarize};
 
 const TABLE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),

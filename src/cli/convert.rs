@@ -6,8 +6,8 @@
 //! is renamed only when everything succeeded, so bad input leaves no output behind.
 
 use super::Outcome;
-use super::input::{detect, stream_from};
-use crate::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
+use crest::io::toolpath::{detect, stream_from};
+use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
 use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -51,7 +51,7 @@ pub fn convert(input: &Path, output: &Path, all_moves: bool, absolute: bool) -> 
     };
     let mut failure: Option<miette::Report> = None;
     let to_clsf = is_clsf_output(output);
-    let written = crate::io::write_atomic(output, |w| {
+    let written = crest::io::write_atomic(output, |w| {
         let result = if to_clsf {
             let mut cw = ClsfWriter::new();
             let mut open = false;

@@ -9,11 +9,11 @@
 //! the closed-form crest of 002 Eqs 7, 8 and 14.
 
 use super::Outcome;
-use crate::metrics::{self, ParamSet, ProfileSpec};
-use crate::resample::{self, Mode};
-use crate::surface::{self, GridSpec, Model};
-use crate::synth::{self, Orientation, PathSpec, Step, Surface};
-use crate::tool::{self, Rule};
+use crest::metrics::{self, ParamSet, ProfileSpec};
+use crest::resample::{self, Mode};
+use crest::surface::{self, GridSpec, Model};
+use crest::synth::{self, Orientation, PathSpec, Step, Surface};
+use crest::tool::{self, Rule};
 use miette::{Context, IntoDiagnostic};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -55,7 +55,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
     // 1. Tool and synthetic contact-data path.
     let cutter =
-        tool::load_tool_toml(DEMO_TOOL).map_err(|e| miette::miette!("embedded tool: {e}"))?;
+        crest::config::load_tool_toml(DEMO_TOOL).map_err(|e| miette::miette!("embedded tool: {e}"))?;
     let teeth = cutter.teeth();
     let feed_mm_min = teeth as f64 * FZ_MM * RPM;
     let mut spec = PathSpec::new(
@@ -75,20 +75,20 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     spec.name = "DEMO_PLANE_LEAD15".into();
     let synthetic = synth::generate(&spec).map_err(|e| miette::miette!("demo path: {e}"))?;
     let cls = dir.join("demo.cls");
-    write_file(&cls, |w| crate::toolpath::write_clsf(&synthetic.program, w))?;
+    write_file(&cls, |w| crest::toolpath::write_clsf(&synthetic.program, w))?;
     wrote.push((
         cls.clone(),
         format!("CLSF with contact data, {} passes", synthetic.passes),
     ));
 
     // 2. Read it back as a user's file would be read, and convert it to contact12.
-    let program = super::input::read_program(&cls)?;
+    let program = crest::io::toolpath::read_program(&cls)?;
     let path = program
         .paths
         .first()
         .ok_or_else(|| miette::miette!("{}: no tool path read back", cls.display()))?;
     let csv = dir.join("demo-contact12.csv");
-    write_file(&csv, |w| crate::toolpath::write_contact12(path, false, w))?;
+    write_file(&csv, |w| crest::toolpath::write_contact12(path, false, w))?;
     wrote.push((
         csv,
         "contact12 CSV (cutting moves with contact data)".into(),
@@ -126,7 +126,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let map = &sim.map;
     for ext in ["gsf", "csv"] {
         let p = dir.join(format!("heightmap.{ext}"));
-        crate::io::write_heightmap(&p, map)
+        crest::io::write_heightmap(&p, map)
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", p.display()))?;
         wrote.push((
@@ -150,7 +150,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
     // 6. Plots.
     let heat = dir.join("heightmap.png");
-    crate::plot::heightmap::plot_heightmap(
+    crest::plot::heightmap::plot_heightmap(
         map,
         "Simulated surface (ICE model, 10 µm run-out)",
         &heat,
@@ -161,7 +161,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .map(|i| i as f64 * profile.step_um * 1e-3)
         .collect();
     let prof = dir.join("profile-feed.svg");
-    crate::plot::profile::plot_profiles(
+    crest::plot::profile::plot_profiles(
         "Profile along the feed (window centre)",
         (&x_mm, &profile.z),
         None,
@@ -170,12 +170,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     .map_err(|e| miette::miette!("{}: {e}", prof.display()))?;
     wrote.push((prof, "profile along the feed".into()));
     let troch = dir.join("trochoids.svg");
-    let troch_opts = crate::plot::trochoid::TrochoidOptions {
+    let troch_opts = crest::plot::trochoid::TrochoidOptions {
         stepover_mm: STEPOVER_MM,
         fz_mm: analysis.fz_effective_mm,
         ..Default::default()
     };
-    crate::plot::trochoid::plot_trochoids(&cutter, &troch_opts, &troch)
+    crest::plot::trochoid::plot_trochoids(&cutter, &troch_opts, &troch)
         .map_err(|e| miette::miette!("{}: {e}", troch.display()))?;
     wrote.push((troch, "trochoids of ICE elements (002 Fig 14)".into()));
 
@@ -253,7 +253,7 @@ fn write_file<F>(path: &Path, fill: F) -> miette::Result<()>
 where
     F: FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
 {
-    crate::io::write_atomic(path, fill)
+    crest::io::write_atomic(path, fill)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write {}", path.display()))
 }

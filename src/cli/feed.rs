@@ -6,7 +6,7 @@
 //! 1 when a path fails the §7 self-check (an interpolator fallback was needed).
 
 use super::Outcome;
-use crate::kinematics::{FeedPlan, Level, Machine, MachineError, plan_input, plan_poses};
+use crest::kinematics::{FeedPlan, Level, Machine, plan_input, plan_poses};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -54,55 +54,32 @@ pub enum FeedSource {
     Predicted,
 }
 
-/// Resolve `--feed` and `--machine` of `resample` / `simulate`: the machine to plan on, or
-/// `None` for the programmed feed. `--feed predicted` needs `--machine`; `--machine` alone
-/// means `--feed predicted`; `--feed programmed` with `--machine` is refused (the machine
-/// would be ignored).
+impl From<FeedSource> for crest::pipeline::simulate::FeedSource {
+    fn from(f: FeedSource) -> Self {
+        match f {
+            FeedSource::Programmed => crest::pipeline::simulate::FeedSource::Programmed,
+            FeedSource::Predicted => crest::pipeline::simulate::FeedSource::Predicted,
+        }
+    }
+}
+
+/// Resolve `--feed` and `--machine` of `resample` / `simulate` (see
+/// [`crest::pipeline::simulate::resolve_feed_source`]).
 pub fn resolve_feed_source(
     feed: Option<FeedSource>,
     machine: Option<&Path>,
 ) -> miette::Result<Option<Machine>> {
-    match (feed, machine) {
-        (Some(FeedSource::Predicted), None) => Err(miette::miette!(
-            "--feed predicted needs the machine: add --machine MACHINE.toml"
-        )),
-        (Some(FeedSource::Programmed), Some(m)) => Err(miette::miette!(
-            "--machine {} is only used with --feed predicted (drop --feed programmed or --machine)",
-            m.display()
-        )),
-        (Some(FeedSource::Predicted) | None, Some(m)) => Ok(Some(read_machine(m)?)),
-        (Some(FeedSource::Programmed) | None, None) => Ok(None),
-    }
-}
-
-/// Read `path` as a machine description; errors name the file and line.
-pub fn read_machine(path: &Path) -> miette::Result<Machine> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| miette::miette!("{}: cannot read the machine file: {e}", path.display()))?;
-    Machine::from_toml_str(&text).map_err(|e| {
-        let file = path.display();
-        match &e {
-            MachineError::Missing { line, .. } | MachineError::Invalid { line, .. } => {
-                let msg = e.to_string();
-                let msg = msg
-                    .strip_prefix(&format!("line {line}: "))
-                    .unwrap_or(&msg)
-                    .to_string();
-                miette::miette!("{file}:{line}:1: {msg}")
-            }
-            _ => miette::miette!("{file}: {e}"),
-        }
-    })
+    crest::pipeline::simulate::resolve_feed_source(feed.map(Into::into), machine)
 }
 
 /// Run `crest feed`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let machine = read_machine(&args.machine)?;
-    let opts = crate::toolpath::LowerOptions {
+    let machine = crest::pipeline::load_machine(&args.machine)?;
+    let opts = crest::toolpath::LowerOptions {
         apply_msys: args.absolute,
         ..Default::default()
     };
-    let program = super::input::read_program_with(&args.file, opts)?;
+    let program = crest::io::toolpath::read_program_with(&args.file, opts)?;
     let level = match args.level {
         LevelArg::Jerk => Level::Jerk,
         LevelArg::Acc => Level::Acceleration,
@@ -124,7 +101,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let names = machine.joint_names();
     if let Some(out) = &args.output {
-        crate::io::write_atomic(out, |w| write_csv(w, &plans, &names))
+        crest::io::write_atomic(out, |w| write_csv(w, &plans, &names))
             .map_err(|e| miette::miette!("{}: cannot write: {e}", out.display()))?;
     }
     let total: f64 = plans.iter().map(|(_, _, p)| p.total_time_s).sum();
@@ -197,7 +174,7 @@ fn joint_out(i: usize, q: f64) -> f64 {
 
 fn path_json(
     name: &str,
-    input: &[crate::kinematics::PlanInput],
+    input: &[crest::kinematics::PlanInput],
     plan: &FeedPlan,
     names: &[&str; 5],
 ) -> serde_json::Value {
@@ -244,8 +221,8 @@ fn path_json(
 }
 
 type Planned<'a> = (
-    &'a crate::toolpath::Toolpath,
-    Vec<crate::kinematics::PlanInput>,
+    &'a crest::toolpath::Toolpath,
+    Vec<crest::kinematics::PlanInput>,
     FeedPlan,
 );
 

@@ -5,8 +5,8 @@
 //! then the warnings. Reading streams, so huge files summarise in constant memory.
 
 use super::Outcome;
-use super::input::{InputKind, detect, stream_program};
-use crate::toolpath::{LowerOptions, MotionKind, Posture, Toolpath};
+use crest::io::toolpath::{InputKind, detect, stream_program};
+use crest::toolpath::{LowerOptions, MotionKind, Posture, Toolpath};
 use serde::Serialize;
 use std::io::Write;
 use std::path::PathBuf;

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use miette::miette;
 
 use super::Outcome;
-use crate::io::{HeightMapFormat, ReadOptions, read_heightmap};
-use crate::metrics::{
+use crest::io::{HeightMapFormat, ReadOptions, read_heightmap};
+use crest::metrics::{
     EndEffects, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
     preprocess_map, preprocess_profile, profile_parameters,
 };

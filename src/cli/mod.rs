@@ -16,10 +16,10 @@ macro_rules! outln {
 mod convert;
 mod demo;
 mod feed;
-mod input;
 mod inspect;
 mod metrics;
 mod plot;
+mod progress;
 mod report;
 mod resample;
 mod runout;

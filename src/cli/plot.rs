@@ -2,8 +2,8 @@
 //! height) along a path, as SVG or PNG by the extension of `-o`.
 
 use super::Outcome;
-use crate::plot::profile::{LineChart, Series};
-use crate::plot::{Format, feed, heightmap, profile, trochoid};
+use crest::plot::profile::{LineChart, Series};
+use crest::plot::{Format, feed, heightmap, profile, trochoid};
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::{Path, PathBuf};
 
@@ -203,7 +203,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
 fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
     check_format(&a.common.output)?;
-    let cutter = super::synth::load_cutter(&a.tool)?;
+    let cutter = crest::pipeline::load_tool(&a.tool)?;
     let o = trochoid::TrochoidOptions {
         heights_mm: a.heights_mm.clone(),
         leads_rad: a.lead_deg.iter().map(|d| d.to_radians()).collect(),
@@ -242,7 +242,8 @@ fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
 }
 
 fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
-    use crate::report::runout::{default_marked_heights_mm, lateral_chart, lateral_curves_for};
+    use crest::plot::runout::lateral_chart;
+    use crest::study::runout::{default_marked_heights_mm, lateral_curves_for};
     let format = Format::from_path(&a.common.output).ok_or_else(|| {
         miette!(
             "{}: unknown plot format (use .svg or .png)",
@@ -254,7 +255,7 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
             "--lead-deg: give leads strictly between -90 and 90 degrees"
         ));
     }
-    let cutter = super::synth::load_cutter(&a.tool)?;
+    let cutter = crest::pipeline::load_tool(&a.tool)?;
     let top = cutter.corner_radius_mm();
     if let Some(z) = a
         .heights_mm
@@ -281,11 +282,11 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
         chart.title = t.clone();
     }
     let bytes = match format {
-        Format::Svg => crate::plot::runout::render_svg(&chart).map(String::into_bytes),
-        Format::Png => crate::plot::runout::render_png(&chart),
+        Format::Svg => crest::plot::runout::render_svg(&chart).map(String::into_bytes),
+        Format::Png => crest::plot::runout::render_png(&chart),
     }
     .map_err(|e| miette!("{}: cannot render: {e}", a.common.output.display()))?;
-    crate::io::write_atomic(&a.common.output, |w| w.write_all(&bytes))
+    crest::io::write_atomic(&a.common.output, |w| w.write_all(&bytes))
         .map_err(|e| miette!("{}: cannot write: {e}", a.common.output.display()))?;
     let json_curves: Vec<_> = curves
         .iter()
@@ -304,12 +305,12 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
     )
 }
 
-fn read_map(input: &MapInput) -> miette::Result<crate::surface::HeightMap> {
-    let opts = crate::io::ReadOptions {
+fn read_map(input: &MapInput) -> miette::Result<crest::surface::HeightMap> {
+    let opts = crest::io::ReadOptions {
         dx_um: input.dx_um,
         dy_um: input.dy_um,
     };
-    crate::io::read_heightmap(&input.map, &opts).map_err(|e| miette!("{e}"))
+    crest::io::read_heightmap(&input.map, &opts).map_err(|e| miette!("{e}"))
 }
 
 fn file_stem(p: &Path) -> String {
@@ -444,7 +445,7 @@ fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
 
 fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
     check_format(&a.common.output)?;
-    let program = super::input::read_program(&a.path)?;
+    let program = crest::io::toolpath::read_program(&a.path)?;
     let Some(tp) = program.paths.iter().find(|p| !p.cutting_runs().is_empty()) else {
         return Err(miette!("{}: no cutting moves", a.path.display()));
     };
@@ -473,13 +474,13 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             .tool
             .as_ref()
             .ok_or_else(|| miette!("--crest needs --tool"))?;
-        let cutter = super::synth::load_cutter(tool)?;
+        let cutter = crest::pipeline::load_tool(tool)?;
         let teeth = cutter.teeth() as f64;
         let r = cutter.corner_radius_mm();
         let crest: Vec<f64> = feed
             .iter()
             .zip(&rpm)
-            .map(|(f, n)| crate::tool::crest_height_mm(r, f / (teeth * n)) * 1e3)
+            .map(|(f, n)| crest::tool::crest_height_mm(r, f / (teeth * n)) * 1e3)
             .collect();
         if crest.iter().all(|c| !c.is_finite()) {
             return Err(miette!(

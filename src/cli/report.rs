@@ -2,14 +2,13 @@
 //! `DIR/report.md`, `DIR/report.html` and the SVG plots.
 //!
 //! Every input is read and checked, and every output rendered in memory, before the first
-//! file is written; the files go through [`crate::io::write_atomic`]. Bad input leaves no
+//! file is written; the files go through `crest::io::write_atomic`. Bad input leaves no
 //! output behind (the directory is not even created).
 
 use super::Outcome;
-use crate::report::regression::{self, DEFAULT_TOLERANCE_PCT, Provenance, RunoutSpec};
-use crate::tool::Cutter;
+use crest::study::regression::DEFAULT_TOLERANCE_PCT;
 use miette::{IntoDiagnostic, WrapErr, miette};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `crest report`.
 #[derive(Debug, clap::Args)]
@@ -31,135 +30,31 @@ pub struct Args {
     pub json: bool,
 }
 
-fn load_tool(path: &Path) -> miette::Result<Cutter> {
-    let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read the tool file {name}"))?;
-    crate::tool::load_tool_toml(&text)
-        .map_err(|e| miette!("{name}:{}:{}: {}", e.line(), e.column(), e.message()))
-}
-
-fn check_runout(r: &RunoutSpec, teeth: usize) -> Result<(), String> {
-    let n = r.tooth_radius_deviation_um.len();
-    if n != 0 && n != teeth {
-        return Err(format!(
-            "tooth_radius_deviation_um has {n} values for {teeth} teeth"
-        ));
-    }
-    let all = [
-        r.offset_um,
-        r.offset_phase_deg,
-        r.axis_tilt_deg,
-        r.axis_tilt_phase_deg,
-    ];
-    if all
-        .iter()
-        .chain(r.tooth_radius_deviation_um.iter())
-        .any(|v| !v.is_finite())
-    {
-        return Err("values must be finite".to_string());
-    }
-    Ok(())
-}
-
-fn read(path: &Path, what: &str) -> miette::Result<String> {
-    std::fs::read_to_string(path)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read the {what} {}", path.display()))
-}
-
 /// Run `crest report`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    if !(args.tolerance_pct.is_finite() && args.tolerance_pct >= 0.0) {
-        return Err(miette!(
-            "--tolerance-pct must be a non-negative number, found {}",
-            args.tolerance_pct
-        ));
-    }
-    let measured_name = args.measured.display().to_string();
-    let study_name = args.study.display().to_string();
-    let table =
-        regression::parse_measured(&read(&args.measured, "measured table")?, &measured_name)?;
-    let study = regression::parse_study(&read(&args.study, "study")?, &study_name)?;
-    let tool_path = args
-        .study
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(&study.tool);
-    let mut cutter = load_tool(&tool_path)
-        .wrap_err_with(|| format!("{study_name}: tool = \"{}\"", study.tool))?;
-    if let Some(r) = &study.runout {
-        check_runout(r, cutter.teeth()).map_err(|e| miette!("{study_name}: [runout] {e}"))?;
-        cutter.runout = r.to_runout();
-    }
     let command = format!(
         "crest report --measured {} --study {} -o {} --tolerance-pct {}",
-        measured_name,
-        study_name,
+        args.measured.display(),
+        args.study.display(),
         args.output.display(),
         args.tolerance_pct
     );
-    let reg = regression::regress(
-        &table,
-        &study,
-        &cutter,
+    let reg = crest::pipeline::report::regression(
+        &args.measured,
+        &args.study,
         args.tolerance_pct,
-        Provenance {
-            measured_file: measured_name,
-            study_file: study_name,
-            command,
-        },
+        command,
     )?;
-
     // Render everything before writing anything.
-    let mut plots: Vec<(String, String, String)> = Vec::new(); // (file, caption, svg)
-    for (param, file) in [("Rz", "rz.svg"), ("Ra", "ra.svg")] {
-        if reg
-            .cases
-            .iter()
-            .any(|c| c.comparisons.iter().any(|k| k.parameter == param))
-        {
-            let svg = regression::render_plot(&reg, param)
-                .map_err(|e| miette!("cannot draw the {param} plot: {e}"))?;
-            let caption = format!(
-                "{param}: measured mean ± σ and samples against simulated, per lead angle and side"
-            );
-            plots.push((file.to_string(), caption, svg));
-        }
-    }
-    let md_plots: Vec<(String, String)> = plots
-        .iter()
-        .map(|(f, c, _)| (f.clone(), c.clone()))
-        .collect();
-    let html_plots: Vec<(String, String)> = plots
-        .iter()
-        .map(|(_, c, s)| (c.clone(), s.clone()))
-        .collect();
-    let markdown = regression::render_markdown(&reg, &md_plots);
-    let html = regression::render_html(&reg, &html_plots);
+    let files = crest::report::regression::outputs(&reg).map_err(|e| miette!("{e}"))?;
     let json = if args.json {
         Some(serde_json::to_string(&reg).into_diagnostic()?)
     } else {
         None
     };
-
-    std::fs::create_dir_all(&args.output)
+    let written = crest::io::write_files(&args.output, &files)
         .into_diagnostic()
-        .wrap_err_with(|| format!("cannot create {}", args.output.display()))?;
-    let write = |name: &str, bytes: &[u8]| -> miette::Result<PathBuf> {
-        let path = args.output.join(name);
-        crate::io::write_atomic(&path, |w| w.write_all(bytes))
-            .into_diagnostic()
-            .wrap_err_with(|| format!("cannot write {}", path.display()))?;
-        Ok(path)
-    };
-    let mut written = Vec::new();
-    for (file, _, svg) in &plots {
-        written.push(write(file, svg.as_bytes())?);
-    }
-    written.push(write("report.html", html.as_bytes())?);
-    written.push(write("report.md", markdown.as_bytes())?);
+        .wrap_err_with(|| format!("cannot write the report into {}", args.output.display()))?;
 
     match json {
         Some(j) => outln!("{j}"),

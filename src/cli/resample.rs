@@ -2,20 +2,20 @@
 //! tooth (`--mode fz`) or a constant spindle step (`--mode dtheta`), written as CSV.
 //!
 //! The CSV is written while the path is resampled (one sample at a time, through
-//! [`crate::io::write_atomic`]), so memory does not grow with the output. Columns:
+//! [`crest::io::write_atomic`]), so memory does not grow with the output. Columns:
 //! `s_mm,t_s,theta_deg,x,y,z,i,j,k,cx,cy,cz,nx,ny,nz,fx,fy,fz,feed_mm_min`; the CC point
 //! and normal are empty where the path has no contact data. Every tool path of the file
 //! is resampled in turn (or only the one chosen with `--path`); s accumulates over the
 //! cutting runs of a tool path, t and θ restart at every run.
 
 use super::Outcome;
-use super::input::{detect, stream_from};
-use crate::resample::{
+use crest::io::toolpath::{detect, stream_from};
+use crest::resample::{
     AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan, SpindleSource,
     Stats, resample_with,
 };
-use crate::toolpath::write::push_decimals;
-use crate::toolpath::{LowerOptions, Posture, Program, Toolpath};
+use crest::toolpath::write::push_decimals;
+use crest::toolpath::{LowerOptions, Posture, Program, Toolpath};
 use std::fs::File;
 use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -136,7 +136,7 @@ struct PathReport {
 /// Resample with the whole file in memory (needed for the predicted feed).
 /// Returns the reports and whether the feed was predicted.
 fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathReport>, bool)> {
-    let program = super::input::read_program(&args.file)?;
+    let program = crest::io::toolpath::read_program(&args.file)?;
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -155,7 +155,7 @@ fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathRe
         let mut o = opts.clone();
         if let Some(machine) = &machine {
             let path = &program.paths[idx];
-            let feeds = crate::kinematics::predict_posture_feed(path, machine).map_err(|e| {
+            let feeds = crest::kinematics::predict_posture_feed(path, machine).map_err(|e| {
                 miette::miette!(
                     "{}: tool path {}: feed prediction: {e}",
                     args.file.display(),
@@ -169,7 +169,7 @@ fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathRe
 
     let mut failure: Option<(String, ResampleError)> = None;
     let mut per_path = Vec::new();
-    let written = crate::io::write_atomic(&args.output, |w| {
+    let written = crest::io::write_atomic(&args.output, |w| {
         let mut out = CsvOut::new(w);
         out.header()?;
         for (&idx, opts) in selected.iter().zip(&path_opts) {
@@ -279,7 +279,7 @@ fn stream_pass(args: &Args, opts: &Options, pass: &Pass<'_>) -> miette::Result<P
 
     let mut failure: Option<miette::Report> = None;
     let mut outcome: Option<PassResult> = None;
-    let written = crate::io::write_atomic(&args.output, |w| {
+    let written = crest::io::write_atomic(&args.output, |w| {
         let mut out = CsvOut::new(w);
         out.header()?;
         let mut current: Option<Current> = None;
@@ -637,7 +637,7 @@ fn format_sample(out: &mut Vec<u8>, s: &Sample) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{Point3, Vec3};
+    use crest::math::{Point3, Vec3};
 
     #[test]
     fn row_has_every_column_and_empty_contact() {

@@ -1,13 +1,10 @@
 //! `crest runout study.toml -o DIR`: a run-out what-if study (full factorial over run-out
 //! offset, phase, axis tilt, lead and fz), written as `DIR/runout.csv` and SVG/PNG plots.
-//! The study format is documented in [`crate::report::runout`] and
+//! The study format is documented in `crest::config::runout` and
 //! `samples/studies/runout.toml`.
 
 use super::Outcome;
-use super::tool::read_tool;
-use crate::report::runout::{StudyError, parse_study, run_study, write_outputs};
-use miette::{NamedSource, SourceSpan};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `crest runout`.
 #[derive(Debug, clap::Args)]
@@ -23,54 +20,19 @@ pub struct Args {
     pub json: bool,
 }
 
-/// A rejected study file, with the file name, line and column.
-#[derive(Debug, thiserror::Error, miette::Diagnostic)]
-#[error("{file}:{line}:{column}: {message}")]
-struct StudyFileError {
-    file: String,
-    line: usize,
-    column: usize,
-    message: String,
-    #[source_code]
-    src: NamedSource<String>,
-    #[label("here")]
-    span: Option<SourceSpan>,
-}
-
-fn study_error(path: &Path, text: &str, e: StudyError) -> StudyFileError {
-    let file = path.display().to_string();
-    StudyFileError {
-        file: file.clone(),
-        line: e.line,
-        column: e.column,
-        message: e.message,
-        src: NamedSource::new(file, text.to_string()),
-        span: e
-            .span
-            .map(|s| SourceSpan::from((s.start, s.end.saturating_sub(s.start)))),
-    }
-}
-
 /// Run `crest runout`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let text = std::fs::read_to_string(&args.study).map_err(|e| {
-        miette::miette!("{}: cannot read the study file: {e}", args.study.display())
-    })?;
-    let study = parse_study(&text).map_err(|e| study_error(&args.study, &text, e))?;
-    let base = args.study.parent().unwrap_or(Path::new("."));
-    let tool_path = base.join(&study.tool);
-    let cutter = read_tool(&tool_path)?;
-    let rows = run_study(&cutter, &study).map_err(|e| miette::miette!("{e}"))?;
-    std::fs::create_dir_all(&args.out).map_err(|e| {
-        miette::miette!(
-            "{}: cannot create the output folder: {e}",
-            args.out.display()
-        )
-    })?;
-    let tool_name = tool_path
-        .file_stem()
-        .map_or_else(|| "tool".to_string(), |s| s.to_string_lossy().into_owned());
-    let written = write_outputs(&args.out, &cutter, &study, &rows, &tool_name)
+    let run = crest::pipeline::runout::runout(&args.study)?;
+    let (study, cutter, rows, tool_path) = (&run.study, &run.cutter, &run.rows, &run.tool_path);
+    let mut csv = Vec::new();
+    crest::io::tables::write_runout_csv(rows, cutter.teeth(), &mut csv)
+        .map_err(|e| miette::miette!("cannot write runout.csv: {e}"))?;
+    let mut files = vec![("runout.csv".to_string(), csv)];
+    files.extend(
+        crest::plot::runout::figures(rows, study, cutter.teeth(), &run.lateral, &run.tool_name())
+            .map_err(|e| miette::miette!("cannot draw the run-out charts: {e}"))?,
+    );
+    let written = crest::io::write_files(&args.out, &files)
         .map_err(|e| miette::miette!("{}: cannot write the outputs: {e}", args.out.display()))?;
     if args.json {
         let out = serde_json::json!({

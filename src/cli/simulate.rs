@@ -11,14 +11,11 @@
 //! feed / (Z · rpm). A progress bar is drawn on stderr when it is a terminal.
 
 use super::Outcome;
-use crate::resample::{self, Mode, Sample};
-use crate::surface::{self, GridSpec, Model, Simulation};
-use crate::toolpath::{MotionKind, Program};
+use crest::pipeline::simulate::{GridRequest, SimulateRequest, SimulateRun};
+use crest::surface::ModelKind;
 use clap::ValueEnum;
 use miette::{IntoDiagnostic, WrapErr, miette};
-use serde::Deserialize;
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// The surface model, as named on the command line.
@@ -28,6 +25,15 @@ pub enum ModelName {
     Dome,
     /// Pondered movement: the teeth's cutting edges swept at every Δθ.
     Ice,
+}
+
+impl From<ModelName> for ModelKind {
+    fn from(m: ModelName) -> ModelKind {
+        match m {
+            ModelName::Dome => ModelKind::Dome,
+            ModelName::Ice => ModelKind::Ice,
+        }
+    }
 }
 
 /// Options of `crest simulate`.
@@ -102,93 +108,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// `process.toml`: cutting parameters, units in the key names; every key is optional.
-///
-/// ```toml
-/// rpm = 15000.0
-/// fz_mm = 0.05
-/// feed_mm_min = 3000.0
-/// ap_mm = 0.2
-/// ae_mm = 0.2
-/// lead_deg = 15.0
-/// tilt_deg = 0.0
-/// ```
-#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ProcessConfig {
-    /// Spindle speed, rpm.
-    pub rpm: Option<f64>,
-    /// Feed per tooth, mm.
-    pub fz_mm: Option<f64>,
-    /// Feed, mm/min.
-    pub feed_mm_min: Option<f64>,
-    /// Depth of cut, mm (the stock above the nominal surface).
-    pub ap_mm: Option<f64>,
-    /// Stepover (radial engagement), mm. Informative: the path sets it.
-    pub ae_mm: Option<f64>,
-    /// Lead angle, degrees. Informative: the path's tool axis sets it.
-    pub lead_deg: Option<f64>,
-    /// Side tilt angle, degrees. Informative: the path's tool axis sets it.
-    pub tilt_deg: Option<f64>,
-}
-
-impl ProcessConfig {
-    /// Parse `process.toml` text; errors name the line and column.
-    pub fn parse(text: &str, file: &Path) -> miette::Result<ProcessConfig> {
-        let cfg: ProcessConfig = toml::from_str(text).map_err(|e| {
-            let (line, col) = e
-                .span()
-                .map(|s| line_column(text, s.start))
-                .unwrap_or((0, 0));
-            miette!("{}:{line}:{col}: {}", file.display(), e.message())
-        })?;
-        let checks = [
-            ("rpm", cfg.rpm),
-            ("fz_mm", cfg.fz_mm),
-            ("feed_mm_min", cfg.feed_mm_min),
-            ("ap_mm", cfg.ap_mm),
-            ("ae_mm", cfg.ae_mm),
-        ];
-        for (key, v) in checks {
-            if let Some(v) = v {
-                if !(v.is_finite() && v > 0.0) {
-                    let at = text.find(key).unwrap_or(0);
-                    let (line, col) = line_column(text, at);
-                    return Err(miette!(
-                        "{}:{line}:{col}: {key} must be positive, got {v}",
-                        file.display()
-                    ));
-                }
-            }
-        }
-        for (key, v) in [("lead_deg", cfg.lead_deg), ("tilt_deg", cfg.tilt_deg)] {
-            if let Some(v) = v {
-                if !(v.is_finite() && v.abs() <= 90.0) {
-                    let at = text.find(key).unwrap_or(0);
-                    let (line, col) = line_column(text, at);
-                    return Err(miette!(
-                        "{}:{line}:{col}: {key} must be within ±90°, got {v}",
-                        file.display()
-                    ));
-                }
-            }
-        }
-        Ok(cfg)
-    }
-}
-
-/// 1-based line and column of byte offset `at`.
-fn line_column(text: &str, at: usize) -> (usize, usize) {
-    let before = &text.as_bytes()[..at.min(text.len())];
-    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-    let start = before
-        .iter()
-        .rposition(|&b| b == b'\n')
-        .map_or(0, |p| p + 1);
-    let col = String::from_utf8_lossy(&before[start..]).chars().count() + 1;
-    (line, col)
-}
-
 /// Parse `n` comma-separated numbers of option `name`.
 fn numbers(s: &str, n: usize, name: &str) -> miette::Result<Vec<f64>> {
     let v: Result<Vec<f64>, _> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
@@ -200,108 +119,13 @@ fn numbers(s: &str, n: usize, name: &str) -> miette::Result<Vec<f64>> {
     }
 }
 
-/// Spindle speed, feed and feed per tooth after resolving options, process.toml and file.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Cutting {
-    rpm: f64,
-    /// Feed given by the user (None = the file's FEDRAT, per posture).
-    feed_mm_min: Option<f64>,
-    /// Representative feed, mm/min.
-    feed_nominal: f64,
-    fz_mm: f64,
-}
-
-fn first_in_cut<T>(
-    program: &Program,
-    pick: impl Fn(&crate::toolpath::Posture) -> Option<T>,
-) -> Option<T> {
-    program
-        .paths
-        .iter()
-        .flat_map(|p| p.postures.iter())
-        .filter(|p| p.motion == MotionKind::Cut)
-        .find_map(pick)
-}
-
-fn resolve_cutting(
-    args: &Args,
-    process: &ProcessConfig,
-    program: &Program,
-    teeth: usize,
-) -> miette::Result<Cutting> {
-    for (name, v) in [
-        ("rpm", args.rpm),
-        ("feed-mm-min", args.feed_mm_min),
-        ("fz-mm", args.fz_mm),
-    ] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(miette!("--{name} must be positive, got {v}"));
-            }
-        }
-    }
-    let rpm = args
-        .rpm
-        .or(process.rpm)
-        .or_else(|| first_in_cut(program, |p| p.spindle_rpm.filter(|r| *r > 0.0)));
-    let feed_user = args.feed_mm_min.or(process.feed_mm_min);
-    let fz_user = args.fz_mm.or(process.fz_mm);
-    let feed_file = first_in_cut(program, |p| p.feed_mm_min.filter(|f| *f > 0.0));
-    let Some(rpm) = rpm else {
-        return Err(miette!(
-            "no spindle speed: {} has no SPINDL; add --rpm N (or rpm in --process process.toml)",
-            args.file.display()
-        ));
-    };
-    let z = teeth as f64;
-    let (feed_mm_min, feed_nominal, fz_mm) = match (feed_user, fz_user, feed_file) {
-        (Some(f), Some(fz), _) => (Some(f), f, fz),
-        (Some(f), None, _) => (Some(f), f, f / (z * rpm)),
-        (None, Some(fz), Some(ff)) => (None, ff, fz),
-        (None, Some(fz), None) => (Some(fz * z * rpm), fz * z * rpm, fz),
-        (None, None, Some(ff)) => (None, ff, ff / (z * rpm)),
-        (None, None, None) => {
-            return Err(miette!(
-                "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
-                args.file.display()
-            ));
-        }
-    };
-    Ok(Cutting {
-        rpm,
-        feed_mm_min,
-        feed_nominal,
-        fz_mm,
-    })
-}
-
-fn read_text(path: &Path, what: &str) -> miette::Result<String> {
-    std::fs::read_to_string(path)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read {what} {}", path.display()))
-}
-
 /// Run `crest simulate`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let started = Instant::now();
-    if !(args.grid_um.is_finite() && args.grid_um > 0.0) {
-        return Err(miette!("--grid-um must be positive, got {}", args.grid_um));
-    }
-    if !(args.dtheta_deg.is_finite() && args.dtheta_deg > 0.0 && args.dtheta_deg <= 90.0) {
-        return Err(miette!(
-            "--dtheta-deg must be in (0, 90], got {}",
-            args.dtheta_deg
-        ));
-    }
     let grid = match (&args.window, args.patch_at, &args.patch_mm) {
         (Some(w), _, _) => {
             let v = numbers(w, 4, "window")?;
-            if v[2] < v[0] || v[3] < v[1] {
-                return Err(miette!(
-                    "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got '{w}'"
-                ));
-            }
-            GridSpec::Window {
+            GridRequest::Window {
                 x0_mm: v[0],
                 y0_mm: v[1],
                 x1_mm: v[2],
@@ -310,7 +134,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
         (None, Some(s), Some(lw)) => {
             let v = numbers(lw, 2, "patch-mm")?;
-            GridSpec::Patch {
+            GridRequest::PatchAt {
                 s_mm: s,
                 length_mm: v[0],
                 width_mm: v[1],
@@ -322,113 +146,29 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             ));
         }
     };
-    if crate::io::HeightMapFormat::from_path(&args.output).is_none() {
+    if crest::io::HeightMapFormat::from_path(&args.output).is_none() {
         return Err(miette!(
             "{}: unknown output extension (expected .csv, .gsf or .sdf)",
             args.output.display()
         ));
     }
-
-    let tool_text = read_text(&args.tool, "tool file")?;
-    let cutter = crate::tool::load_tool_toml(&tool_text).map_err(|e| {
-        miette!(
-            "{}:{}:{}: {}",
-            args.tool.display(),
-            e.line(),
-            e.column(),
-            e.message()
-        )
-    })?;
-    let process = match &args.process {
-        Some(p) => ProcessConfig::parse(&read_text(p, "process file")?, p)?,
-        None => ProcessConfig::default(),
+    let req = SimulateRequest {
+        file: args.file.clone(),
+        tool: args.tool.clone(),
+        process: args.process.clone(),
+        rpm: args.rpm,
+        feed_mm_min: args.feed_mm_min,
+        fz_mm: args.fz_mm,
+        feed: args.feed.map(Into::into),
+        machine: args.machine.clone(),
+        model: args.model.into(),
+        dtheta_deg: args.dtheta_deg,
+        grid_um: args.grid_um,
+        grid,
+        ap_mm: args.ap_mm,
+        path: args.path,
     };
-    let program = super::input::read_program(&args.file)?;
-    let cutting = resolve_cutting(&args, &process, &program, cutter.teeth())?;
-    let machine = super::feed::resolve_feed_source(args.feed, args.machine.as_deref())?;
-    let ap_mm = args.ap_mm.or(process.ap_mm).unwrap_or(0.5);
-    if !(ap_mm.is_finite() && ap_mm > 0.0) {
-        return Err(miette!("--ap-mm must be positive, got {ap_mm}"));
-    }
-
-    let (model, mode) = match args.model {
-        ModelName::Dome => (Model::Dome, Mode::FeedPerTooth),
-        ModelName::Ice => {
-            let d = args.dtheta_deg.to_radians();
-            // Resample every ≥ 8° of spindle and let the engine subdivide to Δθ: the
-            // samples are then a few µm apart, where straight interpolation is exact to
-            // far below a nanometre, and memory stays small on long paths.
-            let coarse = d * (8f64.to_radians() / d).floor().max(1.0);
-            (
-                Model::Ice { dtheta_rad: d },
-                Mode::SpindleStep { dtheta_rad: coarse },
-            )
-        }
-    };
-    let mut ropts =
-        resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
-    if let Some(f) = cutting.feed_mm_min {
-        ropts = ropts.with_feed_mm_min(f);
-    }
-    let paths: Vec<usize> = match args.path {
-        Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
-        Some(n) => {
-            return Err(miette!(
-                "--path {n}: {} has {} tool path(s)",
-                args.file.display(),
-                program.paths.len()
-            ));
-        }
-        None => (0..program.paths.len()).collect(),
-    };
-    let mut samples: Vec<Sample> = Vec::new();
-    for &i in &paths {
-        let path = &program.paths[i];
-        let first_run = samples.last().map_or(0, |s| s.run + 1);
-        let mut popts = ropts.clone();
-        if let Some(m) = &machine {
-            popts.posture_feed_mm_min =
-                Some(predicted_feed(path, m, cutting.feed_mm_min).map_err(|e| {
-                    miette!(
-                        "{}: tool path {} ({}): feed prediction: {e}",
-                        args.file.display(),
-                        i + 1,
-                        path.name
-                    )
-                })?);
-        }
-        let mut got = resample::resample(path, &popts).map_err(|e| {
-            miette!(
-                "{}: tool path {} ({}): {e}",
-                args.file.display(),
-                i + 1,
-                path.name
-            )
-        })?;
-        for s in &mut got {
-            s.run += first_run;
-        }
-        samples.extend(got);
-    }
-    if samples.is_empty() {
-        return Err(miette!(
-            "{}: no cutting moves to simulate",
-            args.file.display()
-        ));
-    }
-
-    let mut sopts = surface::Options::new(model, grid, args.grid_um * 1e-3);
-    sopts.depth_mm = ap_mm;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(1);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} simulate [{bar:40}] {pos}/{len} tiles {elapsed_precise} eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = super::progress::bar(0, "simulate", "tiles");
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_length(total as u64);
@@ -439,22 +179,21 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
-    let sim = pool
-        .install(|| surface::simulate(&samples, &cutter, &sopts, &progress))
-        .map_err(|e| miette!("{}: {e}", args.file.display()))?;
+    let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress))?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    crate::io::write_heightmap(&args.output, &sim.map)
+    let sim = &run.sim;
+    crest::io::write_heightmap(&args.output, &sim.map)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
     let elapsed = started.elapsed().as_secs_f64();
+    let st = crest::metrics::height_stats(&sim.map.z_um);
     if args.json {
-        let mut j = summary(&args, &sim, &cutting, ap_mm, samples.len(), elapsed);
-        j["feed"] = feed_summary(&args, machine.is_some(), &samples);
+        let j = summary(&args, &run, st.as_ref(), elapsed);
         outln!("{j}");
     } else {
-        let st = HeightStats::of(&sim.map.z_um);
+        let nan = f64::NAN;
         outln!(
             "{}: {} × {} nodes at {} µm, {} cut; heights {:.4}..{:.4} µm (Sq {:.4} µm); {:.2} s",
             args.output.display(),
@@ -462,108 +201,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             sim.map.ny,
             args.grid_um,
             sim.nodes_cut,
-            st.min,
-            st.max,
-            st.sq,
+            st.map_or(nan, |s| s.min),
+            st.map_or(nan, |s| s.max),
+            st.map_or(nan, |s| s.sq),
             elapsed
         );
     }
     Ok(Outcome::Ok)
-}
-
-/// The predicted feed per posture (mm/min) of `path` on `machine`; with a feed override
-/// the machine is planned at that programmed feed.
-fn predicted_feed(
-    path: &crate::toolpath::Toolpath,
-    machine: &crate::kinematics::Machine,
-    feed_override: Option<f64>,
-) -> Result<Vec<f64>, crate::kinematics::KinematicsError> {
-    match feed_override {
-        Some(f) => {
-            let mut p = path.clone();
-            for q in &mut p.postures {
-                q.feed_mm_min = Some(f);
-            }
-            crate::kinematics::predict_posture_feed(&p, machine)
-        }
-        None => crate::kinematics::predict_posture_feed(path, machine),
-    }
-}
-
-/// The `feed` object of the JSON summary: which feed was used, the machine, the cutting
-/// time of the resampled runs and the feed range of the samples.
-fn feed_summary(args: &Args, predicted: bool, samples: &[Sample]) -> serde_json::Value {
-    // t restarts at every run: the cutting time is the sum of the runs' last stamps.
-    let mut cut_time = 0.0;
-    let mut run_end = 0.0f64;
-    let mut run = None;
-    let (mut fmin, mut fmax, mut fsum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-    for s in samples {
-        if run != Some(s.run) {
-            cut_time += run_end;
-            run_end = 0.0;
-            run = Some(s.run);
-        }
-        run_end = run_end.max(s.t_s);
-        fmin = fmin.min(s.feed_mm_min);
-        fmax = fmax.max(s.feed_mm_min);
-        fsum += s.feed_mm_min;
-    }
-    cut_time += run_end;
-    serde_json::json!({
-        "source": if predicted { "predicted" } else { "programmed" },
-        "machine": args.machine.as_ref().map(|m| m.display().to_string()),
-        "cut_time_s": num(cut_time),
-        "sample_feed_mm_min": {
-            "min": num(fmin),
-            "max": num(fmax),
-            "mean": num(fsum / samples.len().max(1) as f64),
-        },
-    })
-}
-
-/// Basic statistics of the finite heights, µm.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct HeightStats {
-    min: f64,
-    max: f64,
-    mean: f64,
-    sq: f64,
-    sa: f64,
-}
-
-impl HeightStats {
-    fn of(z: &[f64]) -> HeightStats {
-        let (mut n, mut sum, mut min, mut max) = (0usize, 0.0, f64::INFINITY, f64::NEG_INFINITY);
-        for &v in z.iter().filter(|v| v.is_finite()) {
-            n += 1;
-            sum += v;
-            min = min.min(v);
-            max = max.max(v);
-        }
-        if n == 0 {
-            return HeightStats {
-                min: f64::NAN,
-                max: f64::NAN,
-                mean: f64::NAN,
-                sq: f64::NAN,
-                sa: f64::NAN,
-            };
-        }
-        let mean = sum / n as f64;
-        let (mut s2, mut s1) = (0.0, 0.0);
-        for &v in z.iter().filter(|v| v.is_finite()) {
-            s2 += (v - mean) * (v - mean);
-            s1 += (v - mean).abs();
-        }
-        HeightStats {
-            min,
-            max,
-            mean,
-            sq: (s2 / n as f64).sqrt(),
-            sa: s1 / n as f64,
-        }
-    }
 }
 
 fn num(v: f64) -> serde_json::Value {
@@ -572,20 +216,21 @@ fn num(v: f64) -> serde_json::Value {
 
 fn summary(
     args: &Args,
-    sim: &Simulation,
-    cutting: &Cutting,
-    ap_mm: f64,
-    samples: usize,
+    run: &SimulateRun,
+    st: Option<&crest::metrics::HeightStats>,
     elapsed: f64,
 ) -> serde_json::Value {
+    let sim = &run.sim;
+    let cutting = &run.cutting;
     let m = &sim.map;
-    let st = HeightStats::of(&m.z_um);
     let f = &sim.frame;
     let origin = f.origin + f.u * m.x0_mm + f.v * m.y0_mm;
-    let v3 = |v: &crate::math::Vec3| serde_json::json!([num(v.x), num(v.y), num(v.z)]);
+    let v3 = |v: &crest::math::Vec3| serde_json::json!([num(v.x), num(v.y), num(v.z)]);
+    let stat = |pick: fn(&crest::metrics::HeightStats) -> f64| num(st.map_or(f64::NAN, pick));
+    let (fmin, fmax, fmean) = run.sample_feed_mm_min;
     serde_json::json!({
         "output": args.output.display().to_string(),
-        "model": match args.model { ModelName::Dome => "dome", ModelName::Ice => "ice" },
+        "model": ModelKind::from(args.model).name(),
         "dtheta_deg": matches!(args.model, ModelName::Ice).then_some(args.dtheta_deg),
         "grid": if args.window.is_some() { "window" } else { "patch" },
         "nx": m.nx,
@@ -604,56 +249,32 @@ fn summary(
         "nodes_cut": sim.nodes_cut,
         "nodes_not_reached": m.nx * m.ny - sim.nodes_cut,
         "nominal_from_contacts": sim.nominal_from_contacts,
-        "samples": samples,
+        "samples": run.samples,
         "strips": sim.strips,
         "tiles_widened": sim.tiles_widened,
         "rpm": num(cutting.rpm),
         "feed_mm_min": num(cutting.feed_nominal),
         "feed_from_file": cutting.feed_mm_min.is_none(),
         "fz_mm": num(cutting.fz_mm),
-        "ap_mm": num(ap_mm),
+        "ap_mm": num(run.ap_mm),
         "time_s": num(elapsed),
         "heights_um": {
-            "min": num(st.min),
-            "max": num(st.max),
-            "mean": num(st.mean),
-            "sz": num(st.max - st.min),
-            "sq": num(st.sq),
-            "sa": num(st.sa),
+            "min": stat(|s| s.min),
+            "max": stat(|s| s.max),
+            "mean": stat(|s| s.mean),
+            "sz": stat(|s| s.sz()),
+            "sq": stat(|s| s.sq),
+            "sa": stat(|s| s.sa),
+        },
+        "feed": {
+            "source": if run.predicted { "predicted" } else { "programmed" },
+            "machine": args.machine.as_ref().map(|m| m.display().to_string()),
+            "cut_time_s": num(run.cut_time_s),
+            "sample_feed_mm_min": {
+                "min": num(fmin),
+                "max": num(fmax),
+                "mean": num(fmean),
+            },
         },
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn process_toml_rejects_unknown_keys_with_position() {
-        let err = ProcessConfig::parse("rpm = 15000\nspeed = 3\n", Path::new("p.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("p.toml:2:"), "{err}");
-        assert!(err.contains("speed"), "{err}");
-        let err = ProcessConfig::parse("fz_mm = -0.05\n", Path::new("p.toml"))
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("p.toml:1:1") && err.contains("fz_mm"), "{err}");
-        let ok = ProcessConfig::parse(
-            "rpm = 15000\nfz_mm = 0.05\nfeed_mm_min = 3000\nap_mm = 0.2\nae_mm = 0.2\nlead_deg = 15\ntilt_deg = 0\n",
-            Path::new("p.toml"),
-        )
-        .unwrap();
-        assert_eq!(ok.rpm, Some(15000.0));
-        assert_eq!(ok.lead_deg, Some(15.0));
-    }
-
-    #[test]
-    fn height_stats_ignore_nan() {
-        let s = HeightStats::of(&[f64::NAN, 1.0, 3.0]);
-        assert_eq!(
-            (s.min, s.max, s.mean, s.sq, s.sa),
-            (1.0, 3.0, 2.0, 1.0, 1.0)
-        );
-    }
 }

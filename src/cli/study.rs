@@ -5,22 +5,22 @@
 //! crest study design.toml -o DIR [--json] [--threads N]
 //! ```
 //!
-//! Each run is simulated by [`crate::report::study::simulate_run`] (synthetic path →
+//! Each run is simulated by `crest::study::run::simulate_run` (synthetic path →
 //! resample → surface → areal parameters), the runs in parallel; the results do not depend
 //! on the thread count. Nothing is written until every run has succeeded: then `DIR` is
 //! created if needed and `runs.csv`, `effects.csv`, `effects.svg` (001 Fig 11) and, for each
 //! factor with more than two levels, `effects-<factor>.svg` (001 Fig 12) are written, each
-//! through [`crate::io::write_atomic`]. A progress bar is drawn on stderr when it is a
+//! through `crest::io::write_atomic`. A progress bar is drawn on stderr when it is a
 //! terminal.
 
 use super::Outcome;
-use crate::report::study::{
-    Design, Effects, RunResult, design_effects, effects_chart, level_chart, run_design,
-    simulate_run, write_effects_csv, write_runs_csv,
-};
+use crest::io::tables::{write_effects_csv, write_runs_csv};
+use crest::pipeline::design::DesignRun;
+use crest::plot::effects::{effects_chart, level_chart};
+use crest::plot::profile::line_chart_svg;
+use crest::study::design::{Design, Effects, RunResult};
 use miette::{IntoDiagnostic, WrapErr, miette};
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Options of `crest study`.
@@ -42,48 +42,14 @@ pub struct Args {
 /// Run `crest study`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let started = Instant::now();
-    let text = std::fs::read_to_string(&args.design)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read design {}", args.design.display()))?;
     let file = args.design.display().to_string();
-    let design = Design::parse(&text, &file)?;
-    let tool_path = args
-        .design
-        .parent()
-        .unwrap_or(Path::new("."))
-        .join(&design.tool);
-    let tool_text = std::fs::read_to_string(&tool_path)
-        .into_diagnostic()
-        .wrap_err_with(|| {
-            format!(
-                "{file}: cannot read tool file {} (the path is relative to the design file)",
-                tool_path.display()
-            )
-        })?;
-    let cutter = crate::tool::load_tool_toml(&tool_text).map_err(|e| {
-        miette!(
-            "{}:{}:{}: {}",
-            tool_path.display(),
-            e.line(),
-            e.column(),
-            e.message()
-        )
-    })?;
+    let (design, cutter) = crest::pipeline::design::load_design(&args.design)?;
     if args.threads == Some(0) {
         return Err(miette!("--threads must be at least 1"));
     }
     let n_runs = design.runs().len();
 
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(n_runs as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} study [{bar:40}] {pos}/{len} runs {elapsed_precise} eta {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    let bar = super::progress::bar(n_runs as u64, "study", "runs");
     let tick = || {
         if let Some(b) = &bar {
             b.inc(1);
@@ -93,60 +59,56 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
-    let results = pool.install(|| run_design(&design, |p| simulate_run(&design, &cutter, p), tick));
+    let done = pool.install(|| crest::pipeline::design::run(design, cutter, &file, &tick));
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let failed: Vec<String> = results
-        .iter()
-        .filter_map(|r| {
-            r.error
-                .as_ref()
-                .map(|e| format!("run {}: {e}", r.point.run))
-        })
-        .collect();
-    if !failed.is_empty() {
-        return Err(miette!(
-            "{file}: {} of {n_runs} runs failed, nothing written:\n  {}",
-            failed.len(),
-            failed.join("\n  ")
-        ));
-    }
-    let effects = design_effects(&design, &results);
+    let DesignRun {
+        design,
+        results,
+        effects,
+        ..
+    } = done?;
 
-    // Every run succeeded: write the outputs.
-    std::fs::create_dir_all(&args.output)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot create {}", args.output.display()))?;
-    let runs_csv = args.output.join("runs.csv");
-    let effects_csv = args.output.join("effects.csv");
-    let chart_svg = args.output.join("effects.svg");
-    let write = |path: &Path, f: &dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()>| {
-        crate::io::write_atomic(path, f)
-            .into_diagnostic()
-            .wrap_err_with(|| format!("cannot write {}", path.display()))
+    // Every run succeeded: render the outputs, then write them.
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut table = |name: &str, f: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
+        let mut buf = Vec::new();
+        f(&mut buf).map_err(|e| miette!("cannot write {name}: {e}"))?;
+        files.push((name.to_string(), buf));
+        Ok::<(), miette::Report>(())
     };
-    write(&runs_csv, &|w| write_runs_csv(&design, &results, w))?;
-    write(&effects_csv, &|w| write_effects_csv(&design, &effects, w))?;
-    crate::plot::init_fonts();
-    let mut charts = Vec::new();
+    table("runs.csv", &|w| write_runs_csv(&design, &results, w))?;
+    table("effects.csv", &|w| write_effects_csv(&design, &effects, w))?;
+    crest::plot::init_fonts();
+    let mut chart_names = Vec::new();
     let chart = effects_chart(&design, &effects);
     if !chart.series.is_empty() {
-        crate::plot::profile::plot_lines(&chart, &chart_svg)
-            .map_err(|e| miette!("cannot draw {}: {e}", chart_svg.display()))?;
-        charts.push(chart_svg.clone());
+        files.push((
+            "effects.svg".to_string(),
+            line_chart_svg(&chart).map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
+        ));
+        chart_names.push("effects.svg".to_string());
     }
     for (i, f) in design.factors().iter().enumerate() {
         if f.levels.len() <= 2 {
             continue;
         }
         if let Some(c) = level_chart(&design, &effects, i) {
-            let path = args.output.join(format!("effects-{}.svg", f.name));
-            crate::plot::profile::plot_lines(&c, &path)
-                .map_err(|e| miette!("cannot draw {}: {e}", path.display()))?;
-            charts.push(path);
+            let name = format!("effects-{}.svg", f.name);
+            files.push((
+                name.clone(),
+                line_chart_svg(&c).map_err(|e| miette!("cannot draw {name}: {e}"))?,
+            ));
+            chart_names.push(name);
         }
     }
+    crest::io::write_files(&args.output, &files)
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write into {}", args.output.display()))?;
+    let runs_csv = args.output.join("runs.csv");
+    let effects_csv = args.output.join("effects.csv");
+    let charts: Vec<PathBuf> = chart_names.iter().map(|n| args.output.join(n)).collect();
     let elapsed = started.elapsed().as_secs_f64();
 
     if args.json {

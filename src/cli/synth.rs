@@ -2,8 +2,7 @@
 //! NX-style CLSF (`.cls`) or contact12 (`.txt`, `.csv`).
 
 use super::Outcome;
-use crate::synth::{Orientation, PathSpec, Pattern, Step, Surface, generate};
-use crate::tool::Cutter;
+use crest::synth::{Orientation, PathSpec, Pattern, Step, Surface, generate};
 use clap::ValueEnum;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::{Path, PathBuf};
@@ -107,13 +106,6 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Read a `tool.toml` into a cutter; errors name the file, line and column.
-pub(super) fn load_cutter(path: &Path) -> miette::Result<Cutter> {
-    let text = std::fs::read_to_string(path)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read {}", path.display()))?;
-    crate::tool::load_tool_toml(&text).map_err(|e| miette!("{}: {e}", path.display()))
-}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum OutKind {
@@ -139,7 +131,7 @@ fn out_kind(path: &Path) -> miette::Result<OutKind> {
 /// Run `crest synth`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let kind = out_kind(&args.output)?;
-    let cutter = load_cutter(&args.tool)?;
+    let cutter = crest::pipeline::load_tool(&args.tool)?;
     let size_mm = match args.size_mm.as_deref() {
         None => args.surface.default_size_mm(),
         Some([a, b]) => (*a, *b),
@@ -181,11 +173,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let synth = generate(&spec).map_err(|e| miette!("crest synth: {e}"))?;
 
     let program = &synth.program;
-    let written = crate::io::write_atomic(&args.output, |w| match kind {
-        OutKind::Clsf => crate::toolpath::write_clsf(program, w),
+    let written = crest::io::write_atomic(&args.output, |w| match kind {
+        OutKind::Clsf => crest::toolpath::write_clsf(program, w),
         OutKind::Contact12 => match program.paths.first() {
             // Every move, so that the clearance moves between passes survive.
-            Some(p) => crate::toolpath::write_contact12(p, true, w),
+            Some(p) => crest::toolpath::write_contact12(p, true, w),
             None => Ok(()),
         },
     });
@@ -237,9 +229,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::Surface;
-    use crate::tool::Shape;
-    use crate::toolpath::MotionKind;
+    use crest::synth::Surface;
+    use crest::tool::{Cutter, Shape};
+    use crest::toolpath::MotionKind;
 
     /// Write a synthetic path through the CLI's writer choice and read it back with the
     /// reader every command uses: the same postures (to the written precision).
@@ -262,14 +254,14 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join(format!("p.{ext}"));
         let kind = out_kind(&out).unwrap();
-        crate::io::write_atomic(&out, |w| match kind {
-            OutKind::Clsf => crate::toolpath::write_clsf(&synth.program, w),
+        crest::io::write_atomic(&out, |w| match kind {
+            OutKind::Clsf => crest::toolpath::write_clsf(&synth.program, w),
             OutKind::Contact12 => {
-                crate::toolpath::write_contact12(&synth.program.paths[0], true, w)
+                crest::toolpath::write_contact12(&synth.program.paths[0], true, w)
             }
         })
         .unwrap();
-        let back = super::super::input::read_program(&out).unwrap();
+        let back = crest::io::toolpath::read_program(&out).unwrap();
         let (a, b) = (&synth.program.paths[0], &back.paths[0]);
         assert_eq!(a.postures.len(), b.postures.len());
         assert_eq!(a.cutting_runs(), b.cutting_runs());

@@ -1,12 +1,10 @@
 //! `crest tool`: cutter analysis for one engagement on a plane — effective radius and
 //! cutting-speed ratio (002 Table 3), crest height (Eq 14), participating teeth and the
-//! corrected feed mark spacing (Eqs 7-8) — and [`read_tool`], the `--tool tool.toml` reader
-//! that every command uses.
+//! corrected feed mark spacing (Eqs 7-8).
 
 use super::Outcome;
-use crate::tool::{Cutter, Rule, Shape, ToolConfigError, analyse, load_tool_toml};
-use miette::{NamedSource, SourceSpan};
-use std::path::{Path, PathBuf};
+use crest::tool::{Rule, Shape, analyse};
+use std::path::PathBuf;
 
 /// Options of `crest tool`.
 #[derive(Debug, clap::Args)]
@@ -49,42 +47,6 @@ impl From<RuleArg> for Rule {
     }
 }
 
-/// A rejected `tool.toml`, with the file name, line and column, and the offending text.
-#[derive(Debug, thiserror::Error, miette::Diagnostic)]
-#[error("{file}:{line}:{column}: {message}")]
-pub struct ToolFileError {
-    file: String,
-    line: usize,
-    column: usize,
-    message: String,
-    #[source_code]
-    src: NamedSource<String>,
-    #[label("here")]
-    span: Option<SourceSpan>,
-}
-
-/// Turn a [`ToolConfigError`] on `text` (read from `path`) into a diagnostic.
-pub fn tool_file_error(path: &Path, text: &str, e: &ToolConfigError) -> ToolFileError {
-    let file = path.display().to_string();
-    ToolFileError {
-        file: file.clone(),
-        line: e.line(),
-        column: e.column(),
-        message: e.message(),
-        src: NamedSource::new(file, text.to_string()),
-        span: e
-            .span()
-            .map(|s| SourceSpan::from((s.start, s.end.saturating_sub(s.start)))),
-    }
-}
-
-/// Read `path` as a `tool.toml`; errors name the file, line and column.
-pub fn read_tool(path: &Path) -> miette::Result<Cutter> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| miette::miette!("{}: cannot read the tool file: {e}", path.display()))?;
-    load_tool_toml(&text).map_err(|e| tool_file_error(path, &text, &e).into())
-}
-
 /// Name of a shape in output.
 pub fn shape_name(shape: Shape) -> &'static str {
     match shape {
@@ -96,7 +58,7 @@ pub fn shape_name(shape: Shape) -> &'static str {
 
 /// Run `crest tool`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let cutter = read_tool(&args.tool)?;
+    let cutter = crest::pipeline::load_tool(&args.tool)?;
     let rule = Rule::from(args.rule);
     let a = analyse(&cutter, args.lead_deg, args.ap_mm, args.fz_mm, rule)
         .map_err(|e| miette::miette!("{e}"))?;

@@ -19,6 +19,11 @@ mod gsf;
 mod sdf;
 mod xyz;
 
+pub mod measured;
+pub mod tables;
+pub mod text;
+pub mod toolpath;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -50,6 +55,19 @@ where
     }
     tmp.persist(path).map_err(|e| e.error)?;
     Ok(())
+}
+
+/// Write a set of files `(name, bytes)` into the folder `dir` (created if needed), each
+/// through [`write_atomic`]; returns the paths written, in order.
+pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> std::io::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let mut written = Vec::with_capacity(files.len());
+    for (name, bytes) in files {
+        let path = dir.join(name);
+        write_atomic(&path, |w| w.write_all(bytes))?;
+        written.push(path);
+    }
+    Ok(written)
 }
 
 /// A height-map file format.

@@ -25,7 +25,7 @@ pub mod plan;
 
 pub use blocks::{Blocks, Limit, Settings};
 pub use chain::{IkTracker, Joints, Pose};
-pub use machine::{Machine, MachineError};
+pub use machine::Machine;
 pub use plan::Timing;
 use rayon::prelude::*;
 

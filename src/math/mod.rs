@@ -100,9 +100,30 @@ impl Frame {
     }
 }
 
+/// `v` with `decimals` decimals, trailing zeros (and a trailing point) removed, and `-0`
+/// written `0`: the one way numbers are trimmed for titles, labels, names and reports.
+pub fn trim_decimals(v: f64, decimals: usize) -> String {
+    let s = format!("{v:.decimals$}");
+    let s = if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.')
+    } else {
+        s.as_str()
+    };
+    if s == "-0" { "0".to_string() } else { s.to_string() }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn trim_decimals_drops_zeros_and_negative_zero() {
+        assert_eq!(trim_decimals(1.5, 4), "1.5");
+        assert_eq!(trim_decimals(2.0, 3), "2");
+        assert_eq!(trim_decimals(-0.00001, 3), "0");
+        assert_eq!(trim_decimals(120.0, 0), "120");
+        assert_eq!(trim_decimals(0.123456, 4), "0.1235");
+    }
     use approx::assert_relative_eq;
 
     #[test]

@@ -21,6 +21,10 @@ pub struct HeightStats {
     pub ssk: f64,
     /// Kurtosis `mean η⁴ / Sq⁴` (3 for a Gaussian; `NaN` when Sq = 0).
     pub sku: f64,
+    /// Lowest valid value, µm (not relative to the mean).
+    pub min: f64,
+    /// Highest valid value, µm (not relative to the mean).
+    pub max: f64,
 }
 
 impl HeightStats {
@@ -91,6 +95,7 @@ pub fn height_stats(z: &[f64]) -> Option<HeightStats> {
         s3 += a3;
         s4 += a4;
     }
+    let (min, max) = (lo, hi);
     let (lo, hi) = (lo - mean, hi - mean);
     let nf = n as f64;
     let sq = (s2 / nf).sqrt();
@@ -108,6 +113,8 @@ pub fn height_stats(z: &[f64]) -> Option<HeightStats> {
         sv: -lo,
         ssk,
         sku,
+        min,
+        max,
     })
 }
 

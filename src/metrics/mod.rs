@@ -42,7 +42,9 @@ pub use params::{
     AREAL_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters, preprocess_map,
     preprocess_profile, profile_parameters,
 };
-pub use profile::{Profile, ProfileSpec, extract_profile, profile_values};
+pub use profile::{
+    Profile, ProfileSpec, extract_profile, profile_values, rz_ra, sampling_length_mm,
+};
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 
 /// Errors of the metrics stage.

@@ -179,26 +179,7 @@ pub fn profile_values(p: &Profile, sections: usize) -> Result<ProfileValues, Met
         )));
     }
     let eta: Vec<f64> = p.z.iter().map(|v| v - stats.mean).collect();
-    // numpy.array_split: the first n % sections parts get one more sample.
-    let (base, extra) = (n / sections, n % sections);
-    let (mut sp, mut sv, mut sz, mut used) = (0.0, 0.0, 0.0, 0usize);
-    let mut start = 0;
-    for k in 0..sections {
-        let len = base + usize::from(k < extra);
-        let part = &eta[start..start + len];
-        start += len;
-        let (mut hi, mut lo) = (f64::NEG_INFINITY, f64::INFINITY);
-        for &v in part.iter().filter(|v| v.is_finite()) {
-            hi = hi.max(v);
-            lo = lo.min(v);
-        }
-        if hi.is_finite() {
-            sp += hi;
-            sv -= lo;
-            sz += hi - lo;
-            used += 1;
-        }
-    }
+    let (sp, sv, sz, used) = section_extremes(&eta, sections);
     let u = used as f64;
     let (mut sd, mut cd) = (0.0, 0usize);
     for w in eta.windows(2) {
@@ -226,6 +207,58 @@ pub fn profile_values(p: &Profile, sections: usize) -> Result<ProfileValues, Met
         rdq,
         rsm: rsm(&eta, p.step_um, 0.1 * rz),
     })
+}
+
+/// Sums over `sections` sampling lengths of the peak height, valley depth and peak-to-valley
+/// height of `eta` (heights about the mean line), and the number of sections with a valid
+/// sample. Sections are cut with `numpy.array_split` semantics: the first `n mod sections`
+/// get one more sample. The one rule for Rp, Rv and Rz in crest.
+fn section_extremes(eta: &[f64], sections: usize) -> (f64, f64, f64, usize) {
+    let n = eta.len();
+    let (base, extra) = (n / sections, n % sections);
+    let (mut sp, mut sv, mut sz, mut used) = (0.0, 0.0, 0.0, 0usize);
+    let mut start = 0;
+    for k in 0..sections {
+        let len = base + usize::from(k < extra);
+        let part = &eta[start..start + len];
+        start += len;
+        let (mut hi, mut lo) = (f64::NEG_INFINITY, f64::INFINITY);
+        for &v in part.iter().filter(|v| v.is_finite()) {
+            hi = hi.max(v);
+            lo = lo.min(v);
+        }
+        if hi.is_finite() {
+            sp += hi;
+            sv -= lo;
+            sz += hi - lo;
+            used += 1;
+        }
+    }
+    (sp, sv, sz, used)
+}
+
+/// ISO 4288 sampling length λc for a periodic profile of mean spacing `rsm_mm`, mm.
+pub fn sampling_length_mm(rsm_mm: f64) -> f64 {
+    match rsm_mm {
+        s if s <= 0.04 => 0.08,
+        s if s <= 0.13 => 0.25,
+        s if s <= 0.4 => 0.8,
+        s if s <= 1.3 => 2.5,
+        _ => 8.0,
+    }
+}
+
+/// Rz and Ra (µm) of a profile without form or waviness (no filter) that covers five
+/// sampling lengths: Ra = mean |z − z̄|, Rz = the mean of the five sections' peak-to-valley
+/// heights (002 Eq 15), sections cut as in [`profile_values`]. NaN for an empty profile.
+pub fn rz_ra(heights_um: &[f64]) -> (f64, f64) {
+    let Some(stats) = super::height_stats(heights_um) else {
+        return (f64::NAN, f64::NAN);
+    };
+    let sections = 5.min(heights_um.len()).max(1);
+    let eta: Vec<f64> = heights_um.iter().map(|v| v - stats.mean).collect();
+    let (_, _, sz, used) = section_extremes(&eta, sections);
+    (sz / used.max(1) as f64, stats.sa)
 }
 
 /// Mean element width with height discrimination `h` (see the module docs).

@@ -17,7 +17,9 @@ pub mod clsf;
 pub mod contact12;
 pub mod error;
 pub mod number;
+pub mod position;
 
 pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
 pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
 pub use error::{ParseError, SyntaxError};
+pub use position::line_column;

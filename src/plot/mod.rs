@@ -1,5 +1,6 @@
 //! Charts with plotters, as SVG or PNG, with text rendered from an embedded font (no
-//! system fonts needed): trochoids, run-out, height maps, profiles, feed.
+//! system fonts needed): trochoids, run-out, height maps, profiles, feed, design effects
+//! and regressions. Drawing only: what goes in a chart is computed by the earlier stages.
 
 use std::path::Path;
 use std::sync::Once;
@@ -24,6 +25,17 @@ pub fn init_fonts() {
     });
 }
 
+/// Encode an RGB8 buffer of `size` pixels as PNG, in memory (the same encoder and settings
+/// plotters uses when it saves a bitmap to a path).
+pub fn encode_png(rgb: &[u8], size: (u32, u32)) -> std::io::Result<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out)
+        .write_image(rgb, size.0, size.1, image::ColorType::Rgb8)
+        .map_err(std::io::Error::other)?;
+    Ok(out)
+}
+
 /// Output kind chosen from a file name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
@@ -44,8 +56,11 @@ impl Format {
     }
 }
 
+pub mod chart;
+pub mod effects;
 pub mod feed;
 pub mod heightmap;
 pub mod profile;
+pub mod regression;
 pub mod runout;
 pub mod trochoid;

@@ -49,15 +49,15 @@ fn draw_err<E: std::fmt::Debug>(e: E) -> PlotError {
     PlotError::Draw(format!("{e:?}"))
 }
 
-/// Render `chart` at `size` pixels to `path` (SVG or PNG by extension), atomically.
-pub(crate) fn render(path: &Path, size: (u32, u32), chart: &impl Draw) -> Result<(), PlotError> {
+/// Render `chart` at `size` pixels as SVG or PNG bytes, in memory.
+pub(crate) fn render_bytes(
+    format: Format,
+    size: (u32, u32),
+    chart: &impl Draw,
+) -> Result<Vec<u8>, PlotError> {
     init_fonts();
-    let io_err = |source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let bytes = match Format::from_path(path) {
-        Some(Format::Svg) => {
+    match format {
+        Format::Svg => {
             let mut svg = String::new();
             {
                 let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
@@ -65,24 +65,29 @@ pub(crate) fn render(path: &Path, size: (u32, u32), chart: &impl Draw) -> Result
                 chart.draw(&root).map_err(draw_err)?;
                 root.present().map_err(draw_err)?;
             }
-            svg.into_bytes()
+            Ok(svg.into_bytes())
         }
-        Some(Format::Png) => {
-            // The bitmap encoder writes to a path: draw into a private temporary folder,
-            // then copy the bytes to the output through write_atomic.
-            let dir = tempfile::tempdir().map_err(io_err)?;
-            let tmp = dir.path().join("plot.png");
+        Format::Png => {
+            let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
             {
-                let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
                 root.fill(&WHITE).map_err(draw_err)?;
                 chart.draw(&root).map_err(draw_err)?;
                 root.present().map_err(draw_err)?;
             }
-            std::fs::read(&tmp).map_err(io_err)?
+            super::encode_png(&rgb, size).map_err(|e| PlotError::Draw(e.to_string()))
         }
-        None => return Err(PlotError::Format(path.to_path_buf())),
-    };
-    crate::io::write_atomic(path, |w| w.write_all(&bytes)).map_err(io_err)
+    }
+}
+
+/// Render `chart` at `size` pixels to `path` (SVG or PNG by extension), atomically.
+pub(crate) fn render(path: &Path, size: (u32, u32), chart: &impl Draw) -> Result<(), PlotError> {
+    let format = Format::from_path(path).ok_or_else(|| PlotError::Format(path.to_path_buf()))?;
+    let bytes = render_bytes(format, size, chart)?;
+    crate::io::write_atomic(path, |w| w.write_all(&bytes)).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// The range of the finite values of `values`, widened by `pad` (a fraction) and made
@@ -272,20 +277,35 @@ impl Draw for LineChart {
     }
 }
 
-/// Draw a line chart to `path` (SVG or PNG), 1000 × 560 pixels.
-pub fn plot_lines(chart: &LineChart, path: &Path) -> Result<(), PlotError> {
+/// The size of a line chart, pixels.
+const LINE_CHART_SIZE: (u32, u32) = (1000, 560);
+
+/// A line chart as SVG bytes, 1000 × 560 pixels.
+pub fn line_chart_svg(chart: &LineChart) -> Result<Vec<u8>, PlotError> {
+    check_finite(chart)?;
+    render_bytes(Format::Svg, LINE_CHART_SIZE, chart)
+}
+
+fn check_finite(chart: &LineChart) -> Result<(), PlotError> {
     let finite = chart.series.iter().any(|s| {
         s.x.iter()
             .zip(&s.y)
             .any(|(x, y)| x.is_finite() && y.is_finite())
     });
-    if !finite {
-        return Err(PlotError::Empty(format!(
+    if finite {
+        Ok(())
+    } else {
+        Err(PlotError::Empty(format!(
             "no finite point in '{}'",
             chart.title
-        )));
+        )))
     }
-    render(path, (1000, 560), chart)
+}
+
+/// Draw a line chart to `path` (SVG or PNG), 1000 × 560 pixels.
+pub fn plot_lines(chart: &LineChart, path: &Path) -> Result<(), PlotError> {
+    check_finite(chart)?;
+    render(path, LINE_CHART_SIZE, chart)
 }
 
 /// Plot height profiles against position: a simulated profile and, optionally, a measured

@@ -1,6 +1,4 @@
-//! Studies and reports: run-out what-if studies, regression reports against measured
-//! confocal tables (Markdown and HTML), and their writers.
+//! Reports: the regression report against a measured table as Markdown and HTML. Rendering
+//! only: the numbers come from [`crate::study`], the charts from [`crate::plot`].
 
 pub mod regression;
-pub mod runout;
-pub mod study;

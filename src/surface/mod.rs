@@ -43,6 +43,44 @@ pub enum Model {
     },
 }
 
+/// The surface model by name, as files and options write it (`"ice"`, `"dome"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// Pondered movement: the teeth's edges sweep between spindle steps (002 §2.4.2).
+    #[default]
+    Ice,
+    /// Instantaneous positions: the revolved body of each tooth every fz (002 §2.4.1).
+    Dome,
+}
+
+impl ModelKind {
+    /// The name used in files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Ice => "ice",
+            ModelKind::Dome => "dome",
+        }
+    }
+
+    /// The model with the ICE step `dtheta_rad`, and the resampling it needs: one sample
+    /// per feed per tooth for the dome; for ICE a sample every ≥ 8° of spindle (a whole
+    /// number of Δθ), which the engine subdivides to Δθ, so that the samples are a few µm
+    /// apart (straight interpolation exact far below a nanometre) and memory stays small.
+    pub fn with_resampling(self, dtheta_rad: f64) -> (Model, crate::resample::Mode) {
+        match self {
+            ModelKind::Dome => (Model::Dome, crate::resample::Mode::FeedPerTooth),
+            ModelKind::Ice => {
+                let coarse = dtheta_rad * (8f64.to_radians() / dtheta_rad).floor().max(1.0);
+                (
+                    Model::Ice { dtheta_rad },
+                    crate::resample::Mode::SpindleStep { dtheta_rad: coarse },
+                )
+            }
+        }
+    }
+}
+
 /// Where the grid lies.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum GridSpec {

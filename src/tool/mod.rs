@@ -10,7 +10,8 @@
 //! * [`IceElement`]: the edges discretised at chosen heights;
 //! * [`analyse`]: participating teeth ([`Rule::Paper`] or [`Rule::Exact`]), fz_eff, crest
 //!   heights, effective radius and cutting-speed ratio for one engagement on a plane;
-//! * [`load_tool_toml`]: the `tool.toml` configuration.
+//!
+//! The `tool.toml` file is read by [`crate::config::load_tool_toml`].
 //!
 //! ```
 //! use crest::tool::{Cutter, Rule, Shape, analyse};
@@ -21,17 +22,12 @@
 //! assert!((a.fz_effective_mm - 0.2).abs() < 1e-12);
 //! ```
 
-mod config;
 mod cutter;
 mod effective;
 mod ice;
 mod section;
 mod teeth;
 
-pub use config::{
-    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, line_column, load_tool_toml,
-    parse_tool_config,
-};
 pub use cutter::{Cutter, Runout, Shape, crest_height_mm, direction};
 pub use effective::{EffectiveRadius, cutting_speed_ratio, effective_radius};
 pub use ice::IceElement;

@@ -22,8 +22,10 @@ use super::effective::effective_radius;
 use super::section::{Envelope, envelope, feed_profile, nominal_crest_mm};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
-/// Which teeth cut: the paper's threshold or the exact one-dimensional envelope.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Which teeth cut: the paper's threshold or the exact one-dimensional envelope. Written
+/// `"paper"` / `"exact"` in files (the one enum every config and study uses).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Rule {
     /// 002 Eq 8: r_j(z_c) > max r − hc(nominal fz).
     #[default]

@@ -55,7 +55,7 @@ impl SourceCode for LineSource {
 /// code frame of the offending line.
 #[derive(Debug, thiserror::Error, Diagnostic)]
 #[error("{file}:{line}:{column}: expected {expected}, found {found}")]
-#[diagnostic(code(crest::input))]
+#[diagnostic(code(crate::input))]
 pub struct InputError {
     /// File name as given.
     pub file: String,
@@ -231,13 +231,11 @@ pub fn stream_from(
 }
 
 /// Read and lower a CLSF or contact12 file (chosen by content), MSYS not applied.
-#[allow(dead_code)] // used by the commands of the later stages as they land
 pub fn read_program(path: &Path) -> miette::Result<Program> {
     read_program_with(path, LowerOptions::default())
 }
 
 /// [`read_program`] with options (e.g. `apply_msys` for `--absolute`).
-#[allow(dead_code)] // used by the commands of the later stages as they land
 pub fn read_program_with(path: &Path, opts: LowerOptions) -> miette::Result<Program> {
     let mut sink = |_: &Toolpath, _: &Posture| Ok(());
     stream_program(path, opts, &mut sink)

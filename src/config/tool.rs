@@ -18,9 +18,10 @@
 //! Unknown keys, missing required keys (`shape`, `radius_mm`, `teeth`, `helix_deg`, and
 //! `corner_radius_mm` for a torus) and impossible values are rejected with the key's name
 //! and the 1-based line and column of the offending text. Only these config types derive
-//! serde; the rest of the `tool` stage stays free of it.
+//! serde; the `tool` stage itself stays free of it.
 
-use super::cutter::{Cutter, Runout, Shape};
+use crate::parse::line_column;
+use crate::tool::{Cutter, Runout, Shape};
 use serde::Deserialize;
 use std::f64::consts::TAU;
 use std::ops::Range;
@@ -151,20 +152,6 @@ pub struct RunoutConfig {
     /// δ_j, µm, one per tooth.
     #[serde(default)]
     pub tooth_radius_deviation_um: Option<Spanned<Vec<f64>>>,
-}
-
-/// 1-based line and column (in characters) of byte offset `at` in `text`.
-pub fn line_column(text: &str, at: usize) -> (usize, usize) {
-    let at = at.min(text.len());
-    let mut cut = at;
-    while !text.is_char_boundary(cut) {
-        cut -= 1;
-    }
-    let before = &text[..cut];
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before[line_start..].chars().count() + 1;
-    (line, column)
 }
 
 fn invalid(text: &str, key: &str, span: Range<usize>, message: String) -> ToolConfigError {
@@ -366,11 +353,11 @@ impl ToolConfig {
 /// Read a `tool.toml` document into a [`Cutter`] (lengths mm, angles rad).
 ///
 /// ```
-/// let cutter = crest::tool::load_tool_toml(
+/// let cutter = crest::config::load_tool_toml(
 ///     "shape = \"ball\"\nradius_mm = 5.0\nteeth = 4\nhelix_deg = 30.0\n",
 /// ).unwrap();
 /// assert_eq!(cutter.teeth(), 4);
-/// let err = crest::tool::load_tool_toml("shape = \"ball\"\nradius_mm = -5.0\nteeth = 4\nhelix_deg = 0\n")
+/// let err = crest::config::load_tool_toml("shape = \"ball\"\nradius_mm = -5.0\nteeth = 4\nhelix_deg = 0\n")
 ///     .unwrap_err();
 /// assert_eq!(err.line(), 2);
 /// ```
@@ -480,11 +467,5 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
             "shape = \"ball\"\nradius_mm = 5\nteeth = 3\nhelix_deg = 0\ntooth_pitch_deg = [0, 230, 100]\n",
         );
         assert_eq!(e.line(), 5);
-    }
-
-    #[test]
-    fn line_column_counts_characters() {
-        assert_eq!(line_column("ab\ncdé\nx", 8), (3, 1));
-        assert_eq!(line_column("ab\ncd", 4), (2, 2));
     }
 }

@@ -1,0 +1,93 @@
+//! Configuration files and their schemas, at the edge of the library: `tool.toml`,
+//! `process.toml`, `machine.toml`, the designed-experiment file, the run-out study file and
+//! the regression study file. Each module holds one file's serde schema and its checks and
+//! turns it into the plain types of the stage that uses it (a [`crate::tool::Cutter`], a
+//! [`crate::kinematics::Machine`], a [`crate::study::design::Design`], …); no stage before
+//! this one derives serde for a file.
+//!
+//! Errors name the file, the 1-based line and column of the offending key or value
+//! ([`crate::parse::line_column`]) and what is wrong. Reading the text from disk is the
+//! caller's (see `crate::io`).
+
+pub mod design;
+pub mod machine;
+pub mod process;
+pub mod regression;
+pub mod runout;
+pub mod tool;
+
+pub use machine::MachineError;
+pub use process::ProcessConfig;
+pub use tool::{
+    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, load_tool_toml,
+    parse_tool_config,
+};
+
+use crate::parse::line_column;
+
+/// A configuration file that does not parse or breaks a rule.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
+#[error("{file}:{line}:{column}: {message}")]
+pub struct ConfigError {
+    /// File name as given.
+    pub file: String,
+    /// 1-based line (0 when the error has no position).
+    pub line: usize,
+    /// 1-based column in characters (0 when the error has no position).
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl ConfigError {
+    /// An error at byte offset `at` of `text`.
+    pub fn at(file: &str, text: &str, at: usize, message: impl Into<String>) -> ConfigError {
+        let (line, column) = line_column(text, at);
+        ConfigError {
+            file: file.to_string(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    /// An error about the whole file (no position).
+    pub fn whole(file: &str, message: impl Into<String>) -> ConfigError {
+        ConfigError {
+            file: file.to_string(),
+            line: 0,
+            column: 0,
+            message: message.into(),
+        }
+    }
+}
+
+/// The message of a TOML error: its own message, or, when that is empty (a document cut
+/// off after `key =`), the first line of its full text.
+pub(crate) fn toml_message(e: &toml::de::Error) -> String {
+    let m = e.message().trim();
+    if !m.is_empty() {
+        return m.to_string();
+    }
+    e.to_string()
+        .lines()
+        .find(|l| !l.trim().is_empty())
+        .map_or_else(|| "invalid TOML".to_string(), |l| l.trim().to_string())
+}
+
+/// Deserialize a TOML document, turning a syntax or schema error into a [`ConfigError`]
+/// at its position.
+pub(crate) fn from_toml<T: serde::de::DeserializeOwned>(
+    text: &str,
+    file: &str,
+) -> Result<T, ConfigError> {
+    toml::from_str(text).map_err(|e| {
+        let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
+        ConfigError {
+            file: file.to_string(),
+            line,
+            column,
+            message: toml_message(&e),
+        }
+    })
+}

@@ -1,0 +1,294 @@
+//! The measured-table reader: CSV with one row per case and sample (`lead_deg,side,sample,
+//! Ra_um,Rz_um`, like 002 Table 2), every bad cell named by file, line and column.
+
+use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Side};
+use std::collections::BTreeMap;
+
+/// Why a measured table was rejected.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum MeasuredError {
+    /// A value in the measured table could not be read.
+    #[error("{file}:{line}:{column}: column `{name}`: {message}")]
+    Cell {
+        /// File name as given.
+        file: String,
+        /// 1-based line.
+        line: u64,
+        /// 1-based character column of the field.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// What was wrong.
+        message: String,
+    },
+    /// A malformed line in the measured table.
+    #[error("{file}:{line}: {message}")]
+    Line {
+        /// File name as given.
+        file: String,
+        /// 1-based line.
+        line: u64,
+        /// What was wrong.
+        message: String,
+    },
+    /// The header lacks required columns.
+    #[error(
+        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and at least one of Ra_um, Rz_um"
+    )]
+    MissingColumns {
+        /// File name as given.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// The missing column names, comma separated.
+        missing: String,
+    },
+}
+
+const KNOWN_COLUMNS: [&str; 5] = ["lead_deg", "side", "sample", "Ra_um", "Rz_um"];
+
+/// The 1-based line where a record starts: the csv crate may place a record that follows
+/// blank or comment lines at the first of them, so skip those from its byte offset.
+fn line_of_record(text: &str, pos: &csv::Position) -> u64 {
+    let bytes = text.as_bytes();
+    let mut at = usize::try_from(pos.byte())
+        .unwrap_or(usize::MAX)
+        .min(bytes.len());
+    // Skip blank and comment lines (the record's offset may point at them).
+    while at < bytes.len() {
+        match bytes[at] {
+            b'\n' | b'\r' => at += 1,
+            b'#' => {
+                at = bytes[at..]
+                    .iter()
+                    .position(|b| *b == b'\n')
+                    .map_or(bytes.len(), |p| at + p + 1);
+            }
+            _ => break,
+        }
+    }
+    1 + bytes[..at].iter().filter(|b| **b == b'\n').count() as u64
+}
+
+/// The 1-based character column where field `index` of a raw CSV line starts.
+fn field_column(raw: &str, index: usize) -> usize {
+    let mut field = 0;
+    let mut in_quotes = false;
+    for (col, ch) in raw.chars().enumerate() {
+        if field == index {
+            return col + 1;
+        }
+        match ch {
+            '"' => in_quotes = !in_quotes,
+            ',' if !in_quotes => field += 1,
+            _ => {}
+        }
+    }
+    raw.chars().count() + 1
+}
+
+/// Parse a measured table from CSV text. `file` names the file in error messages.
+///
+/// Lines starting with `#` are comments. The header must hold `lead_deg`, `side`,
+/// `sample` and at least one of `Ra_um`, `Rz_um`, in any order; other columns are errors
+/// (a misspelt unit must not be ignored). `side` is `concave`, `convex` or `plane`.
+/// Roughness values must be finite and non-negative; each (lead, side, sample) appears once.
+pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredError> {
+    let raw_lines: Vec<&str> = text.lines().collect();
+    let raw_line = |line: u64| -> &str {
+        usize::try_from(line)
+            .ok()
+            .and_then(|l| raw_lines.get(l.saturating_sub(1)))
+            .copied()
+            .unwrap_or("")
+    };
+    let mut reader = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .flexible(true)
+        .from_reader(text.as_bytes());
+    let csv_err = |e: csv::Error| {
+        let line = e.position().map(|p| p.line()).unwrap_or(0);
+        MeasuredError::Line {
+            file: file.to_string(),
+            line,
+            message: format!("not valid CSV: {e}"),
+        }
+    };
+    let headers = reader.headers().map_err(csv_err)?.clone();
+    let header_line = headers
+        .position()
+        .map(|p| line_of_record(text, p))
+        .unwrap_or(1);
+    if headers.is_empty() || headers.iter().all(|h| h.is_empty()) {
+        return Err(MeasuredError::MissingColumns {
+            file: file.to_string(),
+            line: header_line,
+            missing: "lead_deg, side, sample, Ra_um, Rz_um".to_string(),
+        });
+    }
+    let mut index: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, h) in headers.iter().enumerate() {
+        let Some(known) = KNOWN_COLUMNS.iter().find(|k| **k == h) else {
+            return Err(MeasuredError::Cell {
+                file: file.to_string(),
+                line: header_line,
+                column: field_column(raw_line(header_line), i),
+                name: h.to_string(),
+                message: format!(
+                    "unknown column; expected one of {} (units in the name)",
+                    KNOWN_COLUMNS.join(", ")
+                ),
+            });
+        };
+        if index.insert(known, i).is_some() {
+            return Err(MeasuredError::Cell {
+                file: file.to_string(),
+                line: header_line,
+                column: field_column(raw_line(header_line), i),
+                name: h.to_string(),
+                message: "column given twice".to_string(),
+            });
+        }
+    }
+    let mut missing: Vec<&str> = ["lead_deg", "side", "sample"]
+        .into_iter()
+        .filter(|c| !index.contains_key(c))
+        .collect();
+    let columns = Columns {
+        ra: index.contains_key("Ra_um"),
+        rz: index.contains_key("Rz_um"),
+    };
+    if !columns.ra && !columns.rz {
+        missing.push("Ra_um or Rz_um");
+    }
+    if !missing.is_empty() {
+        return Err(MeasuredError::MissingColumns {
+            file: file.to_string(),
+            line: header_line,
+            missing: missing.join(", "),
+        });
+    }
+
+    let mut rows: Vec<MeasuredRow> = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(csv_err)?;
+        let line = record
+            .position()
+            .map(|p| line_of_record(text, p))
+            .unwrap_or(0);
+        if record.iter().all(|f| f.is_empty()) {
+            continue;
+        }
+        if record.len() != headers.len() {
+            return Err(MeasuredError::Line {
+                file: file.to_string(),
+                line,
+                message: format!(
+                    "{} field(s) where the header has {}",
+                    record.len(),
+                    headers.len()
+                ),
+            });
+        }
+        let cell = |name: &str| -> (usize, &str) {
+            let i = index[name];
+            (i, record.get(i).unwrap_or(""))
+        };
+        let bad = |name: &str, i: usize, message: String| MeasuredError::Cell {
+            file: file.to_string(),
+            line,
+            column: field_column(raw_line(line), i),
+            name: name.to_string(),
+            message,
+        };
+        let number = |name: &str, nonneg: bool| -> Result<f64, MeasuredError> {
+            let (i, s) = cell(name);
+            let v: f64 = s
+                .parse()
+                .map_err(|_| bad(name, i, format!("expected a number, found `{s}`")))?;
+            if !v.is_finite() || (nonneg && v < 0.0) {
+                return Err(bad(
+                    name,
+                    i,
+                    format!("expected a finite non-negative number, found `{s}`"),
+                ));
+            }
+            Ok(v)
+        };
+        let lead_deg = number("lead_deg", false)?;
+        if !(-90.0..=90.0).contains(&lead_deg) {
+            let (i, s) = cell("lead_deg");
+            return Err(bad(
+                "lead_deg",
+                i,
+                format!("lead angle must lie in [-90, 90] degrees, found `{s}`"),
+            ));
+        }
+        let (si, s) = cell("side");
+        let side = Side::parse(s).ok_or_else(|| {
+            bad(
+                "side",
+                si,
+                format!("expected concave, convex or plane, found `{s}`"),
+            )
+        })?;
+        let (pi, sample) = cell("sample");
+        if sample.is_empty() {
+            return Err(bad("sample", pi, "empty sample label".to_string()));
+        }
+        let ra_um = if columns.ra {
+            Some(number("Ra_um", true)?)
+        } else {
+            None
+        };
+        let rz_um = if columns.rz {
+            Some(number("Rz_um", true)?)
+        } else {
+            None
+        };
+        if let Some(prev) = rows
+            .iter()
+            .find(|r| r.lead_deg == lead_deg && r.side == side && r.sample == sample)
+        {
+            return Err(bad(
+                "sample",
+                pi,
+                format!(
+                    "sample `{sample}` of lead {lead_deg}°, {} given twice (first on line {})",
+                    side.name(),
+                    prev.line
+                ),
+            ));
+        }
+        rows.push(MeasuredRow {
+            lead_deg,
+            side,
+            sample: sample.to_string(),
+            ra_um,
+            rz_um,
+            line,
+        });
+    }
+    if rows.is_empty() {
+        return Err(MeasuredError::Line {
+            file: file.to_string(),
+            line: header_line,
+            message: "the table has a header but no data rows".to_string(),
+        });
+    }
+    Ok(MeasuredTable { columns, rows })
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn field_columns_count_characters() {
+        assert_eq!(field_column("5,concave,S1,x,2", 0), 1);
+        assert_eq!(field_column("5,concave,S1,x,2", 3), 14);
+        assert_eq!(field_column("5,\"a,b\",S1", 2), 9);
+    }
+}

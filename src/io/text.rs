@@ -1,0 +1,85 @@
+//! Reading a whole text file (configs, tables): UTF-8 checked with the line and column of the
+//! first invalid byte, a leading byte-order mark dropped, errors naming the file.
+
+use std::path::Path;
+
+/// Why a text file could not be read.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum TextError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read the {what}: {source}")]
+    Io {
+        /// File name as given.
+        file: String,
+        /// What the file is (`tool file`, `measured table`, …).
+        what: String,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not UTF-8 text.
+    #[error("{file}:{line}:{column}: the {what} is not UTF-8 text (invalid byte 0x{byte:02X})")]
+    Encoding {
+        /// File name as given.
+        file: String,
+        /// What the file is.
+        what: String,
+        /// 1-based line of the first invalid byte.
+        line: usize,
+        /// 1-based column (characters) of the first invalid byte.
+        column: usize,
+        /// The byte.
+        byte: u8,
+    },
+}
+
+/// Read `path` as UTF-8 text; `what` names the kind of file in errors. A UTF-8 byte-order
+/// mark at the start is dropped.
+pub fn read_text(path: &Path, what: &str) -> Result<String, TextError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| TextError::Io {
+        file: file.clone(),
+        what: what.to_string(),
+        source,
+    })?;
+    decode(bytes, &file, what)
+}
+
+/// Decode `bytes` read from `file` (see [`read_text`]).
+pub fn decode(bytes: Vec<u8>, file: &str, what: &str) -> Result<String, TextError> {
+    let mut text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.into_bytes();
+        let before = String::from_utf8_lossy(&bytes[..at]);
+        let (line, column) = crate::parse::line_column(&before, before.len());
+        TextError::Encoding {
+            file: file.to_string(),
+            what: what.to_string(),
+            line,
+            column,
+            byte: bytes[at],
+        }
+    })?;
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_utf8_names_line_and_column() {
+        let e = decode(b"rpm = 1\nfz = \xff\n".to_vec(), "p.toml", "process file").unwrap_err();
+        let m = e.to_string();
+        assert!(m.starts_with("p.toml:2:6: the process file is not UTF-8"), "{m}");
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_dropped() {
+        let t = decode(b"\xef\xbb\xbfrpm = 1\n".to_vec(), "p.toml", "process file").unwrap();
+        assert_eq!(t, "rpm = 1\n");
+    }
+}

@@ -1,0 +1,12 @@
+//! The pipelines the commands run, in one place that the command line, the studies and the
+//! Python package all call: read the inputs a command names, resolve tool, feed and spindle
+//! speed, resample, simulate and measure. Files are read through [`crate::io`]; nothing
+//! here prints.
+
+pub mod inputs;
+
+pub use inputs::{ToolFileError, load_machine, load_process, load_tool, tool_from_text};
+pub mod design;
+pub mod report;
+pub mod simulate;
+pub mod runout;

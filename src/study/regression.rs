@@ -1,0 +1,791 @@
+//! Regressions: simulated roughness held against measured confocal tables.
+//!
+//! A *measured table* is a CSV with one row per case and sample (`lead_deg,side,sample,
+//! Ra_um,Rz_um`, like 002 Table 2). A *study* (TOML) describes the cases: the tool file,
+//! the run-out, the feed per tooth, the lead angle, the curvature side and the model that
+//! predicts the surface. For every case the report computes the simulated Rz, Ra and crest
+//! height, compares them with the measured mean ± σ (sample standard deviation, n − 1), and
+//! marks each comparison pass or fail against a tolerance in percent of the measured mean.
+//!
+//! Models:
+//! * `crest`: the closed-form model of 002 §3.3. The participating teeth (Eq 8, the paper's
+//!   rule) are found from the tooth radii at the generating height, the feed mark spacing is
+//!   fz_eff = fz·Z/zc (Eq 7), and the feed-direction profile is the periodic sequence of
+//!   circular arcs of the tool radius spaced fz_eff. Its crest is Eq 14; Rz and Ra are
+//!   computed on that profile (see [`profile_roughness`]).
+//!
+//! The writers ([`crate::report::regression`], [`crate::plot::regression`]) render a
+//! [`Regression`]; everything here is pure.
+
+use super::measured::{MeasuredCase, MeasuredTable, Side, Stat, summarize};
+use crate::math::trim_decimals;
+use crate::surface::ModelKind;
+use crate::tool::{Cutter, Rule, Runout, crest_height_mm};
+use serde::Serialize;
+
+/// The default tolerance of `crest report`, percent of the measured mean.
+pub const DEFAULT_TOLERANCE_PCT: f64 = 20.0;
+
+/// Profile sampling step of the simulated profile, mm (0.5 µm).
+pub const PROFILE_STEP_MM: f64 = 0.0005;
+
+/// Which model predicts a case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Model {
+    /// Closed-form crest model: participating teeth (002 Eq 8, paper rule), fz_eff (Eq 7),
+    /// Eq 14, and the periodic arc profile.
+    #[default]
+    Crest,
+    /// Z-map simulation (`crate::surface`) of one straight pass over a plane at the case's
+    /// lead, with the tool's edges (ICE) or bodies (dome); Rz and Ra on the centre line.
+    Simulate,
+}
+
+impl Model {
+    /// The name used in studies.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Crest => "crest",
+            Model::Simulate => "simulate",
+        }
+    }
+}
+
+/// `[simulate]` settings of a study (used by cases with `model = "simulate"`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SimulateSpec {
+    /// `ice` (default) or `dome`.
+    pub surface_model: ModelKind,
+    /// Grid spacing, µm (default 1).
+    pub grid_um: f64,
+    /// Largest spindle step of the ICE model, degrees (default 0.5).
+    pub dtheta_deg: f64,
+}
+
+impl Default for SimulateSpec {
+    fn default() -> Self {
+        SimulateSpec {
+            surface_model: ModelKind::Ice,
+            grid_um: 1.0,
+            dtheta_deg: 0.5,
+        }
+    }
+}
+
+/// One case of a study.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StudyCase {
+    /// Lead angle (tool tilt in the feed direction), degrees.
+    pub lead_deg: f64,
+    /// Curvature side; matches the `side` column of the measured table.
+    pub side: Side,
+    /// Local radius of curvature of the surface in the feed direction, mm. Absent = plane.
+    pub surface_radius_mm: Option<f64>,
+    /// Feed per tooth for this case, mm (overrides the study's `fz_mm`).
+    pub fz_mm: Option<f64>,
+    /// Model for this case (overrides the study's `model`).
+    pub model: Option<Model>,
+}
+
+/// A regression study: the cases of a measured table and how to predict them (read by
+/// [`crate::config::regression`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Study {
+    /// Title of the report.
+    pub title: String,
+    /// Where the measurements come from.
+    pub source: Option<String>,
+    /// Tool TOML file, relative to the study file.
+    pub tool: String,
+    /// Default model.
+    pub model: Model,
+    /// Programmed feed per tooth, mm.
+    pub fz_mm: f64,
+    /// Rule for the participating teeth.
+    pub rule: Rule,
+    /// Depth of cut along the normal, mm (for the effective radius, 002 Table 3).
+    pub ap_mm: f64,
+    /// Nominal cutting speed, m/min (informative).
+    pub cutting_speed_m_min: Option<f64>,
+    /// Run-out; when present it replaces the tool file's `[runout]` table entirely.
+    pub runout: Option<Runout>,
+    /// Settings of the `simulate` model.
+    pub simulate: Option<SimulateSpec>,
+    /// Free text (Markdown paragraphs) printed in the report's discussion.
+    pub notes: Option<String>,
+    /// The cases.
+    pub cases: Vec<StudyCase>,
+}
+
+/// Why a regression cannot be made: the study and the table do not match, or a case cannot
+/// be predicted.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
+#[error("{file}: {message}")]
+pub struct RegressionError {
+    /// The study file, as given.
+    pub file: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// What the `crest` model predicts for one case.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CrestPrediction {
+    /// Rule that decided the participating teeth.
+    pub rule: String,
+    /// Height of the generating point above the tip, mm: R(1 − cos β) for a ball on a plane.
+    pub generating_height_mm: f64,
+    /// Local radius of every tooth at the generating height, mm (tooth 1 first).
+    pub tooth_radius_mm: Vec<f64>,
+    /// Participating teeth, 1-based, in cutting order.
+    pub teeth: Vec<usize>,
+    /// Number of participating teeth zc.
+    pub zc: usize,
+    /// Nominal crest (Eq 14 with the programmed fz), µm: the threshold of Eq 8.
+    pub nominal_crest_um: f64,
+    /// Effective (mean) feed mark spacing fz·Z/zc, mm.
+    pub fz_eff_mm: f64,
+    /// Radius of the profile arcs of a ball end, mm (R on a plane; R·Rs/(Rs ± R) when curved).
+    pub arc_radius_mm: f64,
+    /// Crest height between marks, µm: Eq 14 at fz_eff (paper rule) or the exact
+    /// envelope's crest (exact rule), on the curved profile when a surface radius is given.
+    pub crest_um: f64,
+    /// Rz of the simulated profile, µm (mean of 5 sampling lengths).
+    pub rz_um: f64,
+    /// Ra of the simulated profile, µm.
+    pub ra_um: f64,
+    /// Sampling length λc used for the profile, mm.
+    pub sampling_length_mm: f64,
+    /// R_ef,max of the nominal tool for the lead and ap (002 Table 3), mm.
+    pub effective_radius_mm: f64,
+    /// Radius of the generating point (R sin β for a ball), mm.
+    pub contact_radius_mm: f64,
+    /// Cutting-speed ratio R_ef,max / R (002 Table 3 "Vc,ef max" / 100).
+    pub cutting_speed_ratio: f64,
+}
+
+/// A periodic feed-direction profile: period `period_mm`, one height (mm) per position in
+/// the period. Returns (Rz µm, Ra µm, λc mm, peak-to-valley over one period µm).
+///
+/// The period is sampled in an even number of steps of at most [`PROFILE_STEP_MM`] (so
+/// that the crest between two evenly spaced marks is a sample), and the profile repeated
+/// over 5 sampling lengths λc chosen by ISO 4288 from `rsm_mm`.
+fn periodic_roughness(
+    period_mm: f64,
+    rsm_mm: f64,
+    height_mm: &dyn Fn(f64) -> f64,
+) -> (f64, f64, f64, f64) {
+    let lc = crate::metrics::sampling_length_mm(rsm_mm);
+    let total = 5.0 * lc;
+    let mut steps = 2.0 * (0.5 * period_mm / PROFILE_STEP_MM).ceil().max(1.0);
+    // Keep the evaluation under ~2 M points even for tiny periods.
+    while total / (period_mm / steps) > 2.0e6 && steps > 2.0 {
+        steps = 2.0 * (0.25 * steps).ceil();
+    }
+    let dx = period_mm / steps;
+    let m = steps as usize;
+    let one: Vec<f64> = (0..m).map(|i| height_mm(i as f64 * dx)).collect();
+    let lo = one.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = one.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let n = (total / dx).round().max(1.0) as usize;
+    let heights: Vec<f64> = (0..=n).map(|i| (one[i % m] - lo) * 1e3).collect();
+    let (rz, ra) = crate::metrics::rz_ra(&heights);
+    (rz, ra, lc, (hi - lo) * 1e3)
+}
+
+/// Rz and Ra (µm) of the periodic profile of circular arcs of radius `radius_mm` whose
+/// lowest points are `spacing_mm` apart, and the sampling length used (mm).
+///
+/// The profile is sampled every [`PROFILE_STEP_MM`] or finer (so that every crest and every
+/// valley is a sample) over 5 sampling lengths λc chosen by ISO 4288 from RSm = spacing. It
+/// has no form and no waviness, so no filter is applied: Ra is the mean |z − z̄| over the
+/// evaluation length and Rz the mean of the 5 peak-to-valley heights (002 Eq 15). For
+/// sampling lengths that hold a whole crest Rz equals the crest of Eq 14, and Ra tends to
+/// 4/(9√3) = 0.2566 times it for small spacing.
+pub fn profile_roughness(radius_mm: f64, spacing_mm: f64) -> (f64, f64, f64) {
+    let arc = |u: f64| {
+        let d = if u > 0.5 * spacing_mm {
+            spacing_mm - u
+        } else {
+            u
+        };
+        crest_height_mm(radius_mm, 2.0 * d)
+    };
+    let (rz, ra, lc, _) = periodic_roughness(spacing_mm, spacing_mm, &arc);
+    (rz, ra, lc)
+}
+
+/// The `crest` model for one case: `cutter` (with its run-out) at lead `lead_deg`, depth of
+/// cut `ap_mm` and `fz_mm` per tooth, on a plane or on a surface of local radius
+/// `surface_radius_mm` (feed direction) on `side`; teeth by `rule`.
+///
+/// * [`crate::tool::analyse`] gives the generating height, the local tooth radii, the
+///   participating teeth, fz_eff = fz·Z/zc (Eq 7) and the crest (Eq 14 at fz_eff for the
+///   paper rule, the exact envelope for the exact rule), and the effective radius.
+/// * The feed-direction profile: paper rule, the nominal profile repeated every fz_eff;
+///   exact rule, the lower envelope of every tooth's profile (its normal deviation included)
+///   at its own mark positions, period Z·fz. Rz and Ra are computed on it (see
+///   [`profile_roughness`]).
+/// * On a curved surface of radius Rs (ball end only) the arcs take the relative radius
+///   R·Rs/(Rs ± R) (+ convex, − concave), so hc ≈ fz_eff²/8·(1/R ± 1/Rs), the curved-surface
+///   correction of model.md §7, with the marks fz_eff apart on the surface (second order in
+///   the spacing; exact on a plane).
+pub fn crest_model(
+    cutter: &Cutter,
+    lead_deg: f64,
+    ap_mm: f64,
+    fz_mm: f64,
+    rule: Rule,
+    side: Side,
+    surface_radius_mm: Option<f64>,
+) -> Result<CrestPrediction, String> {
+    use crate::tool::{FeedProfile, feed_profile, mark_positions_mm, normal_deviation_mm};
+    let a = crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule)
+        .map_err(|e| e.to_string())?;
+    let r = cutter.radius_mm;
+    let is_ball = matches!(cutter.shape, crate::tool::Shape::Ball);
+    let arc_radius = match (side, surface_radius_mm) {
+        (Side::Plane, _) | (_, None) => r,
+        (_, Some(_)) if !is_ball => {
+            return Err("the curvature correction needs a ball-end tool".to_string());
+        }
+        (Side::Convex, Some(rs)) => r * rs / (rs + r),
+        (Side::Concave, Some(rs)) => {
+            if rs <= r {
+                return Err(format!(
+                    "a concave surface of radius {rs} mm is tighter than the tool radius {r} mm"
+                ));
+            }
+            r * rs / (rs - r)
+        }
+    };
+    let lead = lead_deg.to_radians();
+    let profile = if is_ball {
+        FeedProfile::Circle {
+            radius_mm: arc_radius,
+        }
+    } else {
+        feed_profile(r, cutter.corner_radius_mm(), lead)
+    };
+    let fz_eff = a.fz_effective_mm;
+    let (rz, ra, lc, crest_mm) = match rule {
+        Rule::Paper => {
+            let h = |u: f64| {
+                (-1..=2)
+                    .map(|k| profile.height(u - f64::from(k) * fz_eff))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(fz_eff, fz_eff, &h);
+            let crest = if arc_radius == r {
+                a.crest_height_corrected_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+        Rule::Exact => {
+            let period = cutter.teeth() as f64 * fz_mm;
+            let pos = mark_positions_mm(cutter, fz_mm);
+            let dev: Vec<f64> = (0..cutter.teeth())
+                .map(|j| normal_deviation_mm(cutter, j, a.generating_height_mm, lead))
+                .collect();
+            let h = |u: f64| {
+                let mut best = f64::INFINITY;
+                for (p, d) in pos.iter().zip(&dev) {
+                    for k in [-1.0, 0.0, 1.0] {
+                        let x = u - p.rem_euclid(period) - k * period;
+                        let v = match profile {
+                            FeedProfile::Circle { radius_mm } => FeedProfile::Circle {
+                                radius_mm: (radius_mm + d).max(0.0),
+                            }
+                            .height(x),
+                            _ => profile.height(x),
+                        } - d;
+                        best = best.min(v);
+                    }
+                }
+                best
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(period, fz_eff, &h);
+            let crest = if arc_radius == r {
+                a.crest_height_exact_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+    };
+    Ok(CrestPrediction {
+        rule: rule.name().to_string(),
+        generating_height_mm: a.generating_height_mm,
+        tooth_radius_mm: a.teeth.iter().map(|t| t.local_radius_mm).collect(),
+        teeth: a
+            .teeth
+            .iter()
+            .filter(|t| t.participates)
+            .map(|t| t.index)
+            .collect(),
+        zc: a.zc,
+        nominal_crest_um: a.crest_height_mm * 1e3,
+        fz_eff_mm: fz_eff,
+        arc_radius_mm: arc_radius,
+        crest_um: crest_mm * 1e3,
+        rz_um: rz,
+        ra_um: ra,
+        sampling_length_mm: lc,
+        effective_radius_mm: a.effective_radius_mm,
+        contact_radius_mm: a.contact_radius_mm,
+        cutting_speed_ratio: a.cutting_speed_ratio,
+    })
+}
+
+/// What the `simulate` model predicts for one case.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZmapPrediction {
+    /// Surface model (`ice` or `dome`).
+    pub surface_model: ModelKind,
+    /// Grid spacing, µm.
+    pub grid_um: f64,
+    /// Largest spindle step, degrees (ICE).
+    pub dtheta_deg: f64,
+    /// Length of the evaluated centre-line profile, mm (5 sampling lengths).
+    pub evaluation_length_mm: f64,
+    /// Rz of the centre-line profile, µm (mean of 5 sampling lengths).
+    pub rz_um: f64,
+    /// Ra of the centre-line profile, µm.
+    pub ra_um: f64,
+    /// Peak-to-valley height of the whole profile, µm.
+    pub pv_um: f64,
+    /// Grid nodes computed.
+    pub nodes: usize,
+}
+
+/// The `simulate` model: one straight pass along +x over the plane z = 0, the tool axis
+/// tilted by the lead in the feed plane (model.md §1.2: axis = (sin β, 0, cos β)), spindle
+/// phase 0 at the start, fz per tooth; a window 5λc long (λc from RSm = `rsm_mm`) and five
+/// nodes wide on the pass centre is simulated with `crate::surface::simulate`, and Rz, Ra
+/// are computed on its centre row as for the crest model (no filter; the plane has no form).
+pub fn simulate_case(
+    cutter: &Cutter,
+    lead_deg: f64,
+    ap_mm: f64,
+    fz_mm: f64,
+    rsm_mm: f64,
+    spec: &SimulateSpec,
+) -> Result<ZmapPrediction, String> {
+    use crate::math::{Point3, Vec3};
+    use crate::resample::Sample;
+    use crate::surface::{GridSpec, Model as Zmodel, Options, simulate};
+    use std::f64::consts::TAU;
+    let lc = crate::metrics::sampling_length_mm(rsm_mm);
+    let eval = 5.0 * lc;
+    let teeth = cutter.teeth() as f64;
+    // The tool's marks reach a few revolutions back; the ball's sag does the rest.
+    let margin = 0.5 + 3.0 * teeth * fz_mm;
+    let lead = lead_deg.to_radians();
+    let axis = Vec3::new(lead.sin(), 0.0, lead.cos());
+    // Tool tip that puts the lowest point of the body on z = 0 at contact c.
+    let rc = cutter.corner_radius_mm();
+    let rd = cutter.radius_mm - rc;
+    let z = Vec3::z();
+    let down = -(z - axis * axis.z);
+    let e = if down.norm() < 1e-12 {
+        Vec3::zeros()
+    } else {
+        down.normalize()
+    };
+    let tip = |c: Point3| c - axis * rc - e * rd + z * rc;
+    // Samples every 10° of spindle; the engine subdivides to Δθ.
+    let ds = teeth * fz_mm * 10.0 / 360.0;
+    let length = eval + 2.0 * margin;
+    let n = (length / ds).ceil() as usize;
+    if n > 2_000_000 {
+        return Err(format!(
+            "the simulated pass needs {n} samples; fz is too small"
+        ));
+    }
+    let samples: Vec<Sample> = (0..=n)
+        .map(|k| {
+            let s = k as f64 * ds;
+            let c = Point3::new(s - margin, 0.0, 0.0);
+            Sample {
+                run: 0,
+                s_mm: s,
+                t_s: 0.0,
+                theta_rad: TAU * s / (teeth * fz_mm),
+                position: tip(c),
+                axis,
+                contact: Some(c),
+                normal: Some(z),
+                feed_dir: Vec3::x(),
+                feed_mm_min: 1000.0,
+            }
+        })
+        .collect();
+    let dx = spec.grid_um * 1e-3;
+    let grid = GridSpec::Window {
+        x0_mm: 0.0,
+        y0_mm: -2.0 * dx,
+        x1_mm: eval,
+        y1_mm: 2.0 * dx,
+    };
+    let model = match spec.surface_model {
+        ModelKind::Ice => Zmodel::Ice {
+            dtheta_rad: spec.dtheta_deg.to_radians(),
+        },
+        ModelKind::Dome => Zmodel::Dome,
+    };
+    let mut opts = Options::new(model, grid, dx);
+    opts.depth_mm = ap_mm.max(dx);
+    let sim = simulate(&samples, cutter, &opts, &|_, _| {}).map_err(|e| e.to_string())?;
+    let map = &sim.map;
+    if map.ny == 0 || map.nx < 2 {
+        return Err("the simulated window is empty".to_string());
+    }
+    let row = map.row(map.ny / 2);
+    if row.iter().any(|h| !h.is_finite()) {
+        return Err("the simulated centre line has nodes no tooth reached".to_string());
+    }
+    let dx_mm = map.dx_um * 1e-3;
+    let (rz, ra) = crate::metrics::rz_ra(row);
+    let lo = row.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Ok(ZmapPrediction {
+        surface_model: spec.surface_model,
+        grid_um: map.dx_um,
+        dtheta_deg: spec.dtheta_deg,
+        evaluation_length_mm: (row.len() - 1) as f64 * dx_mm,
+        rz_um: rz,
+        ra_um: ra,
+        pv_um: hi - lo,
+        nodes: sim.nodes_cut,
+    })
+}
+
+/// One parameter of one case held against its measurement.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Comparison {
+    /// Parameter name (`Rz` or `Ra`).
+    pub parameter: String,
+    /// Measured statistics, µm.
+    pub measured: Stat,
+    /// Simulated value, µm.
+    pub simulated_um: f64,
+    /// simulated / measured mean.
+    pub ratio: f64,
+    /// 100·(simulated − mean)/mean.
+    pub deviation_pct: f64,
+    /// Whether the simulated value lies within mean ± σ.
+    pub within_sigma: bool,
+    /// |deviation| ≤ tolerance.
+    pub pass: bool,
+}
+
+impl Comparison {
+    fn new(parameter: &str, measured: Stat, simulated_um: f64, tolerance_pct: f64) -> Self {
+        let ratio = simulated_um / measured.mean;
+        let deviation_pct = 100.0 * (simulated_um - measured.mean) / measured.mean;
+        let within_sigma = measured
+            .sd
+            .is_some_and(|sd| (simulated_um - measured.mean).abs() <= sd);
+        // A zero mean gives an infinite or NaN deviation, which fails.
+        let pass = deviation_pct.abs() <= tolerance_pct;
+        Comparison {
+            parameter: parameter.to_string(),
+            measured,
+            simulated_um,
+            ratio,
+            deviation_pct,
+            within_sigma,
+            pass,
+        }
+    }
+}
+
+/// The result of one case.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseResult {
+    /// Lead angle, degrees.
+    pub lead_deg: f64,
+    /// Curvature side.
+    pub side: Side,
+    /// Local surface radius, mm (None = plane).
+    pub surface_radius_mm: Option<f64>,
+    /// Model used.
+    pub model: Model,
+    /// Programmed feed per tooth, mm.
+    pub fz_mm: f64,
+    /// The measurements.
+    pub measured: MeasuredCase,
+    /// The crest model's prediction (always computed, also for reference).
+    pub prediction: CrestPrediction,
+    /// The z-map prediction, for `model = "simulate"`.
+    pub zmap: Option<ZmapPrediction>,
+    /// Comparisons (Rz first, then Ra, for the columns the table has).
+    pub comparisons: Vec<Comparison>,
+    /// Every comparison passes.
+    pub pass: bool,
+}
+
+/// A whole regression: what the writers render and `--json` prints.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Regression {
+    /// Study title.
+    pub title: String,
+    /// Source of the measurements.
+    pub source: Option<String>,
+    /// Notes from the study.
+    pub notes: Option<String>,
+    /// Measured table file, as given.
+    pub measured_file: String,
+    /// Study file, as given.
+    pub study_file: String,
+    /// Tool file, as written in the study.
+    pub tool_file: String,
+    /// Tool description (one line).
+    pub tool: String,
+    /// Run-out description (one line).
+    pub runout: String,
+    /// Depth of cut, mm.
+    pub ap_mm: f64,
+    /// Nominal cutting speed, m/min.
+    pub cutting_speed_m_min: Option<f64>,
+    /// Tolerance, percent of the measured mean.
+    pub tolerance_pct: f64,
+    /// The command that made the report.
+    pub command: String,
+    /// crest version.
+    pub version: String,
+    /// Per case.
+    pub cases: Vec<CaseResult>,
+    /// Every case passes.
+    pub pass: bool,
+}
+
+/// Inputs of [`regress`] besides the parsed files.
+#[derive(Debug, Clone)]
+pub struct Provenance {
+    /// Measured table file, as given.
+    pub measured_file: String,
+    /// Study file, as given.
+    pub study_file: String,
+    /// The command line that made the report.
+    pub command: String,
+}
+
+/// Hold every case of `study` against `table`. `cutter` is the study's tool with the run-out
+/// already applied. Every measured case must have a study case and vice versa.
+pub fn regress(
+    table: &MeasuredTable,
+    study: &Study,
+    cutter: &Cutter,
+    tolerance_pct: f64,
+    provenance: Provenance,
+) -> Result<Regression, RegressionError> {
+    let err = |message: String| RegressionError {
+        file: provenance.study_file.clone(),
+        message,
+    };
+    let measured = summarize(table);
+    for m in &measured {
+        if !study
+            .cases
+            .iter()
+            .any(|c| c.lead_deg == m.lead_deg && c.side == m.side)
+        {
+            return Err(err(format!(
+                "the measured table ({}) has lead {}°, {} but the study has no such [[case]]",
+                provenance.measured_file,
+                m.lead_deg,
+                m.side.name()
+            )));
+        }
+    }
+    let mut cases = Vec::new();
+    for (i, c) in study.cases.iter().enumerate() {
+        let Some(m) = measured
+            .iter()
+            .find(|m| m.lead_deg == c.lead_deg && m.side == c.side)
+        else {
+            return Err(err(format!(
+                "case {} (lead {}°, {}) has no rows in the measured table {}",
+                i + 1,
+                c.lead_deg,
+                c.side.name(),
+                provenance.measured_file
+            )));
+        };
+        let fz = c.fz_mm.unwrap_or(study.fz_mm);
+        let model = c.model.unwrap_or(study.model);
+        let prediction = crest_model(
+            cutter,
+            c.lead_deg,
+            study.ap_mm,
+            fz,
+            study.rule,
+            c.side,
+            c.surface_radius_mm,
+        )
+        .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
+        let zmap = match model {
+            Model::Crest => None,
+            Model::Simulate => {
+                if c.surface_radius_mm.is_some() {
+                    return Err(err(format!(
+                        "case {}: the simulate model runs on a plane; remove surface_radius_mm or use model = \"crest\"",
+                        i + 1
+                    )));
+                }
+                let spec = study.simulate.unwrap_or_default();
+                Some(
+                    simulate_case(
+                        cutter,
+                        c.lead_deg,
+                        study.ap_mm,
+                        fz,
+                        prediction.fz_eff_mm,
+                        &spec,
+                    )
+                    .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
+                )
+            }
+        };
+        let (sim_rz, sim_ra) = match &zmap {
+            Some(z) => (z.rz_um, z.ra_um),
+            None => (prediction.rz_um, prediction.ra_um),
+        };
+        let mut comparisons = Vec::new();
+        if let Some(rz) = m.rz {
+            comparisons.push(Comparison::new("Rz", rz, sim_rz, tolerance_pct));
+        }
+        if let Some(ra) = m.ra {
+            comparisons.push(Comparison::new("Ra", ra, sim_ra, tolerance_pct));
+        }
+        let pass = comparisons.iter().all(|c| c.pass);
+        cases.push(CaseResult {
+            lead_deg: c.lead_deg,
+            side: c.side,
+            surface_radius_mm: c.surface_radius_mm,
+            model,
+            fz_mm: fz,
+            measured: m.clone(),
+            prediction,
+            zmap,
+            comparisons,
+            pass,
+        });
+    }
+    let pass = cases.iter().all(|c| c.pass);
+    Ok(Regression {
+        title: study.title.clone(),
+        source: study.source.clone(),
+        notes: study.notes.clone(),
+        measured_file: provenance.measured_file,
+        study_file: provenance.study_file,
+        tool_file: study.tool.clone(),
+        tool: describe_tool(cutter),
+        runout: describe_runout(cutter),
+        ap_mm: study.ap_mm,
+        cutting_speed_m_min: study.cutting_speed_m_min,
+        tolerance_pct,
+        command: provenance.command,
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        cases,
+        pass,
+    })
+}
+
+fn describe_tool(c: &Cutter) -> String {
+    let shape = match c.shape {
+        crate::tool::Shape::Ball => "ball end".to_string(),
+        crate::tool::Shape::Torus { corner_radius_mm } => {
+            format!("torus, corner radius {corner_radius_mm} mm")
+        }
+        crate::tool::Shape::Flat => "flat end".to_string(),
+    };
+    format!(
+        "{shape}, R = {} mm, {} teeth, helix {}°",
+        c.radius_mm,
+        c.teeth(),
+        trim_decimals(c.helix_rad.to_degrees(), 4)
+    )
+}
+
+fn describe_runout(c: &Cutter) -> String {
+    let r = &c.runout;
+    let mut parts = Vec::new();
+    if r.offset_mm != 0.0 {
+        parts.push(format!(
+            "offset e0 = {} µm at {}°",
+            trim_decimals(r.offset_mm * 1e3, 4),
+            trim_decimals(r.offset_phase_rad.to_degrees(), 4)
+        ));
+    }
+    if r.tilt_rad != 0.0 {
+        parts.push(format!(
+            "axis tilt {}° at {}°",
+            trim_decimals(r.tilt_rad.to_degrees(), 4),
+            trim_decimals(r.tilt_phase_rad.to_degrees(), 4)
+        ));
+    }
+    if r.tooth_radius_dev_mm.iter().any(|d| *d != 0.0) {
+        let devs: Vec<String> = r
+            .tooth_radius_dev_mm
+            .iter()
+            .map(|d| trim_decimals(d * 1e3, 4))
+            .collect();
+        let radii: Vec<String> = r
+            .tooth_radius_dev_mm
+            .iter()
+            .map(|d| format!("{:.3}", c.radius_mm + d))
+            .collect();
+        parts.push(format!(
+            "tooth radius deviations {} µm (tooth radii {} mm)",
+            devs.join(" / "),
+            radii.join(" / ")
+        ));
+    }
+    if parts.is_empty() {
+        "none".to_string()
+    } else {
+        parts.join("; ")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tool::{Cutter, Shape};
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn profile_of_arcs_has_closed_form_rz_and_ra() {
+        // Rz = Eq 14 exactly; Ra → 4/(9√3)·hc for a parabola, the arcs differ by O((fz/R)²).
+        let (rz, ra, lc) = profile_roughness(5.0, 0.2);
+        assert_relative_eq!(rz, 1.0001000, epsilon = 1e-6);
+        assert_eq!(lc, 0.8);
+        assert_relative_eq!(ra, 4.0 / (9.0 * 3f64.sqrt()) * rz, max_relative = 1e-3);
+        let (rz, _, lc) = profile_roughness(5.0, 0.05);
+        assert_relative_eq!(rz, 0.0625004, epsilon = 1e-6);
+        assert_eq!(lc, 0.25);
+    }
+
+    #[test]
+    fn curvature_reduces_to_plane_and_orders_sides() {
+        let mut c = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
+        c.runout.tooth_radius_dev_mm = vec![-0.010, -0.015, -0.024, -0.025];
+        let plane = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Plane, None).unwrap();
+        let far = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Convex, Some(1e9)).unwrap();
+        assert_relative_eq!(plane.crest_um, far.crest_um, max_relative = 1e-6);
+        let vex = crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Convex, Some(20.0)).unwrap();
+        let cave =
+            crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Concave, Some(20.0)).unwrap();
+        // Second-order closed form: hc ≈ fz²/8·(1/R ± 1/Rs), + convex.
+        let approx = |sign: f64| 0.2 * 0.2 / 8.0 * (1.0 / 5.0 + sign / 20.0) * 1e3;
+        assert_relative_eq!(vex.crest_um, approx(1.0), max_relative = 1e-3);
+        assert_relative_eq!(cave.crest_um, approx(-1.0), max_relative = 1e-3);
+        assert!(vex.crest_um > plane.crest_um && plane.crest_um > cave.crest_um);
+        assert!(crest_model(&c, 15.0, 0.4, 0.05, Rule::Paper, Side::Concave, Some(4.0)).is_err());
+    }
+}

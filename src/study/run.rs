@@ -1,0 +1,274 @@
+//! One run of a designed experiment: the synthetic path over a plane (tool posture,
+//! pass interval from the scallop), resampled, simulated on a periodic unit cell (or the
+//! design's window) and measured with the areal parameters of the design's responses.
+
+use super::design::{DEFAULT_DTHETA_DEG, Design, RunOutput, RunPoint, StepRule, StepSpec};
+
+/// The evaluated grid of a run: the unit cell or the design's window, in the WCS (passes
+/// along +x, stepped along +y), and the extent of the path that covers it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunWindow {
+    /// Grid placement.
+    pub grid: crate::surface::GridSpec,
+    /// Field of the synthetic path: length along the passes, width across, mm.
+    pub field_mm: (f64, f64),
+}
+
+/// Highest surface height (above the plane) a run may reach, mm: passes and tooth passes
+/// that stay higher than this over the window are left out of the path, and a run whose
+/// window comes out higher fails rather than report a wrong value.
+pub const REACH_HEIGHT_MM: f64 = 0.1;
+
+/// How far from its lowest point the swept body of `cutter` (unit axis `axis_fgn` in
+/// (f, g, n)) stays within `h_mm` of the plane: (along f, across along g), mm. A pass (or a
+/// tooth pass) farther than this from a node cannot cut it lower than `h_mm`.
+pub fn reach_mm(
+    cutter: &crate::tool::Cutter,
+    axis_fgn: &crate::math::Vec3,
+    h_mm: f64,
+) -> Result<(f64, f64), String> {
+    let one = |axis: &crate::math::Vec3| -> Result<f64, String> {
+        let cs = crate::synth::CrossSection::new(cutter, axis).map_err(|e| e.to_string())?;
+        let [yb, zb] = cs.bottom();
+        let step = 0.005;
+        let mut reach: f64 = 0.0;
+        for sign in [-1.0, 1.0] {
+            let mut k = 1usize;
+            loop {
+                let y = yb + sign * step * k as f64;
+                match cs.lower(y) {
+                    Some(z) if z - zb <= h_mm && k < 100_000 => k += 1,
+                    _ => break,
+                }
+            }
+            reach = reach.max(step * k as f64);
+        }
+        Ok(reach)
+    };
+    let a = axis_fgn;
+    // Seen along g instead of f: (f, g, n) → (g, −f, n).
+    let along = one(&crate::math::Vec3::new(a.y, -a.x, a.z))?;
+    let across = one(a)?;
+    Ok((along, across))
+}
+
+/// The window of a run with feed per tooth `fz_mm` and pass interval `step_mm`: without
+/// `window_mm`, one unit cell `fz × s` (`fz × 2s` for zigzag passes) with its last column
+/// and row left out, so that the periodic surface is counted once; with it, a window of that
+/// size centred on the origin. The path field (centred on the origin) reaches `reach_mm`
+/// (along, across; see [`reach_mm`]) plus 0.2 mm beyond the window on every side.
+pub fn run_window(design: &Design, reach_mm: (f64, f64), fz_mm: f64, step_mm: f64) -> RunWindow {
+    let d = design.grid_um * 1e-3;
+    let across = if design.pattern == crate::synth::Pattern::Zigzag {
+        2.0 * step_mm
+    } else {
+        step_mm
+    };
+    let (grid, a, b) = match design.window_mm {
+        None => (
+            crate::surface::GridSpec::Window {
+                x0_mm: 0.0,
+                y0_mm: 0.0,
+                x1_mm: fz_mm - d,
+                y1_mm: across - d,
+            },
+            fz_mm,
+            across,
+        ),
+        Some([a, b]) => (
+            crate::surface::GridSpec::Window {
+                x0_mm: -0.5 * a,
+                y0_mm: -0.5 * b,
+                x1_mm: 0.5 * a,
+                y1_mm: 0.5 * b,
+            },
+            a,
+            b,
+        ),
+    };
+    RunWindow {
+        grid,
+        field_mm: (2.0 * (a + reach_mm.0 + 0.2), 2.0 * (b + reach_mm.1 + 0.2)),
+    }
+}
+
+/// The tool axis in (f, g, n) by convention B of model.md §7: lead λ about g, then a side
+/// tilt ψ about f, `a = R_f(ψ)(sin λ f + cos λ n)`.
+pub fn convention_b_axis(tilt_rad: f64, yaw_rad: f64) -> crate::math::Vec3 {
+    crate::math::Vec3::new(
+        tilt_rad.sin(),
+        -yaw_rad.sin() * tilt_rad.cos(),
+        yaw_rad.cos() * tilt_rad.cos(),
+    )
+}
+
+/// Simulate one run of a design: the synthetic path (plane, passes along +x, tool posture
+/// by convention A, pass interval from the scallop by the exact swept envelope), resampled
+/// at a constant spindle step, the surface model of the design on [`run_window`], and the
+/// areal parameters of the raw window (no levelling: a unit cell of a plane is periodic).
+/// Every pass starts at the same spindle phase (model.md §8). The responses come back in
+/// [`Design::responses`] order.
+pub fn simulate_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<RunOutput, String> {
+    use crate::synth::{Orientation, PathSpec, Step, Surface};
+    let lead = design.factors.lead_deg.is_some();
+    let orientation = if lead {
+        Orientation::Lead {
+            lead_rad: p.tilt_deg.to_radians(),
+        }
+    } else {
+        Orientation::TiltYaw {
+            tilt_rad: p.tilt_deg.to_radians(),
+            yaw_rad: p.yaw_deg.to_radians(),
+        }
+    };
+    let step_mm = match p.step {
+        StepSpec::StepoverMm(s) => s,
+        StepSpec::ScallopUm(h) => {
+            let axis = if design.step_rule == StepRule::ConventionB {
+                convention_b_axis(p.tilt_deg.to_radians(), p.yaw_deg.to_radians())
+            } else {
+                orientation.axis_fgn()
+            };
+            crate::synth::exact_step_mm(cutter, &axis, h * 1e-3).map_err(|e| e.to_string())?
+        }
+    };
+    let z = cutter.teeth().max(1) as f64;
+    let fz_mm = p.feed_mm_min / (z * design.rpm);
+    let reach = reach_mm(cutter, &orientation.axis_fgn(), REACH_HEIGHT_MM)?;
+    let win = run_window(design, reach, fz_mm, step_mm);
+    let mut spec = PathSpec::new(
+        Surface::Plane,
+        cutter.clone(),
+        orientation,
+        Step::Stepover {
+            spacing_mm: step_mm,
+        },
+        win.field_mm,
+    );
+    spec.pattern = design.pattern;
+    spec.point_step_mm = 1.0;
+    spec.clearance_mm = 1.0;
+    spec.feed_mm_min = p.feed_mm_min;
+    spec.spindle_rpm = design.rpm;
+    let synth = crate::synth::generate(&spec).map_err(|e| e.to_string())?;
+    let path = synth
+        .program
+        .paths
+        .first()
+        .ok_or_else(|| "the synthetic program has no tool path".to_string())?;
+
+    let dtheta = design.dtheta_deg.unwrap_or(DEFAULT_DTHETA_DEG).to_radians();
+    let (model, mode) = design.model.with_resampling(dtheta);
+    let ropts = crate::resample::Options::new(mode, fz_mm, cutter.teeth())
+        .with_rpm(design.rpm)
+        .with_feed_mm_min(p.feed_mm_min);
+    let samples = crate::resample::resample(path, &ropts).map_err(|e| e.to_string())?;
+    let sopts = crate::surface::Options::new(model, win.grid, design.grid_um * 1e-3);
+    let sim = crate::surface::simulate(&samples, cutter, &sopts, &|_, _| {})
+        .map_err(|e| e.to_string())?;
+    let nodes = sim.map.nx * sim.map.ny;
+    if sim.nodes_cut != nodes {
+        return Err(format!(
+            "{} of {nodes} nodes of the window were not reached",
+            nodes - sim.nodes_cut
+        ));
+    }
+    let top = sim
+        .map
+        .z_um
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    if top > 1e3 * REACH_HEIGHT_MM {
+        return Err(format!(
+            "the window reaches {top:.1} µm above the plane, beyond the {} µm the path covers",
+            1e3 * REACH_HEIGHT_MM
+        ));
+    }
+    let params: Vec<crate::metrics::Param> = design
+        .responses
+        .iter()
+        .map(|r| {
+            crate::metrics::Param::from_symbol(r)
+                .filter(|p| !p.is_profile())
+                .ok_or_else(|| format!("'{r}' is not an areal parameter"))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut set_list: Vec<&str> = params.iter().map(|p| p.symbol()).collect();
+    set_list.dedup();
+    let set =
+        crate::metrics::ParamSet::parse(&set_list.join(","), false).map_err(|e| e.to_string())?;
+    let values = crate::metrics::areal_parameters(&sim.map, &set).map_err(|e| e.to_string())?;
+    let responses = params
+        .iter()
+        .map(|p| {
+            values
+                .iter()
+                .find(|(q, _)| q == p)
+                .map_or(f64::NAN, |(_, v)| *v)
+        })
+        .collect();
+    Ok(RunOutput {
+        responses,
+        fz_mm,
+        stepover_mm: synth.stepover_mm,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reach_follows_the_effective_radii() {
+        // R 5, rc 1.5, tilt 10°, yaw 0: across, z ≈ y²/(2 R_eff) with R_eff = 21.656 mm
+        // (model.md R6); along, the corner circle rc in front: y = √(2 rc h).
+        let cutter = crate::tool::Cutter::new(
+            crate::tool::Shape::Torus {
+                corner_radius_mm: 1.5,
+            },
+            5.0,
+            1,
+            0.0,
+        );
+        let a = crate::synth::axis_convention_a(10f64.to_radians(), 0.0);
+        let h = 0.001;
+        let (along, across) = reach_mm(&cutter, &a, h).unwrap();
+        assert!(
+            (across - (2.0 * 21.656 * h).sqrt()).abs() < 0.006,
+            "{across}"
+        );
+        assert!((along - (2.0 * 1.5 * h).sqrt()).abs() < 0.006, "{along}");
+        // At tilt 1° the end face trails at slope tan 1°: 0.1 mm is reached 5.73 mm behind.
+        let a1 = crate::synth::axis_convention_a(1f64.to_radians(), 0.0);
+        let (along, _) = reach_mm(&cutter, &a1, REACH_HEIGHT_MM).unwrap();
+        let want = REACH_HEIGHT_MM / 1f64.to_radians().tan();
+        assert!((along - want).abs() < 0.05, "{along} vs {want}");
+    }
+
+    #[test]
+    fn convention_b_gives_the_r6_step_of_test_4() {
+        // model.md R6, test 4 (B): yaw 20°, tilt 10°, h = 10 µm → s = 0.5259 mm; A: 1.2385.
+        let cutter = crate::tool::Cutter::new(
+            crate::tool::Shape::Torus {
+                corner_radius_mm: 1.5,
+            },
+            5.0,
+            1,
+            0.0,
+        );
+        let (l, p) = (10f64.to_radians(), 20f64.to_radians());
+        let b = crate::synth::exact_step_mm(&cutter, &convention_b_axis(l, p), 0.01).unwrap();
+        assert!((b - 0.5259).abs() < 1e-3, "{b}");
+        let a = crate::synth::exact_step_mm(&cutter, &crate::synth::axis_convention_a(l, p), 0.01)
+            .unwrap();
+        assert!((a - 1.2385).abs() < 1e-3, "{a}");
+        // Without yaw the conventions agree.
+        let a0 = crate::synth::axis_convention_a(l, 0.0);
+        assert!((convention_b_axis(l, 0.0) - a0).norm() < 1e-15);
+    }
+}
