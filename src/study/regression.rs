@@ -374,55 +374,23 @@ pub fn simulate_case(
     rsm_mm: f64,
     spec: &SimulateSpec,
 ) -> Result<ZmapPrediction, String> {
-    use crate::math::{Point3, Vec3};
-    use crate::resample::Sample;
     use crate::surface::{GridSpec, Model as Zmodel, Options, simulate};
-    use std::f64::consts::TAU;
     let lc = crate::metrics::sampling_length_mm(rsm_mm);
     let eval = 5.0 * lc;
     let teeth = cutter.teeth() as f64;
     // The tool's marks reach a few revolutions back; the ball's sag does the rest.
     let margin = 0.5 + 3.0 * teeth * fz_mm;
-    let lead = lead_deg.to_radians();
-    let axis = Vec3::new(lead.sin(), 0.0, lead.cos());
-    // Tool tip that puts the lowest point of the body on z = 0 at contact c.
-    let rc = cutter.corner_radius_mm();
-    let rd = cutter.radius_mm - rc;
-    let z = Vec3::z();
-    let down = -(z - axis * axis.z);
-    let e = if down.norm() < 1e-12 {
-        Vec3::zeros()
-    } else {
-        down.normalize()
-    };
-    let tip = |c: Point3| c - axis * rc - e * rd + z * rc;
     // Samples every 10° of spindle; the engine subdivides to Δθ.
-    let ds = teeth * fz_mm * 10.0 / 360.0;
     let length = eval + 2.0 * margin;
-    let n = (length / ds).ceil() as usize;
-    if n > 2_000_000 {
-        return Err(format!(
-            "the simulated pass needs {n} samples; fz is too small"
-        ));
-    }
-    let samples: Vec<Sample> = (0..=n)
-        .map(|k| {
-            let s = k as f64 * ds;
-            let c = Point3::new(s - margin, 0.0, 0.0);
-            Sample {
-                run: 0,
-                s_mm: s,
-                t_s: 0.0,
-                theta_rad: TAU * s / (teeth * fz_mm),
-                position: tip(c),
-                axis,
-                contact: Some(c),
-                normal: Some(z),
-                feed_dir: Vec3::x(),
-                feed_mm_min: 1000.0,
-            }
-        })
-        .collect();
+    let samples = crate::synth::pass::straight_pass(
+        cutter,
+        lead_deg.to_radians(),
+        fz_mm,
+        -margin,
+        length,
+        10.0,
+    )
+    .ok_or_else(|| "the simulated pass needs too many samples; fz is too small".to_string())?;
     let dx = spec.grid_um * 1e-3;
     let grid = GridSpec::Window {
         x0_mm: 0.0,

@@ -34,6 +34,7 @@
 //! same.
 
 pub mod envelope;
+pub mod pass;
 mod surface;
 
 pub use envelope::{

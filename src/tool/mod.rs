@@ -27,6 +27,7 @@ mod effective;
 mod ice;
 mod section;
 mod teeth;
+pub mod trochoid;
 
 pub use cutter::{Cutter, Runout, Shape, crest_height_mm, direction};
 pub use effective::{EffectiveRadius, cutting_speed_ratio, effective_radius};
