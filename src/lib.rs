@@ -27,15 +27,15 @@
 
 pub mod math;
 
-pub mod parse;
-pub mod toolpath;
-pub mod resample;
-pub mod tool;
-pub mod synth;
 pub mod kinematics;
-pub mod surface;
 pub mod metrics;
+pub mod parse;
+pub mod resample;
 pub mod study;
+pub mod surface;
+pub mod synth;
+pub mod tool;
+pub mod toolpath;
 
 pub mod config;
 pub mod io;
@@ -43,4 +43,3 @@ pub mod plot;
 pub mod report;
 
 pub mod pipeline;
-

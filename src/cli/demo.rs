@@ -54,8 +54,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let mut wrote: Vec<(PathBuf, String)> = Vec::new();
 
     // 1. Tool and synthetic contact-data path.
-    let cutter =
-        crest::config::load_tool_toml(DEMO_TOOL).map_err(|e| miette::miette!("embedded tool: {e}"))?;
+    let cutter = crest::config::load_tool_toml(DEMO_TOOL)
+        .map_err(|e| miette::miette!("embedded tool: {e}"))?;
     let teeth = cutter.teeth();
     let feed_mm_min = teeth as f64 * FZ_MM * RPM;
     let mut spec = PathSpec::new(

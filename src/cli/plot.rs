@@ -224,7 +224,12 @@ fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
     for &fz in &a.crest_fz_mm {
         for &lead in &a.lead_deg {
             for &z in &a.heights_mm {
-                let c = crest::tool::trochoid::crest_between_marks_mm(&cutter, z, fz, lead.to_radians());
+                let c = crest::tool::trochoid::crest_between_marks_mm(
+                    &cutter,
+                    z,
+                    fz,
+                    lead.to_radians(),
+                );
                 crests.push(serde_json::json!({
                     "fz_mm": fz,
                     "lead_deg": lead,

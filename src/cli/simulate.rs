@@ -11,9 +11,9 @@
 //! feed / (Z · rpm). A progress bar is drawn on stderr when it is a terminal.
 
 use super::Outcome;
+use clap::ValueEnum;
 use crest::pipeline::simulate::{GridRequest, SimulateRequest, SimulateRun};
 use crest::surface::ModelKind;
-use clap::ValueEnum;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -2,8 +2,8 @@
 //! NX-style CLSF (`.cls`) or contact12 (`.txt`, `.csv`).
 
 use super::Outcome;
-use crest::synth::{Orientation, PathSpec, Pattern, Step, Surface, generate};
 use clap::ValueEnum;
+use crest::synth::{Orientation, PathSpec, Pattern, Step, Surface, generate};
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::{Path, PathBuf};
 
@@ -105,7 +105,6 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
 }
-
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum OutKind {

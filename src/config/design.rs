@@ -93,7 +93,10 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
         if x > 0.0 && x.is_finite() {
             Ok(x)
         } else {
-            Err(at(v.span().start, format!("{key} must be positive, got {x}")))
+            Err(at(
+                v.span().start,
+                format!("{key} must be positive, got {x}"),
+            ))
         }
     };
     let rpm = positive("rpm", &d.rpm)?;
@@ -176,35 +179,39 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
         ));
     }
     let mut runs = 1usize;
-    let mut levels = |key: &str, v: &Option<Spanned<Vec<f64>>>| -> Result<Option<Vec<f64>>, ConfigError> {
-        let Some(v) = v else { return Ok(None) };
-        let list = v.get_ref();
-        if list.is_empty() {
-            return Err(at(v.span().start, format!("{key} needs at least one level")));
-        }
-        let ok = list.iter().all(|x| {
-            x.is_finite()
-                && match key {
-                    "scallop_um" | "stepover_mm" | "feed_mm_min" => *x > 0.0,
-                    "tilt_deg" | "lead_deg" => (0.0..90.0).contains(x),
-                    _ => true,
-                }
-        });
-        if !ok {
-            return Err(at(
-                v.span().start,
-                format!("{key} has a level out of range: {list:?}"),
-            ));
-        }
-        runs = runs.saturating_mul(list.len());
-        if runs > MAX_RUNS {
-            return Err(at(
-                v.span().start,
-                format!("the design expands to more than {MAX_RUNS} runs"),
-            ));
-        }
-        Ok(Some(list.clone()))
-    };
+    let mut levels =
+        |key: &str, v: &Option<Spanned<Vec<f64>>>| -> Result<Option<Vec<f64>>, ConfigError> {
+            let Some(v) = v else { return Ok(None) };
+            let list = v.get_ref();
+            if list.is_empty() {
+                return Err(at(
+                    v.span().start,
+                    format!("{key} needs at least one level"),
+                ));
+            }
+            let ok = list.iter().all(|x| {
+                x.is_finite()
+                    && match key {
+                        "scallop_um" | "stepover_mm" | "feed_mm_min" => *x > 0.0,
+                        "tilt_deg" | "lead_deg" => (0.0..90.0).contains(x),
+                        _ => true,
+                    }
+            });
+            if !ok {
+                return Err(at(
+                    v.span().start,
+                    format!("{key} has a level out of range: {list:?}"),
+                ));
+            }
+            runs = runs.saturating_mul(list.len());
+            if runs > MAX_RUNS {
+                return Err(at(
+                    v.span().start,
+                    format!("the design expands to more than {MAX_RUNS} runs"),
+                ));
+            }
+            Ok(Some(list.clone()))
+        };
     let factors = FactorLevels {
         yaw_deg: levels("yaw_deg", &f.yaw_deg)?,
         tilt_deg: levels("tilt_deg", &f.tilt_deg)?,

@@ -55,9 +55,14 @@ impl ProcessConfig {
         let f: ProcessFile = super::from_toml(text, file)?;
         let positive = |key: &str, v: &Option<Spanned<f64>>| -> Result<Option<f64>, ConfigError> {
             match v {
-                Some(s) if !(s.get_ref().is_finite() && *s.get_ref() > 0.0) => Err(
-                    ConfigError::at(file, text, s.span().start, format!("{key} must be positive, got {}", s.get_ref())),
-                ),
+                Some(s) if !(s.get_ref().is_finite() && *s.get_ref() > 0.0) => {
+                    Err(ConfigError::at(
+                        file,
+                        text,
+                        s.span().start,
+                        format!("{key} must be positive, got {}", s.get_ref()),
+                    ))
+                }
                 Some(s) => Ok(Some(*s.get_ref())),
                 None => Ok(None),
             }

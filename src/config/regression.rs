@@ -266,8 +266,11 @@ mod tests {
         assert!(e.message.contains("lead_deg"), "{e}");
         let e = parse_study(&BASE.replace("fz_mm = 0.05", "fz_mm = -0.05"), "s.toml").unwrap_err();
         assert_eq!((e.line, e.column), (3, 9), "{e}");
-        let e = parse_study(&format!("{BASE}rule = \"papr\"\n[[case]]\nlead_deg = 5\nside = \"plane\"\n"), "s.toml")
-            .unwrap_err();
+        let e = parse_study(
+            &format!("{BASE}rule = \"papr\"\n[[case]]\nlead_deg = 5\nside = \"plane\"\n"),
+            "s.toml",
+        )
+        .unwrap_err();
         assert_eq!(e.line, 5, "{e}");
         let e = parse_study(BASE, "s.toml").unwrap_err();
         assert!(e.message.contains("no [[case]]"), "{e}");

@@ -222,4 +222,3 @@ pub fn parse_study(text: &str) -> Result<Study, StudyError> {
         sweep: values,
     })
 }
-

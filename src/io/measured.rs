@@ -280,7 +280,6 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     Ok(MeasuredTable { columns, rows })
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

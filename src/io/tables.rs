@@ -30,7 +30,11 @@ pub const RUNOUT_CSV_HEADER: [&str; 20] = [
 ];
 
 /// Write the rows as CSV (one row per case, header first). `teeth` is the number of teeth Z.
-pub fn write_runout_csv(rows: &[RunoutRow], teeth: usize, w: &mut dyn Write) -> std::io::Result<()> {
+pub fn write_runout_csv(
+    rows: &[RunoutRow],
+    teeth: usize,
+    w: &mut dyn Write,
+) -> std::io::Result<()> {
     let mut csv = csv::Writer::from_writer(w);
     csv.write_record(RUNOUT_CSV_HEADER)?;
     for r in rows {
@@ -107,7 +111,14 @@ pub fn write_effects_csv(
     w: &mut dyn Write,
 ) -> std::io::Result<()> {
     let mut csv = csv::Writer::from_writer(w);
-    csv.write_record(["response", "factor", "level", "mean", "effect", "relative_first"])?;
+    csv.write_record([
+        "response",
+        "factor",
+        "level",
+        "mean",
+        "effect",
+        "relative_first",
+    ])?;
     let factors = design.factors();
     for (resp, e) in design.responses.iter().zip(effects) {
         for (i, f) in factors.iter().enumerate() {

@@ -74,7 +74,10 @@ mod tests {
     fn invalid_utf8_names_line_and_column() {
         let e = decode(b"rpm = 1\nfz = \xff\n".to_vec(), "p.toml", "process file").unwrap_err();
         let m = e.to_string();
-        assert!(m.starts_with("p.toml:2:6: the process file is not UTF-8"), "{m}");
+        assert!(
+            m.starts_with("p.toml:2:6: the process file is not UTF-8"),
+            "{m}"
+        );
     }
 
     #[test]

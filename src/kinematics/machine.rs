@@ -4,7 +4,6 @@
 
 use crate::math::{Point3, Vec3};
 
-
 /// Which side of the chain a rotary axis sits on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Side {

@@ -109,7 +109,11 @@ pub fn trim_decimals(v: f64, decimals: usize) -> String {
     } else {
         s.as_str()
     };
-    if s == "-0" { "0".to_string() } else { s.to_string() }
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
 }
 
 #[cfg(test)]

@@ -29,7 +29,7 @@ pub fn load_design(path: &Path) -> miette::Result<(Design, Cutter)> {
     let tool_path = path.parent().unwrap_or(Path::new(".")).join(&design.tool);
     let cutter = super::load_tool(&tool_path).wrap_err_with(|| {
         format!(
-            "{file}: cannot use the tool file {} (the path is relative to the design file)",
+            "{file}: cannot read tool file {} (the path is relative to the design file)",
             tool_path.display()
         )
     })?;

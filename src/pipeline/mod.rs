@@ -8,5 +8,5 @@ pub mod inputs;
 pub use inputs::{ToolFileError, load_machine, load_process, load_tool, tool_from_text};
 pub mod design;
 pub mod report;
-pub mod simulate;
 pub mod runout;
+pub mod simulate;

@@ -235,10 +235,7 @@ fn feed_figures(samples: &[Sample]) -> (f64, (f64, f64, f64)) {
         fsum += s.feed_mm_min;
     }
     cut_time += run_end;
-    (
-        cut_time,
-        (fmin, fmax, fsum / samples.len().max(1) as f64),
-    )
+    (cut_time, (fmin, fmax, fsum / samples.len().max(1) as f64))
 }
 
 /// Run a simulation. `progress(done, total)` is called from the calling thread after each

@@ -241,8 +241,8 @@ pub fn crest_model(
     surface_radius_mm: Option<f64>,
 ) -> Result<CrestPrediction, String> {
     use crate::tool::{FeedProfile, feed_profile, mark_positions_mm, normal_deviation_mm};
-    let a = crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule)
-        .map_err(|e| e.to_string())?;
+    let a =
+        crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule).map_err(|e| e.to_string())?;
     let r = cutter.radius_mm;
     let is_ball = matches!(cutter.shape, crate::tool::Shape::Ball);
     let arc_radius = match (side, surface_radius_mm) {

@@ -171,7 +171,6 @@ pub struct SweepValues {
     pub tilt_phase: Option<Vec<f64>>,
 }
 
-
 impl Study {
     /// The cases in their fixed order, with the tool's run-out filling unswept keys.
     pub fn cases(&self, cutter: &Cutter) -> Vec<RunoutCase> {
