@@ -30,6 +30,7 @@ pub mod math;
 pub mod kinematics;
 pub mod metrics;
 pub mod parse;
+pub mod part;
 pub mod resample;
 pub mod study;
 pub mod surface;

@@ -6,9 +6,23 @@
 use std::path::{Path, PathBuf};
 
 /// The library's stages in pipeline order; a stage may use only earlier ones.
-const STAGES: [&str; 15] = [
-    "math", "parse", "toolpath", "resample", "tool", "synth", "kinematics", "surface",
-    "metrics", "study", "config", "io", "plot", "report", "pipeline",
+const STAGES: [&str; 16] = [
+    "math",
+    "parse",
+    "toolpath",
+    "resample",
+    "tool",
+    "part",
+    "synth",
+    "kinematics",
+    "surface",
+    "metrics",
+    "study",
+    "config",
+    "io",
+    "plot",
+    "report",
+    "pipeline",
 ];
 
 /// Stages that may run rayon (fixed chunking: results identical for any thread count).
@@ -72,15 +86,26 @@ fn stages_import_only_earlier_stages() {
         let rank = STAGES.iter().position(|s| *s == stage).unwrap();
         let text = code(&path);
         for (i, later) in STAGES.iter().enumerate().skip(rank + 1) {
-            for pat in [format!("crate::{later}::"), format!("crate::{later}}}"), format!("crate::{later};")] {
+            for pat in [
+                format!("crate::{later}::"),
+                format!("crate::{later}}}"),
+                format!("crate::{later};"),
+            ] {
                 if text.contains(&pat) {
-                    bad.push(format!("{} ({stage}) uses {later} (stage {i})", path.display()));
+                    bad.push(format!(
+                        "{} ({stage}) uses {later} (stage {i})",
+                        path.display()
+                    ));
                 }
             }
         }
     }
     bad.dedup();
-    assert!(bad.is_empty(), "imports against the pipeline order:\n{}", bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "imports against the pipeline order:\n{}",
+        bad.join("\n")
+    );
 }
 
 #[test]
@@ -96,15 +121,25 @@ fn only_the_batch_stages_use_rayon() {
 #[test]
 fn only_the_edge_stages_touch_files_or_the_terminal() {
     let touches = [
-        "std::fs::", "File::open", "File::create", "tempfile::", "println!", "eprintln!",
-        "print!(", "std::io::stdout", "std::io::stderr",
+        "std::fs::",
+        "File::open",
+        "File::create",
+        "tempfile::",
+        "println!",
+        "eprintln!",
+        "print!(",
+        "std::io::stdout",
+        "std::io::stderr",
     ];
     let bad: Vec<String> = library_files()
         .into_iter()
         .filter(|(p, s)| !FILES.contains(s) && touches.iter().any(|t| code(p).contains(t)))
         .map(|(p, _)| p.display().to_string())
         .collect();
-    assert!(bad.is_empty(), "files or terminal touched outside {FILES:?}: {bad:?}");
+    assert!(
+        bad.is_empty(),
+        "files or terminal touched outside {FILES:?}: {bad:?}"
+    );
 }
 
 #[test]
