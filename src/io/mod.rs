@@ -20,6 +20,7 @@ mod sdf;
 mod xyz;
 
 pub mod measured;
+pub mod mesh;
 pub mod tables;
 pub mod text;
 pub mod toolpath;
