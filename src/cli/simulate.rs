@@ -12,7 +12,7 @@
 
 use super::Outcome;
 use clap::ValueEnum;
-use crest::pipeline::simulate::{GridRequest, SimulateRequest, SimulateRun};
+use crest::pipeline::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crest::surface::ModelKind;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
@@ -37,13 +37,33 @@ impl From<ModelName> for ModelKind {
 }
 
 /// Options of `crest simulate`.
+///
+/// The part (`--part`) must be in the frame of the path as crest reads it: the MCS of a CLSF
+/// (MSYS not applied), or the absolute frame with `--absolute` (which applies MSYS to the
+/// path). Without `--part` and without contact data in the file, the reference surface is
+/// derived from the path itself (the cutter's offset surface fitted over neighbouring passes).
 #[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("grid").required(true).args(["window", "patch_at", "patch_near", "map_mm"])))]
 pub struct Args {
     /// Tool-path file (NX CLSF or contact12).
     pub file: PathBuf,
-    /// Cutter description (tool.toml).
+    /// Cutter description (tool.toml); default: the file's TLDATA with --teeth.
     #[arg(long, value_name = "TOOL.TOML")]
-    pub tool: PathBuf,
+    pub tool: Option<PathBuf>,
+    /// Number of teeth of a tool taken from TLDATA (which has no tooth count).
+    #[arg(long, value_name = "N")]
+    pub teeth: Option<usize>,
+    /// Helix angle of a tool taken from TLDATA, degrees (default 30).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    pub helix_deg: Option<f64>,
+    /// The part's design surface (binary or ASCII STL, OBJ, PLY; mm), in the frame of the
+    /// path as read (the MCS of a CLSF, or the absolute frame with --absolute): heights are
+    /// measured along its normal, from it.
+    #[arg(long, value_name = "PART.STL")]
+    pub part: Option<PathBuf>,
+    /// Apply MSYS: read the path in the absolute frame (the part must be in it too).
+    #[arg(long)]
+    pub absolute: bool,
     /// Process parameters (process.toml: rpm, fz_mm, feed_mm_min, ap_mm, …).
     #[arg(long, value_name = "PROCESS.TOML")]
     pub process: Option<PathBuf>,
@@ -75,8 +95,9 @@ pub struct Args {
     /// Grid spacing, µm.
     #[arg(long, value_name = "G")]
     pub grid_um: f64,
-    /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z).
-    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true, conflicts_with_all = ["patch_at", "patch_mm"], required_unless_present = "patch_at")]
+    /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z above the reference
+    /// surface).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
     pub window: Option<String>,
     /// A patch on the tangent plane at the contact point at this arc length of the path, mm
     /// (heights along the surface normal).
@@ -87,9 +108,20 @@ pub struct Args {
         allow_negative_numbers = true
     )]
     pub patch_at: Option<f64>,
+    /// A patch centred at the part point nearest X,Y,Z (the design surface of --part, or the
+    /// surface derived from the path), along the local feed and across it.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, requires = "patch_mm")]
+    pub patch_near: Option<String>,
     /// Patch size, mm: L (along the feed), W (across).
-    #[arg(long, value_name = "L,W", requires = "patch_at")]
+    #[arg(long, value_name = "L,W")]
     pub patch_mm: Option<String>,
+    /// Map the whole part (needs --part) at this node spacing, mm; the output is a PLY point
+    /// cloud with normals and a height_um property.
+    #[arg(long, value_name = "SPACING")]
+    pub map_mm: Option<f64>,
+    /// The region of the part to map, mm: X0,Y0,Z0,X1,Y1,Z1.
+    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true, requires = "map_mm")]
+    pub region: Option<String>,
     /// Depth of cut ap, mm (overrides process.toml; default 0.5): nodes that would be cut
     /// higher than this above the nominal surface are reported as not reached.
     #[arg(long, value_name = "AP")]
@@ -100,7 +132,7 @@ pub struct Args {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Output height map: .csv (µm), .gsf or .sdf.
+    /// Output: a height map .csv (µm), .gsf or .sdf; a part map (--map-mm) .ply.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
     /// Print one JSON object with the grid, counts, time and height statistics.
@@ -122,39 +154,79 @@ fn numbers(s: &str, n: usize, name: &str) -> miette::Result<Vec<f64>> {
 /// Run `crest simulate`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let started = Instant::now();
-    let grid = match (&args.window, args.patch_at, &args.patch_mm) {
-        (Some(w), _, _) => {
-            let v = numbers(w, 4, "window")?;
-            GridRequest::Window {
-                x0_mm: v[0],
-                y0_mm: v[1],
-                x1_mm: v[2],
-                y1_mm: v[3],
-            }
+    let grid = if let Some(w) = &args.window {
+        let v = numbers(w, 4, "window")?;
+        GridRequest::Window {
+            x0_mm: v[0],
+            y0_mm: v[1],
+            x1_mm: v[2],
+            y1_mm: v[3],
         }
-        (None, Some(s), Some(lw)) => {
-            let v = numbers(lw, 2, "patch-mm")?;
-            GridRequest::PatchAt {
+    } else if let Some(spacing) = args.map_mm {
+        if !(spacing.is_finite() && spacing > 0.0) {
+            return Err(miette!("--map-mm must be positive, got {spacing}"));
+        }
+        let region = match &args.region {
+            Some(r) => {
+                let v = numbers(r, 6, "region")?;
+                Some([v[0], v[1], v[2], v[3], v[4], v[5]])
+            }
+            None => None,
+        };
+        GridRequest::Map {
+            spacing_mm: spacing,
+            region,
+        }
+    } else {
+        let Some(lw) = &args.patch_mm else {
+            return Err(miette!(
+                "give --window X0,Y0,X1,Y1, --patch-near X,Y,Z --patch-mm L,W, --patch-at S_MM --patch-mm L,W or --map-mm SPACING"
+            ));
+        };
+        let v = numbers(lw, 2, "patch-mm")?;
+        match (&args.patch_near, args.patch_at) {
+            (Some(p), _) => {
+                let q = numbers(p, 3, "patch-near")?;
+                GridRequest::PatchNear {
+                    point: [q[0], q[1], q[2]],
+                    length_mm: v[0],
+                    width_mm: v[1],
+                }
+            }
+            (None, Some(s)) => GridRequest::PatchAt {
                 s_mm: s,
                 length_mm: v[0],
                 width_mm: v[1],
+            },
+            (None, None) => {
+                return Err(miette!(
+                    "--patch-mm needs --patch-near X,Y,Z or --patch-at S_MM"
+                ));
             }
         }
-        _ => {
-            return Err(miette!(
-                "give --window X0,Y0,X1,Y1 or --patch-at S_MM --patch-mm L,W"
-            ));
-        }
     };
-    if crest::io::HeightMapFormat::from_path(&args.output).is_none() {
+    let map = matches!(grid, GridRequest::Map { .. });
+    let ext_ok = if map {
+        args.output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
+    } else {
+        crest::io::HeightMapFormat::from_path(&args.output).is_some()
+    };
+    if !ext_ok {
         return Err(miette!(
-            "{}: unknown output extension (expected .csv, .gsf or .sdf)",
-            args.output.display()
+            "{}: unknown output extension (expected {})",
+            args.output.display(),
+            if map { ".ply for a part map" } else { ".csv, .gsf or .sdf" }
         ));
     }
     let req = SimulateRequest {
         file: args.file.clone(),
         tool: args.tool.clone(),
+        teeth: args.teeth,
+        helix_deg: args.helix_deg,
+        part: args.part.clone(),
+        absolute: args.absolute,
         process: args.process.clone(),
         rpm: args.rpm,
         feed_mm_min: args.feed_mm_min,
@@ -168,7 +240,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         ap_mm: args.ap_mm,
         path: args.path,
     };
-    let bar = super::progress::bar(0, "simulate", "tiles");
+    let bar = super::progress::bar(0, "simulate", if map { "cells" } else { "tiles" });
     let progress = |done: usize, total: usize| {
         if let Some(b) = &bar {
             b.set_length(total as u64);
@@ -183,29 +255,59 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let sim = &run.sim;
-    crest::io::write_heightmap(&args.output, &sim.map)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
+    for w in &run.warnings {
+        eprintln!("warning: {w}");
+    }
+    let heights: Vec<f64> = match &run.output {
+        Output::Grid(sim) => {
+            crest::io::write_heightmap(&args.output, &sim.map)
+                .into_diagnostic()
+                .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
+            sim.map.z_um.clone()
+        }
+        Output::Map(m) => {
+            crest::io::write_atomic(&args.output, |w| crest::io::mesh::write_map_ply(&m.points, w))
+                .into_diagnostic()
+                .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
+            m.points.iter().map(|p| p.height_um).collect()
+        }
+    };
     let elapsed = started.elapsed().as_secs_f64();
-    let st = crest::metrics::height_stats(&sim.map.z_um);
+    let st = crest::metrics::height_stats(&heights);
+    let fraction = run.nodes_cut as f64 / run.nodes.max(1) as f64;
+    let thin = fraction < 0.1;
+    let warning = thin.then(|| {
+        format!(
+            "only {} of {} nodes ({:.1} %) were cut: the grid is mostly outside the tool's reach",
+            run.nodes_cut,
+            run.nodes,
+            100.0 * fraction
+        )
+    });
     if args.json {
-        let j = summary(&args, &run, st.as_ref(), elapsed);
+        let j = summary(&args, &run, st.as_ref(), elapsed, warning.as_deref());
         outln!("{j}");
     } else {
         let nan = f64::NAN;
+        let shape = match &run.output {
+            Output::Grid(sim) => format!("{} × {} nodes at {} µm", sim.map.nx, sim.map.ny, args.grid_um),
+            Output::Map(m) => format!("{} part points in {} cells", m.points.len(), m.tiles),
+        };
         outln!(
-            "{}: {} × {} nodes at {} µm, {} cut; heights {:.4}..{:.4} µm (Sq {:.4} µm); {:.2} s",
+            "{}: {shape}, {} cut; heights {:.4}..{:.4} µm (Sq {:.4} µm) from the {}; tool {}; {:.2} s",
             args.output.display(),
-            sim.map.nx,
-            sim.map.ny,
-            args.grid_um,
-            sim.nodes_cut,
+            run.nodes_cut,
             st.map_or(nan, |s| s.min),
             st.map_or(nan, |s| s.max),
             st.map_or(nan, |s| s.sq),
+            run.reference.name(),
+            run.tool_source,
             elapsed
         );
+    }
+    if let Some(w) = warning {
+        eprintln!("crest simulate: {w}");
+        return Ok(Outcome::CheckFailed);
     }
     Ok(Outcome::Ok)
 }
@@ -219,39 +321,26 @@ fn summary(
     run: &SimulateRun,
     st: Option<&crest::metrics::HeightStats>,
     elapsed: f64,
+    warning: Option<&str>,
 ) -> serde_json::Value {
-    let sim = &run.sim;
     let cutting = &run.cutting;
-    let m = &sim.map;
-    let f = &sim.frame;
-    let origin = f.origin + f.u * m.x0_mm + f.v * m.y0_mm;
     let v3 = |v: &crest::math::Vec3| serde_json::json!([num(v.x), num(v.y), num(v.z)]);
     let stat = |pick: fn(&crest::metrics::HeightStats) -> f64| num(st.map_or(f64::NAN, pick));
     let (fmin, fmax, fmean) = run.sample_feed_mm_min;
-    serde_json::json!({
+    let mut j = serde_json::json!({
         "output": args.output.display().to_string(),
         "model": ModelKind::from(args.model).name(),
         "dtheta_deg": matches!(args.model, ModelName::Ice).then_some(args.dtheta_deg),
-        "grid": if args.window.is_some() { "window" } else { "patch" },
-        "nx": m.nx,
-        "ny": m.ny,
-        "dx_um": num(m.dx_um),
-        "dy_um": num(m.dy_um),
-        "x0_mm": num(m.x0_mm),
-        "y0_mm": num(m.y0_mm),
-        "origin": {
-            "wcs_mm": [num(origin.x), num(origin.y), num(origin.z)],
-            "u": v3(&f.u),
-            "v": v3(&f.v),
-            "w": v3(&f.w),
-        },
-        "nodes": m.nx * m.ny,
-        "nodes_cut": sim.nodes_cut,
-        "nodes_not_reached": m.nx * m.ny - sim.nodes_cut,
-        "nominal_from_contacts": sim.nominal_from_contacts,
+        "nodes": run.nodes,
+        "nodes_cut": run.nodes_cut,
+        "nodes_not_reached": run.nodes - run.nodes_cut,
+        "cut_fraction": num(run.nodes_cut as f64 / run.nodes.max(1) as f64),
+        "warning": warning,
+        "warnings": run.warnings,
+        "tool": run.tool_source,
+        "reference": run.reference.name(),
         "samples": run.samples,
-        "strips": sim.strips,
-        "tiles_widened": sim.tiles_widened,
+        "samples_total": run.samples_total,
         "rpm": num(cutting.rpm),
         "feed_mm_min": num(cutting.feed_nominal),
         "feed_from_file": cutting.feed_mm_min.is_none(),
@@ -276,5 +365,34 @@ fn summary(
                 "mean": num(fmean),
             },
         },
-    })
+    });
+    match &run.output {
+        Output::Grid(sim) => {
+            let m = &sim.map;
+            let f = &sim.frame;
+            let origin = f.origin + f.u * m.x0_mm + f.v * m.y0_mm;
+            j["grid"] = serde_json::json!(if args.window.is_some() { "window" } else { "patch" });
+            j["nx"] = m.nx.into();
+            j["ny"] = m.ny.into();
+            j["dx_um"] = num(m.dx_um);
+            j["dy_um"] = num(m.dy_um);
+            j["x0_mm"] = num(m.x0_mm);
+            j["y0_mm"] = num(m.y0_mm);
+            j["origin"] = serde_json::json!({
+                "wcs_mm": [num(origin.x), num(origin.y), num(origin.z)],
+                "u": v3(&f.u),
+                "v": v3(&f.v),
+                "w": v3(&f.w),
+            });
+            j["nominal_from_contacts"] = sim.nominal_from_contacts.into();
+            j["strips"] = sim.strips.into();
+            j["tiles_widened"] = sim.tiles_widened.into();
+        }
+        Output::Map(m) => {
+            j["grid"] = serde_json::json!("map");
+            j["map_mm"] = num(args.map_mm.unwrap_or(f64::NAN));
+            j["cells"] = m.tiles.into();
+        }
+    }
+    j
 }

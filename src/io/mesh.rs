@@ -12,6 +12,7 @@
 
 use crate::math::{Point3, Vec3};
 use crate::part::{Mesh, MeshError, Part};
+use crate::surface::MapPoint;
 use std::io::Write;
 use std::path::Path;
 
@@ -732,17 +733,6 @@ pub fn write_stl(mesh: &Mesh, out: &mut dyn Write) -> std::io::Result<()> {
         out.write_all(&[0, 0])?;
     }
     Ok(())
-}
-
-/// One point of a part map.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MapPoint {
-    /// The part point, mm.
-    pub point: Point3,
-    /// The part's unit normal there.
-    pub normal: Vec3,
-    /// Height along the normal above the design surface, µm (NaN = not reached).
-    pub height_um: f64,
 }
 
 /// Write a part map as an ASCII PLY point cloud: `x y z nx ny nz height_um` per point (NaN

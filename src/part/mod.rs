@@ -109,6 +109,26 @@ impl Part {
         (lo, hi)
     }
 
+    /// Whether some triangle meets the box between corners `lo` and `hi`.
+    pub fn touches_box(&self, lo: &Point3, hi: &Point3) -> bool {
+        use parry3d_f64::bounding_volume::Aabb;
+        let aabb = Aabb::new(*lo, *hi);
+        let mut hits: Vec<u32> = Vec::new();
+        self.tri.qbvh().intersect_aabb(&aabb, &mut hits);
+        // The QBVH works on the triangles' boxes: confirm with the triangle itself.
+        let cuboid = parry3d_f64::shape::Cuboid::new(aabb.half_extents());
+        let at = parry3d_f64::math::Isometry::translation(
+            aabb.center().x,
+            aabb.center().y,
+            aabb.center().z,
+        );
+        let id = parry3d_f64::math::Isometry::identity();
+        hits.iter().any(|&t| {
+            let tri = self.tri.triangle(t);
+            parry3d_f64::query::intersection_test(&id, &tri, &at, &cuboid).unwrap_or(true)
+        })
+    }
+
     /// The smoothed unit normal at point `p` of triangle `t` (barycentric blend of the
     /// vertex normals; the face normal where the blend vanishes).
     pub fn normal_at(&self, t: u32, p: &Point3) -> Vec3 {

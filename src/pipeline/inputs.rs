@@ -80,3 +80,94 @@ pub fn load_process(path: &Path) -> miette::Result<ProcessConfig> {
     let text = read_text(path, "process file")?;
     Ok(ProcessConfig::parse(&text, &path.display().to_string())?)
 }
+
+/// Default helix angle of a tool taken from TLDATA (which has none), degrees.
+pub const TLDATA_HELIX_DEG: f64 = 30.0;
+
+/// The cutter of a run: `tool.toml` when given, else the first tool path's TLDATA with
+/// `teeth` (TLDATA has no tooth count) and `helix_deg` (default [`TLDATA_HELIX_DEG`]).
+/// Returns the cutter, a one-line description of where it came from, and warnings (a
+/// `tool.toml` whose radii disagree with the file's TLDATA).
+pub fn resolve_cutter(
+    tool: Option<&Path>,
+    program: &crate::toolpath::Program,
+    file: &Path,
+    teeth: Option<usize>,
+    helix_deg: Option<f64>,
+) -> miette::Result<(Cutter, String, Vec<String>)> {
+    use crate::tool::Shape;
+    let tldata = program.paths.iter().find_map(|p| p.tool.clone());
+    if let Some(path) = tool {
+        let cutter = load_tool(path)?;
+        let mut warnings = Vec::new();
+        if let Some(t) = &tldata {
+            let r = 0.5 * t.diameter_mm;
+            if t.diameter_mm > 0.0
+                && ((r - cutter.radius_mm).abs() > 1e-3
+                    || (t.corner_radius_mm - cutter.corner_radius_mm()).abs() > 1e-3)
+            {
+                warnings.push(format!(
+                    "{} has R {} mm, corner radius {} mm, but {}'s TLDATA says D {} mm (R {r} mm), corner radius {} mm: the simulated surface will not be the one the path was computed for",
+                    path.display(),
+                    cutter.radius_mm,
+                    cutter.corner_radius_mm(),
+                    file.display(),
+                    t.diameter_mm,
+                    t.corner_radius_mm
+                ));
+            }
+        }
+        return Ok((cutter, format!("{}", path.display()), warnings));
+    }
+    let Some(t) = tldata else {
+        return Err(miette::miette!(
+            "{} has no TLDATA to take the tool from: give --tool tool.toml",
+            file.display()
+        ));
+    };
+    let r = 0.5 * t.diameter_mm;
+    if !(r.is_finite() && r > 0.0 && t.corner_radius_mm.is_finite() && t.corner_radius_mm >= 0.0)
+    {
+        return Err(miette::miette!(
+            "{}: TLDATA gives diameter {} mm and corner radius {} mm, which describe no milling cutter: give --tool tool.toml",
+            file.display(),
+            t.diameter_mm,
+            t.corner_radius_mm
+        ));
+    }
+    let Some(teeth) = teeth else {
+        return Err(miette::miette!(
+            "the tool comes from {}'s TLDATA (D {} mm, corner radius {} mm), which has no tooth count: give --teeth N (or --tool tool.toml)",
+            file.display(),
+            t.diameter_mm,
+            t.corner_radius_mm
+        ));
+    };
+    if !(1..=crate::config::MAX_TEETH as usize).contains(&teeth) {
+        return Err(miette::miette!(
+            "--teeth must be between 1 and {}, got {teeth}",
+            crate::config::MAX_TEETH
+        ));
+    }
+    let helix = helix_deg.unwrap_or(TLDATA_HELIX_DEG);
+    if !(helix.is_finite() && helix.abs() < 89.0) {
+        return Err(miette::miette!("--helix-deg must lie within ±89°, got {helix}"));
+    }
+    let rc = t.corner_radius_mm.min(r);
+    let (shape, name) = if (rc - r).abs() <= 1e-6 * r {
+        (Shape::Ball, "ball end")
+    } else if rc <= 1e-9 {
+        (Shape::Flat, "flat end")
+    } else {
+        (Shape::Torus { corner_radius_mm: rc }, "bull nose")
+    };
+    let cutter = Cutter::new(shape, r, teeth, helix.to_radians());
+    let what = format!(
+        "{name} D {} mm, corner radius {} mm from {}'s TLDATA, {teeth} teeth, helix {helix}°{}",
+        t.diameter_mm,
+        rc,
+        file.display(),
+        if helix_deg.is_none() { " (assumed; --helix-deg to change)" } else { "" }
+    );
+    Ok((cutter, what, Vec::new()))
+}

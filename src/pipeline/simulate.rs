@@ -6,9 +6,11 @@
 use crate::config::ProcessConfig;
 use crate::kinematics::Machine;
 use crate::resample::{self, Sample};
-use crate::surface::{self, GridSpec, ModelKind, Simulation};
+use crate::surface::{self, GridFrame, GridSpec, ModelKind, PartMap, Reference, Simulation};
 use crate::tool::Cutter;
-use crate::toolpath::{MotionKind, Posture, Program, Toolpath};
+use crate::math::{Frame, Point3, Vec3};
+use crate::surface::cull::{Reach, Subset};
+use crate::toolpath::{Contact, LowerOptions, MotionKind, Posture, Program, Toolpath};
 use miette::miette;
 use std::path::{Path, PathBuf};
 
@@ -56,6 +58,24 @@ pub enum GridRequest {
         /// Upper y.
         y1_mm: f64,
     },
+    /// A patch centred at the part point nearest `point` (the design surface of `--part`, or
+    /// the surface derived from the path), `length_mm` along the local feed, `width_mm`
+    /// across.
+    PatchNear {
+        /// The point, mm (the path's frame).
+        point: [f64; 3],
+        /// Along the feed, mm.
+        length_mm: f64,
+        /// Across, mm.
+        width_mm: f64,
+    },
+    /// The whole part (or a region of it) at `spacing_mm`, as a point cloud (needs a part).
+    Map {
+        /// Node spacing, mm.
+        spacing_mm: f64,
+        /// X0, Y0, Z0, X1, Y1, Z1 of the region, mm (the part's bounds when `None`).
+        region: Option<[f64; 6]>,
+    },
     /// A patch on the tangent plane at the contact point at arc length `s_mm` of the path.
     PatchAt {
         /// Arc length, mm.
@@ -72,8 +92,16 @@ pub enum GridRequest {
 pub struct SimulateRequest {
     /// Tool-path file (CLSF or contact12).
     pub file: PathBuf,
-    /// Cutter description (`tool.toml`).
-    pub tool: PathBuf,
+    /// Cutter description (`tool.toml`); the file's TLDATA when `None`.
+    pub tool: Option<PathBuf>,
+    /// Teeth of a tool taken from TLDATA.
+    pub teeth: Option<usize>,
+    /// Helix angle of a tool taken from TLDATA, degrees.
+    pub helix_deg: Option<f64>,
+    /// The design surface (STL, OBJ, PLY) in the path's frame.
+    pub part: Option<PathBuf>,
+    /// Apply MSYS: read the path in the absolute frame (the part must be in it too).
+    pub absolute: bool,
     /// Process parameters (`process.toml`).
     pub process: Option<PathBuf>,
     /// Spindle speed, rpm.
@@ -113,11 +141,57 @@ pub struct Cutting {
     pub fz_mm: f64,
 }
 
+/// Where the heights are measured from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReferenceSource {
+    /// The contact data of the file.
+    File,
+    /// Contact data derived from the centre-line path (offset-surface fit).
+    Derived,
+    /// The design surface of the part.
+    Part,
+    /// None: a window measures WCS z.
+    None,
+}
+
+impl ReferenceSource {
+    /// The name used in output.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReferenceSource::File => "contact data of the file",
+            ReferenceSource::Derived => "surface derived from the path",
+            ReferenceSource::Part => "design surface of the part",
+            ReferenceSource::None => "z = 0 (no contact data)",
+        }
+    }
+}
+
+/// What was simulated.
+#[derive(Debug, Clone)]
+pub enum Output {
+    /// A height map on a window or patch.
+    Grid(Simulation),
+    /// A point cloud over the part.
+    Map(PartMap),
+}
+
 /// A finished simulation and what it was run with.
 #[derive(Debug, Clone)]
 pub struct SimulateRun {
     /// The simulated surface.
-    pub sim: Simulation,
+    pub output: Output,
+    /// Nodes in the grid or map.
+    pub nodes: usize,
+    /// Nodes with a height.
+    pub nodes_cut: usize,
+    /// Where the tool came from (a file or TLDATA).
+    pub tool_source: String,
+    /// What the heights are measured from.
+    pub reference: ReferenceSource,
+    /// Non-fatal findings (tool/TLDATA mismatch, degenerate mesh triangles, …).
+    pub warnings: Vec<String>,
+    /// Samples the path gave before culling.
+    pub samples_total: usize,
     /// The cutter.
     pub cutter: Cutter,
     /// Spindle speed and feeds used.
@@ -216,30 +290,90 @@ pub fn predicted_feed(
     }
 }
 
-/// Cutting time and the (min, max, mean) sample feed of resampled runs.
-fn feed_figures(samples: &[Sample]) -> (f64, (f64, f64, f64)) {
-    // t restarts at every run: the cutting time is the sum of the runs' last stamps.
-    let mut cut_time = 0.0;
-    let mut run_end = 0.0f64;
-    let mut run = None;
-    let (mut fmin, mut fmax, mut fsum) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
-    for s in samples {
-        if run != Some(s.run) {
-            cut_time += run_end;
-            run_end = 0.0;
-            run = Some(s.run);
+/// Cutting time and the (min, max, mean) sample feed of resampled runs, accumulated.
+#[derive(Debug, Default)]
+struct FeedFigures {
+    n: usize,
+    cut_time: f64,
+    run_end: f64,
+    run: Option<usize>,
+    min: f64,
+    max: f64,
+    sum: f64,
+}
+
+impl FeedFigures {
+    fn push(&mut self, s: &Sample) {
+        if self.n == 0 {
+            self.min = f64::INFINITY;
+            self.max = f64::NEG_INFINITY;
         }
-        run_end = run_end.max(s.t_s);
-        fmin = fmin.min(s.feed_mm_min);
-        fmax = fmax.max(s.feed_mm_min);
-        fsum += s.feed_mm_min;
+        // t restarts at every run: the cutting time is the sum of the runs' last stamps.
+        if self.run != Some(s.run) {
+            self.cut_time += self.run_end;
+            self.run_end = 0.0;
+            self.run = Some(s.run);
+        }
+        self.run_end = self.run_end.max(s.t_s);
+        self.min = self.min.min(s.feed_mm_min);
+        self.max = self.max.max(s.feed_mm_min);
+        self.sum += s.feed_mm_min;
+        self.n += 1;
     }
-    cut_time += run_end;
-    (cut_time, (fmin, fmax, fsum / samples.len().max(1) as f64))
+
+    fn finish(&self) -> (f64, (f64, f64, f64)) {
+        (
+            self.cut_time + self.run_end,
+            (self.min, self.max, self.sum / self.n.max(1) as f64),
+        )
+    }
+}
+
+/// Give every cutting posture of `program` that has no contact data the contact derived
+/// from the path (see [`crate::part::contact::derive`]). Returns how many postures got one.
+pub fn derive_contacts(program: &mut Program, cutter: &Cutter) -> usize {
+    let mut n = 0;
+    for path in &mut program.paths {
+        let idx: Vec<usize> = (0..path.postures.len())
+            .filter(|&i| {
+                let p = &path.postures[i];
+                p.contact.is_none()
+                    && (p.motion == MotionKind::Cut
+                        || path.postures.get(i + 1).is_some_and(|q| q.motion == MotionKind::Cut))
+            })
+            .collect();
+        let poses: Vec<(Point3, Vec3)> = idx
+            .iter()
+            .map(|&i| (path.postures[i].position, path.postures[i].axis))
+            .collect();
+        let got = crate::part::contact::derive(cutter, &poses, DERIVE_CELL_MM);
+        for (&i, c) in idx.iter().zip(got) {
+            if let Some((point, normal)) = c {
+                path.postures[i].contact = Some(Contact {
+                    point,
+                    normal,
+                    normal_derived: true,
+                });
+                n += 1;
+            }
+        }
+    }
+    n
+}
+
+/// Thinning cell of the offset points when contacts are derived from the path, mm.
+pub const DERIVE_CELL_MM: f64 = 0.1;
+
+fn has_contacts(program: &Program) -> bool {
+    program
+        .paths
+        .iter()
+        .flat_map(|p| p.postures.iter())
+        .any(|p| p.motion == MotionKind::Cut && p.contact.is_some())
 }
 
 /// Run a simulation. `progress(done, total)` is called from the calling thread after each
-/// batch of tiles. Runs on the current rayon pool.
+/// batch of tiles (each cell of a map). Runs on the current rayon pool.
 pub fn simulate(
     req: &SimulateRequest,
     progress: &(dyn Fn(usize, usize) + Sync),
@@ -253,54 +387,80 @@ pub fn simulate(
             req.dtheta_deg
         ));
     }
-    let grid = match req.grid {
-        GridRequest::Window {
-            x0_mm,
-            y0_mm,
-            x1_mm,
-            y1_mm,
-        } => {
-            if x1_mm < x0_mm || y1_mm < y0_mm {
-                return Err(miette!(
-                    "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"
-                ));
-            }
-            GridSpec::Window {
-                x0_mm,
-                y0_mm,
-                x1_mm,
-                y1_mm,
-            }
+    if let GridRequest::Window {
+        x0_mm,
+        y0_mm,
+        x1_mm,
+        y1_mm,
+    } = req.grid
+    {
+        if x1_mm < x0_mm || y1_mm < y0_mm {
+            return Err(miette!(
+                "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"
+            ));
         }
-        GridRequest::PatchAt {
-            s_mm,
-            length_mm,
-            width_mm,
-        } => GridSpec::Patch {
-            s_mm,
-            length_mm,
-            width_mm,
-        },
+    }
+    let mut warnings = Vec::new();
+    let part = match &req.part {
+        Some(p) => {
+            let f = crate::io::mesh::read_part(p)?;
+            warnings.extend(f.warnings);
+            Some(f.part)
+        }
+        None => None,
     };
-    let cutter = super::load_tool(&req.tool)?;
+    if matches!(req.grid, GridRequest::Map { .. }) && part.is_none() {
+        return Err(miette!(
+            "--map-mm maps the design surface of a part: give --part PART.stl"
+        ));
+    }
     let process = match &req.process {
         Some(p) => super::load_process(p)?,
         None => ProcessConfig::default(),
     };
-    let program = crate::io::toolpath::read_program(&req.file)?;
+    let lower = LowerOptions {
+        apply_msys: req.absolute,
+        ..Default::default()
+    };
+    let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
+    let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
+        req.tool.as_deref(),
+        &program,
+        &req.file,
+        req.teeth,
+        req.helix_deg,
+    )?;
+    warnings.extend(tool_warnings);
     let cutting = resolve_cutting(req, &process, &program, cutter.teeth())?;
     let machine = resolve_feed_source(req.feed, req.machine.as_deref())?;
     let ap_mm = req.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
         return Err(miette!("--ap-mm must be positive, got {ap_mm}"));
     }
-    let (model, mode) = req.model.with_resampling(req.dtheta_deg.to_radians());
-    let mut ropts =
-        resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
-    if let Some(f) = cutting.feed_mm_min {
-        ropts = ropts.with_feed_mm_min(f);
-    }
-    let file = req.file.display();
+    let file = req.file.display().to_string();
+    // Contact data: the file's, else derived from the path when the heights need it.
+    let from_file = has_contacts(&program);
+    let needs_contacts = part.is_none() && !matches!(req.grid, GridRequest::Map { .. });
+    let reference = if part.is_some() && !matches!(req.grid, GridRequest::PatchAt { .. }) {
+        ReferenceSource::Part
+    } else if from_file {
+        ReferenceSource::File
+    } else if needs_contacts || matches!(req.grid, GridRequest::PatchAt { .. }) {
+        if derive_contacts(&mut program, &cutter) == 0 {
+            match req.grid {
+                GridRequest::Window { .. } => ReferenceSource::None,
+                _ => {
+                    return Err(miette!(
+                        "{file}: the path has no contact data and none can be derived from it (a single pass has no neighbour to fit the surface to); give --part PART.stl"
+                    ));
+                }
+            }
+        } else {
+            ReferenceSource::Derived
+        }
+    } else {
+        ReferenceSource::None
+    };
     let paths: Vec<usize> = match req.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -311,10 +471,76 @@ pub fn simulate(
         }
         None => (0..program.paths.len()).collect(),
     };
-    let mut samples: Vec<Sample> = Vec::new();
+    // The region the tool must reach, for culling.
+    let margin = cutter.radius_mm + ap_mm + 1.0;
+    let (grid, reach): (Option<GridSpec>, Option<Reach>) = match req.grid {
+        GridRequest::Window {
+            x0_mm,
+            y0_mm,
+            x1_mm,
+            y1_mm,
+        } => (
+            Some(GridSpec::Window {
+                x0_mm,
+                y0_mm,
+                x1_mm,
+                y1_mm,
+            }),
+            Some(Reach {
+                lo: Point3::new(x0_mm, y0_mm, f64::NEG_INFINITY),
+                hi: Point3::new(x1_mm, y1_mm, f64::INFINITY),
+            }),
+        ),
+        GridRequest::PatchAt {
+            s_mm,
+            length_mm,
+            width_mm,
+        } => (
+            Some(GridSpec::Patch {
+                s_mm,
+                length_mm,
+                width_mm,
+            }),
+            None,
+        ),
+        GridRequest::PatchNear {
+            point,
+            length_mm,
+            width_mm,
+        } => {
+            let q = Point3::new(point[0], point[1], point[2]);
+            if !point.iter().all(|v| v.is_finite()) {
+                return Err(miette!("--patch-near wants three finite numbers"));
+            }
+            let half = 0.5 * (length_mm * length_mm + width_mm * width_mm).sqrt();
+            (None, Some(Reach::around(&q, half + 2.0)))
+        }
+        GridRequest::Map { region, .. } => (
+            None,
+            match region {
+                Some(r) => Some(Reach {
+                    lo: Point3::new(r[0], r[1], r[2]),
+                    hi: Point3::new(r[3], r[4], r[5]),
+                }),
+                None => part.as_ref().map(|p| {
+                    let (lo, hi) = p.bounds();
+                    Reach { lo, hi }
+                }),
+            },
+        ),
+    };
+    let (model, mode) = req.model.with_resampling(req.dtheta_deg.to_radians());
+    let mut ropts =
+        resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
+    if let Some(f) = cutting.feed_mm_min {
+        ropts = ropts.with_feed_mm_min(f);
+    }
+    let mut subset = Subset::default();
+    let mut all_samples = (0usize, 0.0f64, (f64::INFINITY, f64::NEG_INFINITY, 0.0f64));
+    let mut run_base = 0;
+    let mut last_run = 0;
     for &i in &paths {
         let path = &program.paths[i];
-        let first_run = samples.last().map_or(0, |s| s.run + 1);
         let mut popts = ropts.clone();
         if let Some(m) = &machine {
             popts.posture_feed_mm_min =
@@ -326,29 +552,179 @@ pub fn simulate(
                     )
                 })?);
         }
-        let mut got = resample::resample(path, &popts)
-            .map_err(|e| miette!("{file}: tool path {} ({}): {e}", i + 1, path.name))?;
-        for s in &mut got {
-            s.run += first_run;
-        }
-        samples.extend(got);
+        let mut figures = FeedFigures::default();
+        resample::resample_with(path, &popts, |s| {
+            let mut s = s.clone();
+            s.run += run_base;
+            last_run = last_run.max(s.run);
+            figures.push(&s);
+            let keep = reach.as_ref().is_none_or(|r| r.near(&s.position, margin));
+            subset.push(&s, keep);
+        })
+        .map_err(|e| miette!("{file}: tool path {} ({}): {e}", i + 1, path.name))?;
+        run_base = last_run + 1;
+        let (cut, (lo, hi, mean)) = figures.finish();
+        let n = all_samples.0 + figures.n;
+        all_samples.2 = (
+            all_samples.2.0.min(lo),
+            all_samples.2.1.max(hi),
+            if n > 0 {
+                (all_samples.2.2 * all_samples.0 as f64 + mean * figures.n as f64) / n as f64
+            } else {
+                0.0
+            },
+        );
+        all_samples.0 = n;
+        all_samples.1 += cut;
     }
-    if samples.is_empty() {
+    let samples_total = subset.seen;
+    let samples = subset.samples;
+    if samples_total == 0 {
         return Err(miette!("{file}: no cutting moves to simulate"));
     }
-    let mut sopts = surface::Options::new(model, grid, req.grid_um * 1e-3);
+    if samples.is_empty() {
+        return Err(miette!(
+            "{file}: no cutting move comes within reach of the grid (tool radius + depth of cut {margin:.3} mm); check the coordinates and the frame (--absolute applies MSYS)"
+        ));
+    }
+    let mut sopts = surface::Options::new(
+        model,
+        grid.unwrap_or(GridSpec::Window {
+            x0_mm: 0.0,
+            y0_mm: 0.0,
+            x1_mm: 0.0,
+            y1_mm: 0.0,
+        }),
+        req.grid_um * 1e-3,
+    );
     sopts.depth_mm = ap_mm;
-    let sim = surface::simulate(&samples, &cutter, &sopts, progress)
-        .map_err(|e| miette!("{file}: {e}"))?;
-    let (cut_time_s, sample_feed_mm_min) = feed_figures(&samples);
+    let reference_arg = match (&part, reference) {
+        (Some(p), ReferenceSource::Part) => Reference::Part(p),
+        _ => Reference::Contacts,
+    };
+    let output = match req.grid {
+        GridRequest::Map { spacing_mm, .. } => {
+            let Some(p) = &part else {
+                unreachable!("checked above")
+            };
+            if let GridRequest::Map {
+                region: Some(r), ..
+            } = req.grid
+            {
+                if !(r.iter().all(|v| v.is_finite()) && r[3] >= r[0] && r[4] >= r[1] && r[5] >= r[2]) {
+                    return Err(miette!(
+                        "--region X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1"
+                    ));
+                }
+            }
+            let tile = (256.0 * spacing_mm).clamp(1.0, 20.0).max(spacing_mm);
+            sopts.spacing_mm = spacing_mm;
+            let region = reach.map(|r| (r.lo, r.hi));
+            let m = surface::map_part(&samples, &cutter, &sopts, p, spacing_mm, tile, region, progress)
+                .map_err(|e| miette!("{file}: {e}"))?;
+            Output::Map(m)
+        }
+        GridRequest::PatchNear {
+            point,
+            length_mm,
+            width_mm,
+        } => {
+            let q = Point3::new(point[0], point[1], point[2]);
+            let (centre, normal) = match &part {
+                Some(p) => {
+                    let c = p.closest(&q);
+                    (c.point, c.normal)
+                }
+                None => {
+                    let best = samples
+                        .iter()
+                        .filter_map(|s| Some((s.contact?, s.normal?)))
+                        .min_by(|a, b| (a.0 - q).norm().total_cmp(&(b.0 - q).norm()));
+                    let Some(b) = best else {
+                        return Err(miette!(
+                            "{file}: no contact point near {},{},{}",
+                            point[0],
+                            point[1],
+                            point[2]
+                        ));
+                    };
+                    b
+                }
+            };
+            // The patch centre must lie within the tool radius of the cutter somewhere.
+            let rc = cutter.corner_radius_mm();
+            let near = samples
+                .iter()
+                .map(|s| ((s.position + s.axis * rc) - centre).norm() - rc)
+                .fold(f64::INFINITY, f64::min);
+            if near > cutter.radius_mm {
+                return Err(miette!(
+                    "{file}: the patch centre {:.4},{:.4},{:.4} is {near:.3} mm from the nearest cutter position, farther than the tool radius {} mm: the path does not cut there",
+                    centre.x,
+                    centre.y,
+                    centre.z,
+                    cutter.radius_mm
+                ));
+            }
+            let feed = samples
+                .iter()
+                .min_by(|a, b| {
+                    (a.position - centre)
+                        .norm()
+                        .total_cmp(&(b.position - centre).norm())
+                })
+                .map_or_else(Vec3::x, |s| s.feed_dir);
+            let f = Frame::tool(&normal, &feed);
+            sopts.grid = GridSpec::Oriented {
+                frame: GridFrame {
+                    origin: centre,
+                    u: f.x,
+                    v: f.y,
+                    w: f.z,
+                },
+                length_mm,
+                width_mm,
+            };
+            Output::Grid(
+                surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
+                    .map_err(|e| miette!("{file}: {e}"))?,
+            )
+        }
+        GridRequest::PatchAt { s_mm, .. } => {
+            let last = samples.last().map_or(0.0, |s| s.s_mm);
+            if !(0.0..=last + 1e-9).contains(&s_mm) {
+                return Err(miette!(
+                    "--patch-at {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
+                ));
+            }
+            Output::Grid(
+                surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
+                    .map_err(|e| miette!("{file}: {e}"))?,
+            )
+        }
+        GridRequest::Window { .. } => Output::Grid(
+            surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
+                .map_err(|e| miette!("{file}: {e}"))?,
+        ),
+    };
+    let (nodes, nodes_cut) = match &output {
+        Output::Grid(sim) => (sim.map.nx * sim.map.ny, sim.nodes_cut),
+        Output::Map(m) => (m.points.len(), m.nodes_cut),
+    };
     Ok(SimulateRun {
-        sim,
+        output,
+        nodes,
+        nodes_cut,
+        tool_source,
+        reference,
+        warnings,
+        samples_total,
         cutter,
         cutting,
         ap_mm,
         predicted: machine.is_some(),
         samples: samples.len(),
-        cut_time_s,
-        sample_feed_mm_min,
+        cut_time_s: all_samples.1,
+        sample_feed_mm_min: all_samples.2,
     })
 }

@@ -13,7 +13,7 @@
 use super::grid::{GridFrame, Nominal, grid_contacts};
 use super::profile::Profile;
 use super::raster::Tile;
-use super::{GridSpec, HeightMap, Model, Options, Simulation, SurfaceError};
+use super::{GridSpec, HeightMap, Model, Options, Reference, Simulation, SurfaceError};
 use crate::math::{Frame, Point3, Vec3, nlerp};
 use crate::resample::Sample;
 use crate::tool::Cutter;
@@ -85,7 +85,9 @@ struct Setup<'a> {
     x0: f64,
     y0: f64,
     nominal: Nominal,
-    patch: bool,
+    /// Heights along the local surface normal (a patch, or any grid on a part) rather than
+    /// along w.
+    along_normal: bool,
     opts: &'a Options,
     /// grid rows (u, v, w) scaled to node space.
     g: Matrix3<f64>,
@@ -101,6 +103,18 @@ pub fn simulate(
     samples: &[Sample],
     cutter: &Cutter,
     opts: &Options,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Simulation, SurfaceError> {
+    simulate_with(samples, cutter, opts, Reference::Contacts, progress)
+}
+
+/// [`simulate`] with heights measured from `reference` (the contact data, or the design
+/// surface of a part).
+pub fn simulate_with(
+    samples: &[Sample],
+    cutter: &Cutter,
+    opts: &Options,
+    reference: Reference<'_>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Simulation, SurfaceError> {
     check_options(opts, cutter)?;
@@ -139,15 +153,36 @@ pub fn simulate(
             let ny = count(0.0, width_mm, d);
             (frame, nx, ny, -0.5 * length_mm, -0.5 * width_mm, true)
         }
+        GridSpec::Oriented {
+            frame,
+            length_mm,
+            width_mm,
+        } => {
+            let nx = count(0.0, length_mm, d);
+            let ny = count(0.0, width_mm, d);
+            (frame, nx, ny, -0.5 * length_mm, -0.5 * width_mm, true)
+        }
     };
     if nx == 0 || ny == 0 || nx.saturating_mul(ny) > MAX_NODES {
         return Err(SurfaceError::BadGrid { nx, ny });
     }
     let uv_box = [x0, y0, x0 + (nx - 1) as f64 * d, y0 + (ny - 1) as f64 * d];
     let diag = ((uv_box[2] - uv_box[0]).powi(2) + (uv_box[3] - uv_box[1]).powi(2)).sqrt();
-    let contacts = grid_contacts(samples, &frame, uv_box, (0.5 * diag).max(2.0), 0.05);
     // Lattice of the nominal surface: every 32 nodes, at most 0.25 mm apart.
     let stride = ((0.25 / d).floor() as usize).clamp(1, NOMINAL_STRIDE);
+    let contacts = match reference {
+        Reference::Contacts => {
+            grid_contacts(samples, &frame, uv_box, (0.5 * diag).max(2.0), 0.05)
+        }
+        Reference::Part(part) => {
+            let c = part_contacts(part, &frame, uv_box, patch, 0.5 * stride as f64 * d);
+            if c.is_empty() {
+                return Err(SurfaceError::NoPartSurface);
+            }
+            c
+        }
+    };
+    let along_normal = patch || matches!(reference, Reference::Part(_));
     let (nominal, from_contacts) = match Nominal::fit(nx, ny, stride, x0, y0, d, &contacts) {
         Some(n) => (n, true),
         None if patch => return Err(SurfaceError::NoContactData),
@@ -172,7 +207,7 @@ pub fn simulate(
         x0,
         y0,
         nominal,
-        patch,
+        along_normal,
         opts,
         g,
     };
@@ -234,6 +269,7 @@ pub fn simulate(
         strips: strips_total,
         tiles_widened: widened,
         nominal_from_contacts: from_contacts,
+        nominal: setup.nominal,
     })
 }
 
@@ -277,6 +313,22 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
                 )));
             }
         }
+        GridSpec::Oriented {
+            frame,
+            length_mm,
+            width_mm,
+        } => {
+            let finite = [frame.origin.coords, frame.u, frame.v, frame.w]
+                .iter()
+                .all(|v| v.iter().all(|c| c.is_finite()));
+            if !finite {
+                return Err(SurfaceError::InvalidOption(
+                    "patch frame is not finite".into(),
+                ));
+            }
+            positive(length_mm, "patch length")?;
+            positive(width_mm, "patch width")?;
+        }
         GridSpec::Patch {
             s_mm,
             length_mm,
@@ -292,6 +344,47 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
         }
     }
     Ok(())
+}
+
+/// Points and normals of the part's surface facing +w over the grid, in grid coordinates:
+/// the first hit of a ray along −w from above at every `step` of the (u, v) box widened by
+/// two steps. For a patch the rays start a little above the patch plane (the local surface);
+/// for a window above the whole part (the top surface).
+fn part_contacts(
+    part: &crate::part::Part,
+    frame: &GridFrame,
+    uv_box: [f64; 4],
+    patch: bool,
+    step: f64,
+) -> Vec<(Vec3, Vec3)> {
+    let (lo, hi) = part.bounds();
+    let diag = (hi - lo).norm();
+    let span = ((uv_box[2] - uv_box[0]).powi(2) + (uv_box[3] - uv_box[1]).powi(2)).sqrt();
+    let top = if patch {
+        0.5 * span + 1.0
+    } else {
+        // Above every vertex along w.
+        let c = nalgebra::center(&lo, &hi);
+        frame.w.dot(&(c - frame.origin)) + diag
+    };
+    let reach = top + diag + 1.0;
+    let n_u = (((uv_box[2] - uv_box[0]) / step).ceil() as i64 + 4).clamp(2, 4096);
+    let n_v = (((uv_box[3] - uv_box[1]) / step).ceil() as i64 + 4).clamp(2, 4096);
+    let mut out = Vec::new();
+    for b in 0..=n_v {
+        for a in 0..=n_u {
+            let u = uv_box[0] - 2.0 * step + a as f64 * step;
+            let v = uv_box[1] - 2.0 * step + b as f64 * step;
+            let from = frame.origin + frame.u * u + frame.v * v + frame.w * top;
+            if let Some((_, p, n)) = part.ray(&from, &-frame.w, reach) {
+                let nl = frame.local_dir(&n);
+                if nl.z > 0.2 {
+                    out.push((frame.local(&p), nl));
+                }
+            }
+        }
+    }
+    out
 }
 
 /// Nodes from `a` to `b` at spacing `d` (both ends included when they fall on the grid).
@@ -690,7 +783,7 @@ impl Setup<'_> {
                     uncertain = true;
                 }
                 if above <= depth {
-                    let f = if self.patch { cos_beta } else { 1.0 };
+                    let f = if self.along_normal { cos_beta } else { 1.0 };
                     out[r * w + c] = above * f * 1e3;
                 }
             }

@@ -141,6 +141,12 @@ impl Nominal {
 
     /// Nominal height q (mm) and slope factor cos β = 1/√(1 + |∇q|²) at fine node (i, j).
     pub fn q_cos(&self, i: usize, j: usize) -> (f64, f64) {
+        let (q, gu, gv) = self.q_grad(i, j);
+        (q, 1.0 / (1.0 + gu * gu + gv * gv).sqrt())
+    }
+
+    /// Nominal height q (mm) and its gradient (∂q/∂u, ∂q/∂v) at fine node (i, j).
+    pub fn q_grad(&self, i: usize, j: usize) -> (f64, f64, f64) {
         let ci = (i / self.stride).min(self.cnx - 1);
         let cj = (j / self.stride).min(self.cny - 1);
         let ci1 = (ci + 1).min(self.cnx - 1);
@@ -166,7 +172,7 @@ impl Nominal {
             gu += wgt * (c[1] + 2.0 * c[3] * x + c[4] * y);
             gv += wgt * (c[2] + c[4] * x + 2.0 * c[5] * y);
         }
-        (q, 1.0 / (1.0 + gu * gu + gv * gv).sqrt())
+        (q, gu, gv)
     }
 }
 

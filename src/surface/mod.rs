@@ -20,15 +20,18 @@
 //! tile whose result is not provably inside that band is recomputed with a wider band,
 //! up to the depth of cut, so the band only changes the speed, never the result.
 
+pub mod cull;
 mod engine;
 pub(crate) mod grid;
 mod heightmap;
+pub mod map;
 pub(crate) mod profile;
 pub(crate) mod raster;
 
-pub use engine::simulate;
+pub use engine::{simulate, simulate_with};
 pub use grid::GridFrame;
 pub use heightmap::HeightMap;
+pub use map::{MapPoint, PartMap, map_part};
 
 /// Which surface model imprints the tool.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,6 +98,17 @@ pub enum GridSpec {
         /// Upper y, mm.
         y1_mm: f64,
     },
+    /// A patch centred on `frame.origin` in the plane of `frame.u` (columns, `length_mm`)
+    /// and `frame.v` (rows, `width_mm`), heights along `frame.w` (the surface normal there)
+    /// and then along the local surface normals.
+    Oriented {
+        /// The patch frame (origin on the surface, w its normal).
+        frame: GridFrame,
+        /// Extent along u, mm.
+        length_mm: f64,
+        /// Extent along v, mm.
+        width_mm: f64,
+    },
     /// A patch on the tangent plane at the contact point nearest arc length `s_mm`, centred
     /// there: `length_mm` along the feed f (columns), `width_mm` along g = n × f (rows);
     /// heights along the local surface normals.
@@ -106,6 +120,18 @@ pub enum GridSpec {
         /// Extent along g, mm.
         width_mm: f64,
     },
+}
+
+/// What heights are measured from.
+#[derive(Debug, Clone, Copy, Default)]
+pub enum Reference<'a> {
+    /// The surface through the samples' contact points and normals (a window without
+    /// contact data measures from z = 0).
+    #[default]
+    Contacts,
+    /// The design surface of the part: heights along its normal, 0 on the surface, positive
+    /// where material is left, negative where the tool gouged.
+    Part(&'a crate::part::Part),
 }
 
 /// Options of a simulation.
@@ -156,9 +182,27 @@ pub struct Simulation {
     pub strips: usize,
     /// Tiles recomputed with a wider band.
     pub tiles_widened: usize,
-    /// True when the nominal surface came from contact data; false when the samples carry
-    /// none and a window's heights are WCS z (nominal z = 0).
+    /// True when the nominal surface came from contact data or a part; false when the
+    /// samples carry none and a window's heights are WCS z (nominal z = 0).
     pub nominal_from_contacts: bool,
+    /// The reference surface over the grid (for [`Simulation::node_point`]).
+    pub(crate) nominal: grid::Nominal,
+}
+
+impl Simulation {
+    /// The reference-surface point under node (`i` column, `j` row) and the surface's unit
+    /// normal there, in the WCS.
+    pub fn node_point(&self, i: usize, j: usize) -> (crate::math::Point3, crate::math::Vec3) {
+        let f = &self.frame;
+        let d = self.map.dx_um * 1e-3;
+        let (q, gu, gv) = self.nominal.q_grad(i, j);
+        let p = f.origin
+            + f.u * (self.map.x0_mm + i as f64 * d)
+            + f.v * (self.map.y0_mm + j as f64 * d)
+            + f.w * q;
+        let n = (f.w - f.u * gu - f.v * gv).normalize();
+        (p, n)
+    }
 }
 
 /// Why a simulation cannot run.
@@ -181,6 +225,9 @@ pub enum SurfaceError {
     /// A patch needs contact points and normals.
     #[error("a patch needs contact data (CC points and normals) in the path")]
     NoContactData,
+    /// The part has no surface facing the tool under the grid.
+    #[error("the part has no surface facing the tool under the grid")]
+    NoPartSurface,
     /// A sample holds a non-finite number.
     #[error("sample {0} has a non-finite position, axis or angle")]
     BadSample(usize),
