@@ -5,8 +5,9 @@
 //! The surface simulation needs the tool where each tooth actually is, not where the CAM
 //! system happened to put a posture, so the path is re-cut on its own clock:
 //!
-//! * **Geometry.** Each cutting run ([`Toolpath::cutting_runs`]) is walked move by move:
-//!   straight lines, arcs ([`crate::toolpath::ArcMove`], clockwise about their axis, extra
+//! * **Geometry.** Each cutting run
+//!   ([`Toolpath::cutting_runs`](crate::toolpath::Toolpath::cutting_runs)) is walked move
+//!   by move: straight lines, arcs ([`crate::toolpath::ArcMove`], clockwise about their axis, extra
 //!   turns, helical when the end is higher along the axis) or, with [`Options::spline`],
 //!   cubic Hermite curves through the postures. The tool axis, CC point and normal are
 //!   interpolated with the move's parameter u (axis and normal by slerp or nlerp,

@@ -21,9 +21,10 @@ pub enum SpindleSource {
 /// SPINDL met in a cutting run.
 ///
 /// V_ref is a maximum over the whole path, so a streaming caller that does not know the
-/// spindle speed beforehand either scans the path first or lets [`Resampler`] resolve it
-/// from the postures seen so far and compares with this scan at the end
-/// (`crest resample` does the latter and resamples again in the rare case they differ).
+/// spindle speed beforehand either scans the path first or lets
+/// [`Resampler`](super::Resampler) resolve it from the postures seen so far and compares
+/// with this scan at the end (`crest resample` does the latter and resamples again in the
+/// rare case they differ).
 #[derive(Debug, Clone, Default)]
 pub struct SpindleScan {
     index: usize,
