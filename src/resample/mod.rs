@@ -5,8 +5,9 @@
 //! The surface simulation needs the tool where each tooth actually is, not where the CAM
 //! system happened to put a posture, so the path is re-cut on its own clock:
 //!
-//! * **Geometry.** Each cutting run ([`Toolpath::cutting_runs`]) is walked move by move:
-//!   straight lines, arcs ([`crate::toolpath::ArcMove`], clockwise about their axis, extra
+//! * **Geometry.** Each cutting run
+//!   ([`Toolpath::cutting_runs`](crate::toolpath::Toolpath::cutting_runs)) is walked move
+//!   by move: straight lines, arcs ([`crate::toolpath::ArcMove`], clockwise about their axis, extra
 //!   turns, helical when the end is higher along the axis) or, with [`Options::spline`],
 //!   cubic Hermite curves through the postures. The tool axis, CC point and normal are
 //!   interpolated with the move's parameter u (axis and normal by slerp or nlerp,
@@ -58,9 +59,13 @@
 //! ```
 
 mod curve;
-mod engine;
+mod sphere;
+mod spindle;
+mod stream;
+mod walker;
 
-pub use engine::{Resampler, SpindleScan, SpindleSource, Stats, resample, resample_with};
+pub use spindle::{SpindleScan, SpindleSource};
+pub use stream::{Resampler, resample, resample_with};
 
 use crate::math::{Point3, Vec3};
 use thiserror::Error;
@@ -206,6 +211,58 @@ impl Options {
             }
         }
     }
+}
+
+/// Counts of a resampling: samples, runs, and every degenerate case met.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Samples delivered to the sink.
+    pub samples: u64,
+    /// Cutting runs that produced samples.
+    pub runs: usize,
+    /// Cutting moves walked (including zero-length ones).
+    pub moves: u64,
+    /// Cutting arc length, mm.
+    pub length_mm: f64,
+    /// Cutting time, s.
+    pub duration_s: f64,
+    /// Spindle speed used, rpm (`None` when the path has no cutting move).
+    pub spindle_rpm: Option<f64>,
+    /// Where the spindle speed came from.
+    pub spindle_source: Option<SpindleSource>,
+    /// Lowest feed at a sample, mm/min.
+    pub feed_min_mm_min: Option<f64>,
+    /// Highest feed at a sample, mm/min.
+    pub feed_max_mm_min: Option<f64>,
+    /// Lowest local feed per tooth V/(Z·n) at a sample, mm.
+    pub fz_min_mm: Option<f64>,
+    /// Highest local feed per tooth V/(Z·n) at a sample, mm.
+    pub fz_max_mm: Option<f64>,
+    /// Arc moves.
+    pub arcs: u64,
+    /// Moves whose feed changes along the move (linear in time, model.md §5.3).
+    pub variable_feed_moves: u64,
+    /// Cutting moves shorter than 1e-12 mm (skipped; an axis change there is lost).
+    pub zero_length_moves: u64,
+    /// Cutting runs of zero total length (no samples).
+    pub zero_length_runs: u64,
+    /// Arcs with a zero axis or an end on the axis, walked as straight lines.
+    pub degenerate_arcs: u64,
+    /// Moves whose tool axis turns by 180° (the great circle is not unique).
+    pub axis_flips: u64,
+    /// Moves whose surface normal turns by 180°.
+    pub normal_flips: u64,
+    /// Samples where the path tangent is parallel to the surface normal (f taken from
+    /// g = n × axis, or the previous f).
+    pub normal_parallel_to_feed: u64,
+    /// Samples without contact data where the tangent is parallel to the tool axis.
+    pub feed_parallel_to_axis: u64,
+    /// Moves with contact data at one end only (no CC point or normal on their samples).
+    pub partial_contact_moves: u64,
+    /// Moves that are not cutting moves (rapids, cycles, …), skipped.
+    pub non_cutting_moves: u64,
+    /// Maximal stretches of non-cutting moves, skipped; resampling restarts after them.
+    pub non_cutting_runs: u64,
 }
 
 /// Why a path could not be resampled.

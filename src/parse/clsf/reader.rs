@@ -1,0 +1,285 @@
+//! The streaming CLSF reader: physical lines joined into logical records (`$`
+//! continuations, `$$` comments), parsed one at a time, with line and column.
+
+use super::grammar::{Span, fast_numbers, parse_record};
+use super::record::{MAX_NUMBERS, Record, RecordKind};
+use crate::parse::error::{ParseError, describe_found};
+use std::io::BufRead;
+
+/// One physical line that went into a logical record: where it starts in the joined text.
+#[derive(Debug, Clone, Copy)]
+struct Piece {
+    offset: usize,
+    line: u32,
+    /// Byte offset in the physical line of the piece's first byte.
+    column_base: usize,
+}
+
+/// Streams [`Record`]s out of CLSF text, one logical line at a time.
+pub struct ClsfReader<R> {
+    src: R,
+    buf: Vec<u8>,
+    line: u32,
+    joined: String,
+    pieces: Vec<Piece>,
+    /// Physical lines of the current joined record (for error frames).
+    joined_lines: Vec<String>,
+    done: bool,
+}
+
+impl<R: BufRead> ClsfReader<R> {
+    /// Read from `src` (wrap files in a `BufReader`).
+    pub fn new(src: R) -> Self {
+        ClsfReader {
+            src,
+            buf: Vec::with_capacity(256),
+            line: 0,
+            joined: String::new(),
+            pieces: Vec::new(),
+            joined_lines: Vec::new(),
+            done: false,
+        }
+    }
+
+    /// Number of physical lines read so far.
+    pub fn lines_read(&self) -> u32 {
+        self.line
+    }
+
+    fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
+        loop {
+            self.buf.clear();
+            let n = self.src.read_until(b'\n', &mut self.buf)?;
+            if n == 0 {
+                self.done = true;
+                if self.joined.is_empty() {
+                    return Ok(None);
+                }
+                // A `$` on the last line: parse what was joined.
+                return self.parse_joined().map(Some);
+            }
+            self.line = self.line.saturating_add(1);
+            let mut end = self.buf.len();
+            if end > 0 && self.buf[end - 1] == b'\n' {
+                end -= 1;
+            }
+            if end > 0 && self.buf[end - 1] == b'\r' {
+                end -= 1;
+            }
+            let text = match std::str::from_utf8(&self.buf[..end]) {
+                Ok(t) => t,
+                Err(e) => {
+                    let good = &self.buf[..e.valid_up_to()];
+                    let good = String::from_utf8_lossy(good).into_owned();
+                    let column = good.chars().count() as u32 + 1;
+                    let shown = String::from_utf8_lossy(&self.buf[..end]).into_owned();
+                    return Err(ParseError::at(
+                        self.line,
+                        column,
+                        "ASCII or UTF-8 text",
+                        format!("byte 0x{:02X}", self.buf[e.valid_up_to()]),
+                        &shown,
+                    ));
+                }
+            };
+            let trimmed = text.trim_end_matches([' ', '\t']);
+            let lead = trimmed.len() - trimmed.trim_start_matches([' ', '\t']).len();
+            let body = &trimmed[lead..];
+            if self.joined.is_empty() {
+                if body.is_empty() {
+                    continue;
+                }
+                if body.starts_with("$$") {
+                    return parse_physical(body, self.line, lead, text).map(Some);
+                }
+            }
+            // Drop a trailing `$$` comment, then look for a `$` continuation mark.
+            let code = if body.find('$').is_none() {
+                body
+            } else {
+                match body.find("$$") {
+                    Some(k) => body[..k].trim_end_matches([' ', '\t']),
+                    None => body,
+                }
+            };
+            if let Some(stripped) = code.strip_suffix('$') {
+                if self.joined.is_empty() {
+                    self.joined_lines.clear();
+                }
+                self.pieces.push(Piece {
+                    offset: self.joined.len(),
+                    line: self.line,
+                    column_base: lead,
+                });
+                self.joined.push_str(stripped);
+                // A continued line's end acts as a blank between arguments.
+                self.joined_lines.push(text.to_string());
+                continue;
+            }
+            if self.joined.is_empty() {
+                if code.is_empty() {
+                    continue;
+                }
+                return parse_physical(code, self.line, lead, text).map(Some);
+            }
+            self.pieces.push(Piece {
+                offset: self.joined.len(),
+                line: self.line,
+                column_base: lead,
+            });
+            self.joined.push_str(code);
+            self.joined_lines.push(text.to_string());
+            return self.parse_joined().map(Some);
+        }
+    }
+
+    fn parse_joined(&mut self) -> Result<Record, ParseError> {
+        let joined = std::mem::take(&mut self.joined);
+        let pieces = std::mem::take(&mut self.pieces);
+        let lines = std::mem::take(&mut self.joined_lines);
+        let locate = |offset: usize| -> (u32, u32, &str) {
+            let k = pieces.iter().rposition(|p| p.offset <= offset).unwrap_or(0);
+            let p = pieces.get(k).copied().unwrap_or(Piece {
+                offset: 0,
+                line: self.line,
+                column_base: 0,
+            });
+            let line_text = lines.get(k).map(String::as_str).unwrap_or("");
+            let in_piece = offset - p.offset;
+            let byte_col = p.column_base + in_piece;
+            let col = line_text
+                .get(..byte_col.min(line_text.len()))
+                .map(|s| s.chars().count())
+                .unwrap_or(byte_col) as u32
+                + 1;
+            (p.line, col, line_text)
+        };
+        let span = Span::new(joined.as_str());
+        let start = joined.len() - joined.trim_start_matches([' ', '\t']).len();
+        match parse_record(span) {
+            Ok((_, kind)) => {
+                let (line, column, _) = locate(start);
+                Ok(Record { kind, line, column })
+            }
+            Err(nom::Err::Error(e) | nom::Err::Failure(e)) => {
+                let (line, column, text) = locate(e.at.location_offset());
+                let found = e.found.unwrap_or_else(|| describe_found(e.at.fragment()));
+                Err(ParseError::at(line, column, e.expected, found, text))
+            }
+            Err(nom::Err::Incomplete(_)) => {
+                let (line, column, text) = locate(joined.len());
+                Err(ParseError::at(
+                    line,
+                    column,
+                    "more input",
+                    "end of line",
+                    text,
+                ))
+            }
+        }
+    }
+}
+
+/// Parse one record that sits on a single physical line. `lead` = byte offset of `code`
+/// in `full` (the whole physical line, for columns and the code frame).
+fn parse_physical(code: &str, line: u32, lead: usize, full: &str) -> Result<Record, ParseError> {
+    // Fast path for the bulk of a file: `GOTO/` with bare-comma numbers. Anything
+    // unusual (blanks, lower case, errors) goes through the grammar below.
+    if let Some(rest) = code.strip_prefix("GOTO/")
+        && let Some((n, used)) = fast_numbers(rest.as_bytes(), MAX_NUMBERS, false)
+        && used == rest.len()
+        && matches!(n.len(), 3 | 6 | 9 | 12)
+    {
+        return Ok(Record {
+            kind: RecordKind::Goto(n),
+            line,
+            column: lead as u32 + 1,
+        });
+    }
+    let column_of = |byte: usize| -> u32 {
+        let byte = lead + byte;
+        full.get(..byte.min(full.len()))
+            .map(|s| s.chars().count())
+            .unwrap_or(byte) as u32
+            + 1
+    };
+    match parse_record(Span::new(code)) {
+        Ok((_, kind)) => Ok(Record {
+            kind,
+            line,
+            column: column_of(0),
+        }),
+        Err(nom::Err::Error(e) | nom::Err::Failure(e)) => {
+            let found = e.found.unwrap_or_else(|| describe_found(e.at.fragment()));
+            Err(ParseError::at(
+                line,
+                column_of(e.at.location_offset()),
+                e.expected,
+                found,
+                full,
+            ))
+        }
+        Err(nom::Err::Incomplete(_)) => Err(ParseError::at(
+            line,
+            column_of(code.len()),
+            "more input",
+            "end of line",
+            full,
+        )),
+    }
+}
+
+/// Parse one physical line (no continuation) as a record; `line` is its 1-based number.
+/// Blank lines are an error ("a record word").
+pub fn parse_line(text: &str, line: u32) -> Result<Record, ParseError> {
+    let text = text.trim_end_matches(['\r', '\n']);
+    let trimmed = text.trim_end_matches([' ', '\t']);
+    let lead = trimmed.len() - trimmed.trim_start_matches([' ', '\t']).len();
+    parse_physical(&trimmed[lead..], line, lead, text)
+}
+
+impl<R: BufRead> Iterator for ClsfReader<R> {
+    type Item = Result<Record, ParseError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        match self.next_record() {
+            Ok(Some(r)) => Some(Ok(r)),
+            Ok(None) => None,
+            Err(e) => {
+                // After an error the stream ends: the caller reports it.
+                self.done = true;
+                Some(Err(e))
+            }
+        }
+    }
+}
+
+/// Parse a whole CLSF text into records (convenience for tests and small inputs).
+pub fn parse_str(text: &str) -> Result<Vec<Record>, ParseError> {
+    ClsfReader::new(text.as_bytes()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::err;
+    use super::super::record::Numbers;
+    use super::*;
+
+    #[test]
+    fn continuation_comments_and_line_endings() {
+        let v = parse_str("GOTO/1,$\r\n  2,3 $$ note\r\n\r\nRAPID  \r\nGOTO/4,5,6$$x\n").unwrap();
+        assert_eq!(v.len(), 3);
+        assert!(matches!(&v[0].kind, RecordKind::Goto(n) if n.as_slice() == [1.0, 2.0, 3.0]));
+        assert_eq!((v[1].line, v[1].column), (4, 1));
+        assert_eq!(
+            v[2].kind,
+            RecordKind::Goto(Numbers::from_slice(&[4.0, 5.0, 6.0]).unwrap())
+        );
+        // An error on a continued line points at that line.
+        let (line, col, _, found) = err("GOTO/1,$\n  2,x\n");
+        assert_eq!((line, col, found.as_str()), (2, 5, "`x`"));
+    }
+}

@@ -1,0 +1,221 @@
+//! The CLSF records: what one logical record says (syntax only) and where it starts.
+
+use std::fmt;
+
+/// At most this many numbers in one fixed-size record (a GOTO with contact data).
+pub const MAX_NUMBERS: usize = 12;
+
+/// A short list of numbers stored inline (no allocation): GOTO, FROM, GOHOME, CONTACT,
+/// CIRCLE and CNTRL arguments.
+#[derive(Clone, Copy, PartialEq)]
+pub struct Numbers {
+    pub(super) values: [f64; MAX_NUMBERS],
+    pub(super) len: u8,
+}
+
+impl Numbers {
+    /// Copy up to [`MAX_NUMBERS`] values; `None` when there are more.
+    pub fn from_slice(values: &[f64]) -> Option<Numbers> {
+        if values.len() > MAX_NUMBERS {
+            return None;
+        }
+        let mut n = Numbers {
+            values: [0.0; MAX_NUMBERS],
+            len: values.len() as u8,
+        };
+        n.values[..values.len()].copy_from_slice(values);
+        Some(n)
+    }
+
+    /// The values.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len as usize]
+    }
+
+    /// Number of values.
+    pub fn len(&self) -> usize {
+        self.len as usize
+    }
+
+    /// True when there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Three values starting at `k` (caller checks the length).
+    pub fn triple(&self, k: usize) -> [f64; 3] {
+        [self.values[k], self.values[k + 1], self.values[k + 2]]
+    }
+}
+
+impl fmt::Debug for Numbers {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+/// A generic argument: a number or a word/name as written.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Arg {
+    /// A number.
+    Num(f64),
+    /// Anything else, trimmed (words are kept as written; compare case-insensitively).
+    Word(String),
+}
+
+impl Arg {
+    /// True when this is a word equal to `w` ignoring ASCII case.
+    pub fn is_word(&self, w: &str) -> bool {
+        matches!(self, Arg::Word(s) if s.eq_ignore_ascii_case(w))
+    }
+}
+
+/// Feed-rate unit word of `FEDRAT`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeedUnit {
+    /// mm per minute.
+    Mmpm,
+    /// inch per minute.
+    Ipm,
+    /// mm per revolution.
+    Mmpr,
+    /// inch per revolution.
+    Ipr,
+    /// per minute in the file's length unit.
+    Permin,
+    /// per revolution in the file's length unit.
+    Perrev,
+}
+
+impl FeedUnit {
+    pub(super) fn from_word(w: &str) -> Option<FeedUnit> {
+        Some(match w.to_ascii_uppercase().as_str() {
+            "MMPM" => FeedUnit::Mmpm,
+            "IPM" => FeedUnit::Ipm,
+            "MMPR" => FeedUnit::Mmpr,
+            "IPR" => FeedUnit::Ipr,
+            "PERMIN" => FeedUnit::Permin,
+            "PERREV" => FeedUnit::Perrev,
+            _ => return None,
+        })
+    }
+
+    /// The word as written in CLSF.
+    pub fn word(self) -> &'static str {
+        match self {
+            FeedUnit::Mmpm => "MMPM",
+            FeedUnit::Ipm => "IPM",
+            FeedUnit::Mmpr => "MMPR",
+            FeedUnit::Ipr => "IPR",
+            FeedUnit::Permin => "PERMIN",
+            FeedUnit::Perrev => "PERREV",
+        }
+    }
+}
+
+/// Length unit of `UNITS`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LengthUnit {
+    /// Millimetres.
+    Mm,
+    /// Inches (`INCH` or `INCHES`).
+    Inch,
+}
+
+/// One logical CLSF record (syntax only).
+#[derive(Debug, Clone, PartialEq)]
+pub enum RecordKind {
+    /// `TOOL PATH/<op>,TOOL,<tool>[,…]`.
+    ToolPath {
+        /// Operation name.
+        name: String,
+        /// Tool name (empty when the record has no `TOOL,<name>` part).
+        tool: String,
+    },
+    /// `TLDATA/<kind>[,<subtype word>],args…`.
+    Tldata {
+        /// Tool kind word, upper case (`MILL`, `DRILL`, `TURN`, …).
+        kind: String,
+        /// Word after the kind (`TLDATA/DRILL,MILL,…`), upper case.
+        subtype: Option<String>,
+        /// The remaining arguments.
+        args: Vec<Arg>,
+    },
+    /// `MSYS/ox,oy,oz,xi,xj,xk,yi,yj,yk`.
+    Msys([f64; 9]),
+    /// A whole-line `$$` comment (text after `$$`, trimmed).
+    Comment(String),
+    /// Contact data for the GOTO before it: `CONTACT/x,y,z[,nx,ny,nz]` or the same after
+    /// `$$ ` (3 or 6 numbers).
+    Contact(Numbers),
+    /// `PAINT/<word>,args…`.
+    Paint(Vec<Arg>),
+    /// `FEDRAT/[unit,]value` (also `FEDRAT/value,unit`).
+    Fedrat {
+        /// Unit word, if written.
+        unit: Option<FeedUnit>,
+        /// Feed value as written.
+        value: f64,
+    },
+    /// `RAPID`: the next GOTO only is a rapid move.
+    Rapid,
+    /// `GOTO/x,y,z[,i,j,k[,cx,cy,cz[,nx,ny,nz]]]` (3, 6, 9 or 12 numbers).
+    Goto(Numbers),
+    /// `FROM/x,y,z[,i,j,k]`.
+    From(Numbers),
+    /// `GOHOME/x,y,z[,i,j,k]`.
+    GoHome(Numbers),
+    /// `CIRCLE/xc,yc,zc,ai,aj,ak,r[,tol,intol,toolD,toolR][,TIMES,n]` (7 to 11 numbers).
+    Circle {
+        /// The numbers as written.
+        numbers: Numbers,
+        /// `TIMES,n`, if written.
+        times: Option<u32>,
+    },
+    /// `NURBS/` (arguments, if any, are ignored).
+    Nurbs,
+    /// `KNOT/k1,…`.
+    Knot(Vec<f64>),
+    /// `CNTRL/x,y,z`.
+    Cntrl([f64; 3]),
+    /// `LOAD/TOOL,n[,…]`.
+    LoadTool {
+        /// Tool number.
+        number: f64,
+        /// Further arguments (`ADJUST,n`, …).
+        args: Vec<Arg>,
+    },
+    /// `SELECT/TOOL,n[,…]`.
+    SelectTool {
+        /// Tool number.
+        number: f64,
+    },
+    /// `SPINDL/…`: arguments as written.
+    Spindl(Vec<Arg>),
+    /// `CUTCOM/LEFT|RIGHT|ON|OFF[,…]`.
+    Cutcom(Vec<Arg>),
+    /// `CYCLE/<kind>[,…]` or `CYCLE/OFF`.
+    Cycle(Vec<Arg>),
+    /// `UNITS/MM|INCH|INCHES`.
+    Units(LengthUnit),
+    /// `END-OF-PATH`.
+    EndOfPath,
+    /// Any other record, kept raw.
+    Unknown {
+        /// Major word, upper case.
+        word: String,
+        /// The whole logical record text.
+        text: String,
+    },
+}
+
+/// A record with the position of its first character.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// What the record says.
+    pub kind: RecordKind,
+    /// 1-based line of the record's first character.
+    pub line: u32,
+    /// 1-based column of the record's first character.
+    pub column: u32,
+}
