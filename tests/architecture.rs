@@ -26,7 +26,7 @@ const STAGES: [&str; 16] = [
 ];
 
 /// Stages that may run rayon (fixed chunking: results identical for any thread count).
-const RAYON: [&str; 3] = ["kinematics", "surface", "study"];
+const RAYON: [&str; 4] = ["part", "kinematics", "surface", "study"];
 
 /// Stages that may touch files or the terminal.
 const FILES: [&str; 3] = ["io", "plot", "report"];

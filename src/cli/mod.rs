@@ -13,6 +13,7 @@ macro_rules! outln {
     };
 }
 
+mod contact;
 mod convert;
 mod demo;
 mod feed;
@@ -44,6 +45,8 @@ enum Command {
     Inspect(inspect::Args),
     /// Convert CLSF to contact12 CSV, or contact12 to CLSF with contact data.
     Convert(convert::Args),
+    /// Contact points and normals of a centre-line path, from the part (or the path).
+    Contact(contact::Args),
     /// Resample a path to even feed per tooth or a constant spindle step.
     Resample(resample::Args),
     /// Cutter analysis: effective radius, crest height, participating teeth.
@@ -136,6 +139,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Demo(a) => demo::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
+        Command::Contact(a) => contact::run(a),
         Command::Resample(a) => resample::run(a),
         Command::Tool(a) => tool::run(a),
         Command::Runout(a) => runout::run(a),

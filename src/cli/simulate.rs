@@ -110,7 +110,12 @@ pub struct Args {
     pub patch_at: Option<f64>,
     /// A patch centred at the part point nearest X,Y,Z (the design surface of --part, or the
     /// surface derived from the path), along the local feed and across it.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, requires = "patch_mm")]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true,
+        requires = "patch_mm"
+    )]
     pub patch_near: Option<String>,
     /// Patch size, mm: L (along the feed), W (across).
     #[arg(long, value_name = "L,W")]
@@ -120,7 +125,12 @@ pub struct Args {
     #[arg(long, value_name = "SPACING")]
     pub map_mm: Option<f64>,
     /// The region of the part to map, mm: X0,Y0,Z0,X1,Y1,Z1.
-    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true, requires = "map_mm")]
+    #[arg(
+        long,
+        value_name = "X0,Y0,Z0,X1,Y1,Z1",
+        allow_hyphen_values = true,
+        requires = "map_mm"
+    )]
     pub region: Option<String>,
     /// Depth of cut ap, mm (overrides process.toml; default 0.5): nodes that would be cut
     /// higher than this above the nominal surface are reported as not reached.
@@ -217,7 +227,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         return Err(miette!(
             "{}: unknown output extension (expected {})",
             args.output.display(),
-            if map { ".ply for a part map" } else { ".csv, .gsf or .sdf" }
+            if map {
+                ".ply for a part map"
+            } else {
+                ".csv, .gsf or .sdf"
+            }
         ));
     }
     let req = SimulateRequest {
@@ -266,9 +280,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             sim.map.z_um.clone()
         }
         Output::Map(m) => {
-            crest::io::write_atomic(&args.output, |w| crest::io::mesh::write_map_ply(&m.points, w))
-                .into_diagnostic()
-                .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
+            crest::io::write_atomic(&args.output, |w| {
+                crest::io::mesh::write_map_ply(&m.points, w)
+            })
+            .into_diagnostic()
+            .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
             m.points.iter().map(|p| p.height_um).collect()
         }
     };
@@ -290,7 +306,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     } else {
         let nan = f64::NAN;
         let shape = match &run.output {
-            Output::Grid(sim) => format!("{} × {} nodes at {} µm", sim.map.nx, sim.map.ny, args.grid_um),
+            Output::Grid(sim) => format!(
+                "{} × {} nodes at {} µm",
+                sim.map.nx, sim.map.ny, args.grid_um
+            ),
             Output::Map(m) => format!("{} part points in {} cells", m.points.len(), m.tiles),
         };
         outln!(
@@ -371,7 +390,11 @@ fn summary(
             let m = &sim.map;
             let f = &sim.frame;
             let origin = f.origin + f.u * m.x0_mm + f.v * m.y0_mm;
-            j["grid"] = serde_json::json!(if args.window.is_some() { "window" } else { "patch" });
+            j["grid"] = serde_json::json!(if args.window.is_some() {
+                "window"
+            } else {
+                "patch"
+            });
             j["nx"] = m.nx.into();
             j["ny"] = m.ny.into();
             j["dx_um"] = num(m.dx_um);

@@ -19,15 +19,27 @@ pub enum SurfaceKind {
     /// Camber waves and twist: z = sin(2πx/40) + 0.5 sin(2πy/30) + 0.002·x·y mm
     /// (default field 40 × 20 mm).
     BladePatch,
+    /// A convex cylinder about the x axis, top line on z = 0 (radius --surface-radius-mm,
+    /// default 20; default field 10 × 6 mm).
+    ConvexCylinder,
+    /// A concave cylinder (a trough) about the x axis, bottom line on z = 0 (radius
+    /// --surface-radius-mm, default 20; default field 10 × 6 mm).
+    ConcaveCylinder,
+    /// A convex sphere, top on the origin (radius --surface-radius-mm, default 20; default
+    /// field 6 × 6 mm).
+    Sphere,
 }
 
 impl SurfaceKind {
-    fn surface(self) -> Surface {
+    fn surface(self, radius_mm: f64) -> Surface {
         match self {
             SurfaceKind::Plane => Surface::Plane,
             SurfaceKind::ExtrudedParabola => Surface::paper_parabola(),
             SurfaceKind::HyperbolicParaboloid => Surface::paper_hyperbolic_paraboloid(),
             SurfaceKind::BladePatch => Surface::default_blade(),
+            SurfaceKind::ConvexCylinder => Surface::ConvexCylinder { radius_mm },
+            SurfaceKind::ConcaveCylinder => Surface::ConcaveCylinder { radius_mm },
+            SurfaceKind::Sphere => Surface::Sphere { radius_mm },
         }
     }
 
@@ -37,6 +49,8 @@ impl SurfaceKind {
             SurfaceKind::ExtrudedParabola => (10.0, 10.0),
             SurfaceKind::HyperbolicParaboloid => (40.0, 40.0),
             SurfaceKind::BladePatch => (40.0, 20.0),
+            SurfaceKind::ConvexCylinder | SurfaceKind::ConcaveCylinder => (10.0, 6.0),
+            SurfaceKind::Sphere => (6.0, 6.0),
         }
     }
 }
@@ -62,6 +76,24 @@ pub struct Args {
     /// Lead β in the feed direction, degrees (the same as --tilt-deg β --yaw-deg 0).
     #[arg(long, value_name = "DEG", allow_negative_numbers = true, conflicts_with_all = ["tilt_deg", "yaw_deg"])]
     pub lead_deg: Option<f64>,
+    /// One fixed tool axis for the whole path, I,J,K (a 3-axis path: 0,0,1), instead of an
+    /// axis set from the surface normal.
+    #[arg(long, value_name = "I,J,K", allow_hyphen_values = true, conflicts_with_all = ["tilt_deg", "yaw_deg", "lead_deg"])]
+    pub axis: Option<String>,
+    /// Radius of the cylinders and the sphere, mm.
+    #[arg(long, value_name = "MM", default_value_t = 20.0)]
+    pub surface_radius_mm: f64,
+    /// Measure --stepover-mm along the surface across the passes (through the field's
+    /// centre) instead of between the drive planes.
+    #[arg(long, requires = "stepover_mm")]
+    pub stepover_along_surface: bool,
+    /// Also write the design surface of the field (and a margin of the tool radius + 1 mm)
+    /// as binary STL, for `crest simulate --part` and `crest contact --part`.
+    #[arg(long, value_name = "PART.STL")]
+    pub part_stl: Option<PathBuf>,
+    /// Chord tolerance of the STL facets, µm.
+    #[arg(long, value_name = "UM", default_value_t = 0.05, requires = "part_stl")]
+    pub part_tol_um: f64,
     /// Target scallop height, µm: the stepover comes from the exact swept envelope.
     #[arg(long, value_name = "UM")]
     pub scallop_um: Option<f64>,
@@ -141,11 +173,28 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             ));
         }
     };
-    let orientation = match args.lead_deg {
-        Some(lead) => Orientation::Lead {
+    let orientation = match (args.lead_deg, &args.axis) {
+        (Some(lead), _) => Orientation::Lead {
             lead_rad: lead.to_radians(),
         },
-        None => Orientation::TiltYaw {
+        (None, Some(a)) => {
+            let v: Vec<f64> = a
+                .split(',')
+                .map(|t| t.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| miette!("--axis wants three numbers I,J,K, got '{a}'"))?;
+            let axis = match v.as_slice() {
+                [i, j, k] => crest::math::Vec3::new(*i, *j, *k),
+                _ => return Err(miette!("--axis wants three numbers I,J,K, got '{a}'")),
+            };
+            let Some(axis) = crest::math::normalize_or_none(&axis, 1e-9)
+                .filter(|a| a.iter().all(|c| c.is_finite()))
+            else {
+                return Err(miette!("--axis {a} is not a direction"));
+            };
+            Orientation::Fixed { axis }
+        }
+        (None, None) => Orientation::TiltYaw {
             tilt_rad: args.tilt_deg.unwrap_or(0.0).to_radians(),
             yaw_rad: args.yaw_deg.unwrap_or(0.0).to_radians(),
         },
@@ -154,10 +203,24 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         (Some(h), _) => Step::Scallop {
             height_mm: h * 1e-3,
         },
+        (None, Some(s)) if args.stepover_along_surface => Step::SurfaceArc { spacing_mm: s },
         (None, Some(s)) => Step::Stepover { spacing_mm: s },
         (None, None) => return Err(miette!("give --scallop-um or --stepover-mm")),
     };
-    let mut spec = PathSpec::new(args.surface.surface(), cutter, orientation, step, size_mm);
+    if !(args.surface_radius_mm.is_finite() && args.surface_radius_mm > 0.0) {
+        return Err(miette!(
+            "--surface-radius-mm must be positive, got {}",
+            args.surface_radius_mm
+        ));
+    }
+    let margin = cutter.radius_mm + 1.0;
+    let mut spec = PathSpec::new(
+        args.surface.surface(args.surface_radius_mm),
+        cutter,
+        orientation,
+        step,
+        size_mm,
+    );
     spec.pass_angle_rad = args.pass_angle_deg.to_radians();
     spec.pattern = if args.zigzag {
         Pattern::Zigzag
@@ -170,6 +233,19 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     spec.feed_end_mm_min = args.feed_end_mm_min;
     spec.spindle_rpm = args.rpm;
     let synth = generate(&spec).map_err(|e| miette!("crest synth: {e}"))?;
+    let part = match &args.part_stl {
+        Some(_) => Some(
+            crest::synth::mesh::surface_mesh(
+                &spec.surface,
+                size_mm,
+                spec.pass_angle_rad,
+                margin,
+                args.part_tol_um * 1e-3,
+            )
+            .map_err(|e| miette!("crest synth --part-stl: {e}"))?,
+        ),
+        None => None,
+    };
 
     let program = &synth.program;
     let written = crest::io::write_atomic(&args.output, |w| match kind {
@@ -183,6 +259,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     written
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
+    if let (Some(path), Some(mesh)) = (&args.part_stl, &part) {
+        crest::io::write_atomic(path, |w| crest::io::mesh::write_stl(mesh, w))
+            .into_diagnostic()
+            .wrap_err_with(|| format!("cannot write {}", path.display()))?;
+    }
 
     let postures: usize = program.paths.iter().map(|p| p.postures.len()).sum();
     let (tilt_deg, yaw_deg) = match args.lead_deg {
@@ -210,6 +291,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "feed_mm_min": args.feed_mm_min,
             "feed_end_mm_min": args.feed_end_mm_min,
             "rpm": args.rpm,
+            "axis": args.axis,
+            "stepover_along_surface": args.stepover_along_surface,
+            "surface_radius_mm": spec.surface.radius_mm(),
+            "part_stl": args.part_stl.as_ref().map(|p| p.display().to_string()),
+            "part_triangles": part.as_ref().map(|m| m.triangles.len()),
         });
         outln!("{report}");
     } else {

@@ -108,6 +108,19 @@ pub fn touch(part: &Part, cutter: &Cutter, tip: &Point3, axis: &Vec3) -> Touch {
     }
 }
 
+/// [`touch`] for every pose given (tip, unit axis), in parallel; the order is kept.
+pub fn touch_all(
+    part: &Part,
+    cutter: &Cutter,
+    poses: &[Option<(Point3, Vec3)>],
+) -> Vec<Option<Touch>> {
+    use rayon::prelude::*;
+    poses
+        .par_iter()
+        .map(|p| p.map(|(tip, axis)| touch(part, cutter, &tip, &axis)))
+        .collect()
+}
+
 /// Golden-section minimum of `f` on [a, b].
 fn golden(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, iters: usize) -> f64 {
     let g = 0.5 * (5f64.sqrt() - 1.0);
@@ -254,9 +267,41 @@ fn quadric_normal<'a>(
     let (cxx, cxy, cyy) = (sxx / sw - mx * mx, sxy / sw - mx * my, syy / sw - my * my);
     let det = cxx * cyy - cxy * cxy;
     let tr = cxx + cyy;
-    // Smaller principal spread at least 2 % of the larger (in length): not a single line.
-    if !(tr > 0.0) || det < (0.02f64.powi(2)) * tr * tr * 0.25 {
+    if !(tr > 0.0) {
         return None;
+    }
+    // Smaller principal spread under 2 % of the larger (in length): the points lie along a
+    // single pass. The surface is then taken level across the pass: the normal is the
+    // guess made perpendicular to the pass direction.
+    if det < (0.02f64.powi(2)) * tr * tr * 0.25 {
+        let half = 0.5 * (cxx - cyy);
+        let lambda = 0.5 * (cxx + cyy) + (half * half + cxy * cxy).sqrt();
+        let (tx, ty) = if cxy.abs() > 1e-300 {
+            (cxy, lambda - cxx)
+        } else if cxx >= cyy {
+            (1.0, 0.0)
+        } else {
+            (0.0, 1.0)
+        };
+        // The pass direction in 3-D from a line fit of w against the along-pass coordinate.
+        let len = (tx * tx + ty * ty).sqrt();
+        let (tx, ty) = (tx / len, ty / len);
+        let (mut sa, mut sb, mut saa) = (0.0, 0.0, 0.0);
+        for d in &local {
+            let a = d.x * tx + d.y * ty;
+            sa += a;
+            sb += d.z;
+            saa += a * a;
+        }
+        let m = local.len() as f64;
+        let slope = if saa * m - sa * sa > 1e-300 {
+            let sab: f64 = local.iter().map(|d| (d.x * tx + d.y * ty) * d.z).sum();
+            (m * sab - sa * sb) / (m * saa - sa * sa)
+        } else {
+            0.0
+        };
+        let t = (u * tx + v * ty + w * slope).normalize();
+        return normalize_or_none(&(w - t * t.dot(&w)), 1e-9);
     }
     let ridge = 1e-6 * ata.trace().max(1e-12);
     for i in 3..6 {
@@ -343,12 +388,26 @@ mod tests {
     }
 
     #[test]
-    fn a_lone_pass_has_no_derived_contact() {
+    fn a_lone_pass_is_taken_level_across() {
+        // One pass climbing at 10° along x: the normal is perpendicular to the pass, level
+        // across it.
         let c = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
+        let slope = 10f64.to_radians();
+        let n = Vec3::new(-slope.sin(), 0.0, slope.cos());
         let tips: Vec<(Point3, Vec3)> = (0..100)
-            .map(|i| (Point3::new(i as f64 * 0.05, 0.0, 0.0), Vec3::z()))
+            .map(|i| {
+                let cc = Point3::new(
+                    i as f64 * 0.05 * slope.cos(),
+                    0.0,
+                    i as f64 * 0.05 * slope.sin(),
+                );
+                (crate::synth::tool_tip(&c, &cc, &n, &Vec3::z()), Vec3::z())
+            })
             .collect();
-        assert!(derive(&c, &tips, 0.1).iter().all(|c| c.is_none()));
+        let got = derive(&c, &tips, 0.1);
+        let (cc, nn) = got[50].unwrap();
+        assert!(nn.angle(&n) < 1e-9, "{nn:?}");
+        assert!((cc - Point3::new(2.5 * slope.cos(), 0.0, 2.5 * slope.sin())).norm() < 1e-9);
     }
 
     #[test]

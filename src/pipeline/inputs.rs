@@ -126,8 +126,7 @@ pub fn resolve_cutter(
         ));
     };
     let r = 0.5 * t.diameter_mm;
-    if !(r.is_finite() && r > 0.0 && t.corner_radius_mm.is_finite() && t.corner_radius_mm >= 0.0)
-    {
+    if !(r.is_finite() && r > 0.0 && t.corner_radius_mm.is_finite() && t.corner_radius_mm >= 0.0) {
         return Err(miette::miette!(
             "{}: TLDATA gives diameter {} mm and corner radius {} mm, which describe no milling cutter: give --tool tool.toml",
             file.display(),
@@ -151,7 +150,9 @@ pub fn resolve_cutter(
     }
     let helix = helix_deg.unwrap_or(TLDATA_HELIX_DEG);
     if !(helix.is_finite() && helix.abs() < 89.0) {
-        return Err(miette::miette!("--helix-deg must lie within ±89°, got {helix}"));
+        return Err(miette::miette!(
+            "--helix-deg must lie within ±89°, got {helix}"
+        ));
     }
     let rc = t.corner_radius_mm.min(r);
     let (shape, name) = if (rc - r).abs() <= 1e-6 * r {
@@ -159,7 +160,12 @@ pub fn resolve_cutter(
     } else if rc <= 1e-9 {
         (Shape::Flat, "flat end")
     } else {
-        (Shape::Torus { corner_radius_mm: rc }, "bull nose")
+        (
+            Shape::Torus {
+                corner_radius_mm: rc,
+            },
+            "bull nose",
+        )
     };
     let cutter = Cutter::new(shape, r, teeth, helix.to_radians());
     let what = format!(
@@ -167,7 +173,11 @@ pub fn resolve_cutter(
         t.diameter_mm,
         rc,
         file.display(),
-        if helix_deg.is_none() { " (assumed; --helix-deg to change)" } else { "" }
+        if helix_deg.is_none() {
+            " (assumed; --helix-deg to change)"
+        } else {
+            ""
+        }
     );
     Ok((cutter, what, Vec::new()))
 }

@@ -6,6 +6,7 @@
 pub mod inputs;
 
 pub use inputs::{ToolFileError, load_machine, load_process, load_tool, tool_from_text};
+pub mod contact;
 pub mod design;
 pub mod report;
 pub mod runout;

@@ -5,11 +5,11 @@
 
 use crate::config::ProcessConfig;
 use crate::kinematics::Machine;
+use crate::math::{Frame, Point3, Vec3};
 use crate::resample::{self, Sample};
+use crate::surface::cull::{Reach, Subset};
 use crate::surface::{self, GridFrame, GridSpec, ModelKind, PartMap, Reference, Simulation};
 use crate::tool::Cutter;
-use crate::math::{Frame, Point3, Vec3};
-use crate::surface::cull::{Reach, Subset};
 use crate::toolpath::{Contact, LowerOptions, MotionKind, Posture, Program, Toolpath};
 use miette::miette;
 use std::path::{Path, PathBuf};
@@ -337,9 +337,7 @@ pub fn derive_contacts(program: &mut Program, cutter: &Cutter) -> usize {
         let idx: Vec<usize> = (0..path.postures.len())
             .filter(|&i| {
                 let p = &path.postures[i];
-                p.contact.is_none()
-                    && (p.motion == MotionKind::Cut
-                        || path.postures.get(i + 1).is_some_and(|q| q.motion == MotionKind::Cut))
+                p.contact.is_none() && p.motion == MotionKind::Cut
             })
             .collect();
         let poses: Vec<(Point3, Vec3)> = idx
@@ -611,7 +609,11 @@ pub fn simulate(
                 region: Some(r), ..
             } = req.grid
             {
-                if !(r.iter().all(|v| v.is_finite()) && r[3] >= r[0] && r[4] >= r[1] && r[5] >= r[2]) {
+                if !(r.iter().all(|v| v.is_finite())
+                    && r[3] >= r[0]
+                    && r[4] >= r[1]
+                    && r[5] >= r[2])
+                {
                     return Err(miette!(
                         "--region X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1"
                     ));
@@ -620,8 +622,10 @@ pub fn simulate(
             let tile = (256.0 * spacing_mm).clamp(1.0, 20.0).max(spacing_mm);
             sopts.spacing_mm = spacing_mm;
             let region = reach.map(|r| (r.lo, r.hi));
-            let m = surface::map_part(&samples, &cutter, &sopts, p, spacing_mm, tile, region, progress)
-                .map_err(|e| miette!("{file}: {e}"))?;
+            let m = surface::map_part(
+                &samples, &cutter, &sopts, p, spacing_mm, tile, region, progress,
+            )
+            .map_err(|e| miette!("{file}: {e}"))?;
             Output::Map(m)
         }
         GridRequest::PatchNear {

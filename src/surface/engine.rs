@@ -171,9 +171,7 @@ pub fn simulate_with(
     // Lattice of the nominal surface: every 32 nodes, at most 0.25 mm apart.
     let stride = ((0.25 / d).floor() as usize).clamp(1, NOMINAL_STRIDE);
     let contacts = match reference {
-        Reference::Contacts => {
-            grid_contacts(samples, &frame, uv_box, (0.5 * diag).max(2.0), 0.05)
-        }
+        Reference::Contacts => grid_contacts(samples, &frame, uv_box, (0.5 * diag).max(2.0), 0.05),
         Reference::Part(part) => {
             let c = part_contacts(part, &frame, uv_box, patch, 0.5 * stride as f64 * d);
             if c.is_empty() {

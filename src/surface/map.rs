@@ -51,7 +51,8 @@ pub fn map_part(
     region: Option<(Point3, Point3)>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PartMap, SurfaceError> {
-    if !(spacing_mm.is_finite() && spacing_mm > 0.0 && tile_mm.is_finite() && tile_mm >= spacing_mm) {
+    if !(spacing_mm.is_finite() && spacing_mm > 0.0 && tile_mm.is_finite() && tile_mm >= spacing_mm)
+    {
         return Err(SurfaceError::InvalidOption(format!(
             "map spacing {spacing_mm} mm and tile {tile_mm} mm must be positive, the tile at least the spacing"
         )));
@@ -99,8 +100,13 @@ pub fn map_part(
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            let j = ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f64 / (1u64 << 24) as f64;
-            [s.position.x + 1e-7 * j, s.position.y - 1e-7 * j, s.position.z + 0.5e-7 * j]
+            let j =
+                ((i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 40) as f64 / (1u64 << 24) as f64;
+            [
+                s.position.x + 1e-7 * j,
+                s.position.y - 1e-7 * j,
+                s.position.z + 0.5e-7 * j,
+            ]
         })
         .collect();
     let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&tips);
@@ -123,7 +129,12 @@ pub fn map_part(
         }
         let mut subset = Subset::default();
         let mut next = 0;
-        for (i, s) in samples.iter().enumerate().take(idx[idx.len() - 1] + 1).skip(idx[0]) {
+        for (i, s) in samples
+            .iter()
+            .enumerate()
+            .take(idx[idx.len() - 1] + 1)
+            .skip(idx[0])
+        {
             let keep = next < idx.len() && idx[next] == i;
             if keep {
                 next += 1;

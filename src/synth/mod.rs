@@ -34,6 +34,7 @@
 //! same.
 
 pub mod envelope;
+pub mod mesh;
 pub mod pass;
 mod surface;
 
@@ -86,6 +87,11 @@ pub enum Orientation {
         /// β, rad.
         lead_rad: f64,
     },
+    /// One tool axis for the whole path in the WCS (a 3-axis path: the axis is z).
+    Fixed {
+        /// Unit axis, WCS.
+        axis: Vec3,
+    },
 }
 
 impl Orientation {
@@ -94,6 +100,8 @@ impl Orientation {
         match *self {
             Orientation::TiltYaw { tilt_rad, yaw_rad } => axis_convention_a(tilt_rad, yaw_rad),
             Orientation::Lead { lead_rad } => axis_convention_a(lead_rad, 0.0),
+            // At a point whose normal is the axis (the field centre of a level surface).
+            Orientation::Fixed { .. } => Vec3::z(),
         }
     }
 }
@@ -109,6 +117,13 @@ pub enum Step {
     /// The drive-plane spacing, mm.
     Stepover {
         /// Spacing, mm.
+        spacing_mm: f64,
+    },
+    /// The distance between passes measured along the surface, across the passes through
+    /// the field's centre, mm (the contact points of neighbouring passes are this far apart
+    /// along the cross-section there).
+    SurfaceArc {
+        /// Spacing along the surface, mm.
         spacing_mm: f64,
     },
 }
@@ -285,6 +300,13 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
             spec.cutter.radius_mm
         )));
     }
+    if let Orientation::Fixed { axis } = spec.orientation {
+        if !(axis.iter().all(|c| c.is_finite()) && (axis.norm() - 1.0).abs() < 1e-6) {
+            return Err(SynthError::Invalid(format!(
+                "the fixed tool axis must be a unit vector, got {axis:?}"
+            )));
+        }
+    }
     let axis_fgn = spec.orientation.axis_fgn();
     if !axis_fgn.iter().all(|c| c.is_finite()) || axis_fgn.z <= 1e-9 {
         return Err(SynthError::Invalid(
@@ -300,9 +322,28 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         .collect();
     let r_eff = effective_radius_mm(&spec.cutter, &axis_fgn);
 
+    let mut pass_v: Option<Vec<f64>> = None;
     let (stepover, plane_step) = match spec.step {
         Step::Stepover { spacing_mm } => {
             check_positive("the stepover", spacing_mm)?;
+            (spacing_mm, None)
+        }
+        Step::SurfaceArc { spacing_mm } => {
+            check_positive("the stepover along the surface", spacing_mm)?;
+            if width / spacing_mm > 100_000.0 {
+                return Err(SynthError::Invalid(format!(
+                    "{:.0} passes of {spacing_mm} mm over {width} mm are too many",
+                    width / spacing_mm
+                )));
+            }
+            let n = (width / spacing_mm - 1e-9).ceil().max(0.0) as usize + 1;
+            let vs: Vec<f64> = (0..n)
+                .map(|k| {
+                    let a = (k as f64 - 0.5 * (n - 1) as f64) * spacing_mm;
+                    arc_to_v(&spec.surface, &du, &dv, a)
+                })
+                .collect();
+            pass_v = Some(vs);
             (spacing_mm, None)
         }
         Step::Scallop { height_mm } => {
@@ -317,7 +358,10 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
             width / stepover
         )));
     }
-    let passes = (width / stepover - 1e-9).ceil().max(0.0) as usize + 1;
+    let passes = pass_v.as_ref().map_or_else(
+        || (width / stepover - 1e-9).ceil().max(0.0) as usize + 1,
+        Vec::len,
+    );
 
     let mut postures = Vec::with_capacity(passes * (n_points + 2));
     let posture = |position: Point3, axis: Vec3, motion, contact, feed: f64| Posture {
@@ -331,7 +375,10 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         line: 0,
     };
     for k in 0..passes {
-        let v = (k as f64 - 0.5 * (passes - 1) as f64) * stepover;
+        let v = match &pass_v {
+            Some(vs) => vs[k],
+            None => (k as f64 - 0.5 * (passes - 1) as f64) * stepover,
+        };
         let reverse = spec.pattern == Pattern::Zigzag && k % 2 == 1;
         let sign = if reverse { -1.0 } else { 1.0 };
         let order: Box<dyn Iterator<Item = &f64>> = if reverse {
@@ -342,8 +389,20 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         let mut pass = Vec::with_capacity(n_points);
         for &u in order {
             let st = station(&spec.surface, u, v, &du, &dv, sign);
+            if !spec.surface.covers(st.cc.x, st.cc.y) {
+                return Err(SynthError::Invalid(format!(
+                    "the field reaches ({:.3}, {:.3}), beyond the {} (radius {} mm): choose a smaller --size-mm",
+                    st.cc.x,
+                    st.cc.y,
+                    spec.surface.name(),
+                    spec.surface.radius_mm().unwrap_or(f64::NAN)
+                )));
+            }
             let g = st.normal.cross(&st.feed);
-            let axis = (st.feed * axis_fgn.x + g * axis_fgn.y + st.normal * axis_fgn.z).normalize();
+            let axis = match spec.orientation {
+                Orientation::Fixed { axis } => axis,
+                _ => (st.feed * axis_fgn.x + g * axis_fgn.y + st.normal * axis_fgn.z).normalize(),
+            };
             let tip = tool_tip(&spec.cutter, &st.cc, &st.normal, &axis);
             pass.push((tip, axis, st));
         }
@@ -399,6 +458,41 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         r_eff_mm: r_eff,
         plane_step_mm: plane_step,
     })
+}
+
+/// The drive-plane coordinate v whose point on the cross-section through the field centre
+/// (u = 0) lies arc length `a` along the surface from v = 0 (negative `a` towards −v):
+/// Simpson's rule on √(1 + (dF/dv)²) and bisection.
+fn arc_to_v(surface: &Surface, du: &Vec3, dv: &Vec3, a: f64) -> f64 {
+    let _ = du;
+    let slope = |v: f64| {
+        let (fx, fy) = surface.gradient(dv.x * v, dv.y * v);
+        let d = fx * dv.x + fy * dv.y;
+        (1.0 + d * d).sqrt()
+    };
+    let arc = |v: f64| {
+        let n = 200;
+        let h = v / n as f64;
+        let mut sum = slope(0.0) + slope(v);
+        for i in 1..n {
+            sum += slope(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        sum * h / 3.0
+    };
+    if a == 0.0 {
+        return 0.0;
+    }
+    // The arc is at least |v|: search v in [0, a].
+    let (mut lo, mut hi) = if a > 0.0 { (0.0, a) } else { (a, 0.0) };
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if arc(mid) < a {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The drive-plane spacing that keeps the scallop at or below the target everywhere:

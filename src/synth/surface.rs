@@ -1,4 +1,5 @@
-//! The known surfaces synthetic paths are made for, all graphs z = F(x, y) in the WCS.
+//! The known surfaces synthetic paths are made for, all graphs z = F(x, y) in the WCS
+//! (cylinders and spheres over their upper or lower half, |y| (and |x|) < radius).
 
 use crate::math::Vec3;
 use std::f64::consts::TAU;
@@ -37,6 +38,23 @@ pub enum Surface {
         /// τ, 1/mm.
         twist_per_mm: f64,
     },
+    /// A convex cylinder of radius R about the x axis, top line on z = 0:
+    /// z = √(R² − y²) − R.
+    ConvexCylinder {
+        /// R, mm.
+        radius_mm: f64,
+    },
+    /// A concave cylinder (a trough) of radius R about the x axis, bottom line on z = 0:
+    /// z = R − √(R² − y²).
+    ConcaveCylinder {
+        /// R, mm.
+        radius_mm: f64,
+    },
+    /// A convex sphere of radius R, top on the origin: z = √(R² − x² − y²) − R.
+    Sphere {
+        /// R, mm.
+        radius_mm: f64,
+    },
 }
 
 impl Surface {
@@ -74,6 +92,31 @@ impl Surface {
             Surface::ExtrudedParabola { .. } => "extruded-parabola",
             Surface::HyperbolicParaboloid { .. } => "hyperbolic-paraboloid",
             Surface::BladePatch { .. } => "blade-patch",
+            Surface::ConvexCylinder { .. } => "convex-cylinder",
+            Surface::ConcaveCylinder { .. } => "concave-cylinder",
+            Surface::Sphere { .. } => "sphere",
+        }
+    }
+
+    /// The surface's radius when it is a cylinder or sphere, mm.
+    pub fn radius_mm(&self) -> Option<f64> {
+        match *self {
+            Surface::ConvexCylinder { radius_mm }
+            | Surface::ConcaveCylinder { radius_mm }
+            | Surface::Sphere { radius_mm } => Some(radius_mm),
+            _ => None,
+        }
+    }
+
+    /// Whether (x, y) lies where the graph is defined (inside a cylinder's or sphere's
+    /// radius, with a margin so that slopes stay finite).
+    pub fn covers(&self, x: f64, y: f64) -> bool {
+        match *self {
+            Surface::ConvexCylinder { radius_mm } | Surface::ConcaveCylinder { radius_mm } => {
+                y.abs() < 0.98 * radius_mm
+            }
+            Surface::Sphere { radius_mm } => x.hypot(y) < 0.98 * radius_mm,
+            _ => true,
         }
     }
 
@@ -94,6 +137,9 @@ impl Surface {
                     + amplitude_y_mm * (TAU * y / wavelength_y_mm).sin()
                     + twist_per_mm * x * y
             }
+            Surface::ConvexCylinder { radius_mm: r } => (r * r - y * y).sqrt() - r,
+            Surface::ConcaveCylinder { radius_mm: r } => r - (r * r - y * y).sqrt(),
+            Surface::Sphere { radius_mm: r } => (r * r - x * x - y * y).sqrt() - r,
         }
     }
 
@@ -116,6 +162,12 @@ impl Surface {
                     amplitude_x_mm * kx * (kx * x).cos() + twist_per_mm * y,
                     amplitude_y_mm * ky * (ky * y).cos() + twist_per_mm * x,
                 )
+            }
+            Surface::ConvexCylinder { radius_mm: r } => (0.0, -y / (r * r - y * y).sqrt()),
+            Surface::ConcaveCylinder { radius_mm: r } => (0.0, y / (r * r - y * y).sqrt()),
+            Surface::Sphere { radius_mm: r } => {
+                let w = (r * r - x * x - y * y).sqrt();
+                (-x / w, -y / w)
             }
         }
     }
@@ -141,6 +193,19 @@ impl Surface {
                     -amplitude_y_mm * ky * ky * (ky * y).sin(),
                 )
             }
+            Surface::ConvexCylinder { radius_mm: r } => {
+                let w = (r * r - y * y).sqrt();
+                (0.0, 0.0, -r * r / (w * w * w))
+            }
+            Surface::ConcaveCylinder { radius_mm: r } => {
+                let w = (r * r - y * y).sqrt();
+                (0.0, 0.0, r * r / (w * w * w))
+            }
+            Surface::Sphere { radius_mm: r } => {
+                let w2 = r * r - x * x - y * y;
+                let w3 = w2 * w2.sqrt();
+                (-(r * r - y * y) / w3, -x * y / w3, -(r * r - x * x) / w3)
+            }
         }
     }
 
@@ -165,20 +230,46 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
-    fn all() -> [Surface; 4] {
+    fn all() -> [Surface; 7] {
         [
             Surface::Plane,
             Surface::paper_parabola(),
             Surface::paper_hyperbolic_paraboloid(),
             Surface::default_blade(),
+            Surface::ConvexCylinder { radius_mm: 20.0 },
+            Surface::ConcaveCylinder { radius_mm: 20.0 },
+            Surface::Sphere { radius_mm: 20.0 },
         ]
+    }
+
+    #[test]
+    fn cylinders_and_sphere_have_their_radius_of_curvature() {
+        let r = 20.0;
+        let t = Vec3::y();
+        assert_relative_eq!(
+            Surface::ConvexCylinder { radius_mm: r }.normal_curvature(0.0, 0.0, &t),
+            -1.0 / r
+        );
+        let cave = Surface::ConcaveCylinder { radius_mm: r };
+        let t = Vec3::new(0.0, 1.0, cave.gradient(0.0, 3.0).1).normalize();
+        assert_relative_eq!(
+            cave.normal_curvature(0.0, 3.0, &t),
+            1.0 / r,
+            epsilon = 1e-12
+        );
+        let s = Surface::Sphere { radius_mm: r };
+        let (x, y) = (3.0, -4.0);
+        let n = s.normal(x, y);
+        let p = Vec3::new(x, y, s.height(x, y) + r);
+        assert!(n.angle(&p) < 1e-12);
+        assert!(s.covers(3.0, 4.0) && !s.covers(19.9, 0.0));
     }
 
     #[test]
     fn derivatives_match_finite_differences() {
         let e = 1e-5;
         for s in all() {
-            for &(x, y) in &[(0.3, -1.7), (7.0, 4.0), (-12.0, 9.5)] {
+            for &(x, y) in &[(0.3, -1.7), (7.0, 4.0), (-9.0, 9.5)] {
                 let (fx, fy) = s.gradient(x, y);
                 let nfx = (s.height(x + e, y) - s.height(x - e, y)) / (2.0 * e);
                 let nfy = (s.height(x, y + e) - s.height(x, y - e)) / (2.0 * e);

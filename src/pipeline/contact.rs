@@ -1,0 +1,173 @@
+//! `crest contact`: contact data for a centre-line path — for every cutting posture the
+//! point where the cutter touches the part and the part's normal there (from the design
+//! surface, or derived from the path when no part is given) — with the deepest gouge and
+//! the largest air gap.
+
+use crate::io::mesh::read_part;
+use crate::math::{Point3, Vec3};
+use crate::part::contact::touch_all;
+use crate::toolpath::{Contact, LowerOptions, MotionKind, Program};
+use std::path::{Path, PathBuf};
+
+/// Default distance within which a cutter touches the part, µm.
+pub const DEFAULT_TOLERANCE_UM: f64 = 20.0;
+
+/// Everything `crest contact` is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactRequest {
+    /// Tool-path file.
+    pub file: PathBuf,
+    /// The design surface; `None` derives the contacts from the path.
+    pub part: Option<PathBuf>,
+    /// `tool.toml`; the file's TLDATA when `None`.
+    pub tool: Option<PathBuf>,
+    /// Teeth of a TLDATA tool.
+    pub teeth: Option<usize>,
+    /// Apply MSYS to the path (the part is then in the absolute frame).
+    pub absolute: bool,
+    /// A cutting posture whose cutter is farther than this from the part gets no contact, µm.
+    pub tolerance_um: f64,
+}
+
+/// The path with contact data, and what was found.
+#[derive(Debug, Clone)]
+pub struct ContactRun {
+    /// The program, postures carrying the contact data found.
+    pub program: Program,
+    /// Cutting postures.
+    pub postures: usize,
+    /// Cutting postures that got a contact.
+    pub with_contact: usize,
+    /// Deepest penetration of the cutter into the part, µm (0 when none).
+    pub max_gouge_um: f64,
+    /// Largest cutter-to-part distance of a cutting posture, µm (0 when none).
+    pub max_gap_um: f64,
+    /// Where the tool came from.
+    pub tool_source: String,
+    /// Where the contacts came from.
+    pub source: &'static str,
+    /// Non-fatal findings.
+    pub warnings: Vec<String>,
+}
+
+/// Compute the contact data of `req.file`.
+pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
+    if !(req.tolerance_um.is_finite() && req.tolerance_um >= 0.0) {
+        return Err(miette::miette!(
+            "--tolerance-um must be a non-negative number, got {}",
+            req.tolerance_um
+        ));
+    }
+    let lower = LowerOptions {
+        apply_msys: req.absolute,
+        ..Default::default()
+    };
+    let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
+    let (cutter, tool_source, mut warnings) =
+        super::inputs::resolve_cutter(req.tool.as_deref(), &program, &req.file, req.teeth, None)?;
+    // A cutting posture: one a cutting move ends at (the posture a run starts from is
+    // where the tool comes from, often above the part).
+    let is_cut =
+        |path: &crate::toolpath::Toolpath, i: usize| path.postures[i].motion == MotionKind::Cut;
+    let postures: usize = program
+        .paths
+        .iter()
+        .map(|p| (0..p.postures.len()).filter(|&i| is_cut(p, i)).count())
+        .sum();
+    if postures == 0 {
+        return Err(miette::miette!(
+            "{}: the file has no cutting moves",
+            req.file.display()
+        ));
+    }
+    let tol = req.tolerance_um * 1e-3;
+    let (mut gouge, mut gap, mut with_contact) = (0.0f64, 0.0f64, 0usize);
+    let source = match &req.part {
+        Some(part_path) => {
+            let f = read_part(part_path)?;
+            warnings.extend(f.warnings);
+            let part = f.part;
+            check_orientation(&part, &program, &cutter, part_path)?;
+            for path in &mut program.paths {
+                let cut: Vec<bool> = (0..path.postures.len()).map(|i| is_cut(path, i)).collect();
+                let poses: Vec<Option<(Point3, Vec3)>> = path
+                    .postures
+                    .iter()
+                    .zip(&cut)
+                    .map(|(p, &c)| c.then_some((p.position, p.axis)))
+                    .collect();
+                let found = touch_all(&part, &cutter, &poses);
+                for (p, f) in path.postures.iter_mut().zip(found) {
+                    let Some(t) = f else { continue };
+                    let (cc, n, clear) = (t.cc, t.normal, t.clearance_mm);
+                    gouge = gouge.max(-clear);
+                    gap = gap.max(clear);
+                    if clear <= tol {
+                        p.contact = Some(Contact {
+                            point: cc,
+                            normal: n,
+                            normal_derived: false,
+                        });
+                        with_contact += 1;
+                    } else {
+                        p.contact = None;
+                    }
+                }
+            }
+            "part"
+        }
+        None => {
+            for path in &mut program.paths {
+                for p in &mut path.postures {
+                    p.contact = None;
+                }
+            }
+            with_contact = super::simulate::derive_contacts(&mut program, &cutter);
+            "derived from the path"
+        }
+    };
+    Ok(ContactRun {
+        program,
+        postures,
+        with_contact,
+        max_gouge_um: gouge.max(0.0) * 1e3,
+        max_gap_um: gap.max(0.0) * 1e3,
+        tool_source,
+        source,
+        warnings,
+    })
+}
+
+/// The part's normals must face the tool: most tool centres lie outside the material.
+fn check_orientation(
+    part: &crate::part::Part,
+    program: &Program,
+    cutter: &crate::tool::Cutter,
+    file: &Path,
+) -> miette::Result<()> {
+    let rc = cutter.corner_radius_mm();
+    let (mut out, mut inside) = (0usize, 0usize);
+    for p in program
+        .paths
+        .iter()
+        .flat_map(|t| t.postures.iter())
+        .filter(|p| p.motion == MotionKind::Cut)
+        .step_by(17)
+        .take(400)
+    {
+        let c = part.closest(&(p.position + p.axis * rc));
+        if c.signed_distance >= 0.0 {
+            out += 1;
+        } else {
+            inside += 1;
+        }
+    }
+    if inside > 3 * out.max(1) {
+        return Err(miette::miette!(
+            "{}: the tool lies behind the part's faces at {inside} of {} sampled postures: its triangles face into the material (reverse their winding), or the part is not in the path's frame (crest reads the path in the MCS; --absolute applies MSYS)",
+            file.display(),
+            inside + out
+        ));
+    }
+    Ok(())
+}
