@@ -527,7 +527,9 @@ pub fn simulate(
             },
         ),
     };
-    let (model, mode) = req.model.with_resampling(req.dtheta_deg.to_radians());
+    let (model, mode) =
+        req.model
+            .with_resampling(req.dtheta_deg.to_radians(), cutting.fz_mm, cutter.teeth());
     let mut ropts =
         resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
     if let Some(f) = cutting.feed_mm_min {
