@@ -621,7 +621,7 @@ pub fn simulate(
                     ));
                 }
             }
-            let tile = (256.0 * spacing_mm).clamp(1.0, 20.0).max(spacing_mm);
+            let tile = (128.0 * spacing_mm).clamp(0.5, 10.0).max(spacing_mm);
             sopts.spacing_mm = spacing_mm;
             let region = reach.map(|r| (r.lo, r.hi));
             let m = surface::map_part(
