@@ -19,7 +19,8 @@ use crate::util::{
     RESAMPLE_HEADER, column, crest, external_file, read_number_csv, repo_file, stdout_json, tempdir,
 };
 
-/// The Table I machines (000): A/C table-table and a 45° nutating table.
+/// The Table I machine of 000 (A/C), and the same limits on a nutating table (A at 45°
+/// carrying C).
 const AC: &str = repo_file!("samples/machines/table1_ac.toml");
 const NUT: &str = repo_file!("samples/machines/table1_nutating45.toml");
 const AC_TOML: &str = include_str!(repo_file!("samples/machines/table1_ac.toml"));

@@ -4,11 +4,7 @@ use std::path::{Path, PathBuf};
 
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
-use crate::util::{crest, output_json, repo, tempdir};
-
-fn sample(name: &str) -> PathBuf {
-    repo("samples/synth").join(name)
-}
+use crate::util::{crest, output_json, synth_sample, tempdir};
 
 fn write_map(dir: &Path) -> PathBuf {
     // A 40 × 20 grid, 5 µm spacing: cusps across y, feed marks along x, a missing corner.
@@ -35,7 +31,7 @@ fn trochoid_svg_and_png() {
     let svg = dir.path().join("t.svg");
     let out = crest()
         .args(["plot", "trochoid", "--tool"])
-        .arg(sample("ball-r5-presetter.toml"))
+        .arg(synth_sample("ball-r5-presetter.toml"))
         .args(["--lead-deg", "15", "--revolutions", "1", "--json", "-o"])
         .arg(&svg)
         .output()
@@ -75,7 +71,7 @@ fn trochoid_svg_and_png() {
     let png = dir.path().join("t.png");
     crest()
         .args(["plot", "trochoid", "--tool"])
-        .arg(sample("ball-r5.toml"))
+        .arg(synth_sample("ball-r5.toml"))
         .args(["--revolutions", "1", "-o"])
         .arg(&png)
         .assert()
@@ -152,7 +148,7 @@ fn unknown_picture_format_is_a_usage_error() {
     let out = dir.path().join("t.pdf");
     crest()
         .args(["plot", "trochoid", "--tool"])
-        .arg(sample("ball-r5.toml"))
+        .arg(synth_sample("ball-r5.toml"))
         .arg("-o")
         .arg(&out)
         .assert()
@@ -176,7 +172,7 @@ fn feed_and_crest_along_a_synthetic_path() {
             "10,4",
         ])
         .args(["--feed-mm-min", "4000", "--rpm", "10000", "--tool"])
-        .arg(sample("ball-r5.toml"))
+        .arg(synth_sample("ball-r5.toml"))
         .arg("-o")
         .arg(&cls)
         .assert()
@@ -199,7 +195,7 @@ fn feed_and_crest_along_a_synthetic_path() {
     // fz = 4000 / (4 · 10000) = 0.1 mm on R = 5: 0.250006 µm (model.md R2).
     let out = crest()
         .args(["plot", "feed", "--crest", "--tool"])
-        .arg(sample("ball-r5.toml"))
+        .arg(synth_sample("ball-r5.toml"))
         .arg(&cls)
         .args(["--json", "-o"])
         .arg(dir.path().join("c.png"))
@@ -221,7 +217,7 @@ fn runout_against_tool_height() {
     let png = dir.path().join("r.png");
     let out = crest()
         .args(["plot", "runout", "--tool"])
-        .arg(sample("ball-r5-presetter.toml"))
+        .arg(synth_sample("ball-r5-presetter.toml"))
         .args([
             "--lead-deg",
             "5,15",
@@ -259,7 +255,7 @@ fn runout_against_tool_height() {
     let svg = dir.path().join("r.svg");
     crest()
         .args(["plot", "runout", "--tool"])
-        .arg(sample("ball-r5-presetter.toml"))
+        .arg(synth_sample("ball-r5-presetter.toml"))
         .arg("-o")
         .arg(&svg)
         .assert()
@@ -276,7 +272,7 @@ fn runout_against_tool_height() {
     let bad = dir.path().join("bad.svg");
     crest()
         .args(["plot", "runout", "--tool"])
-        .arg(sample("ball-r5-presetter.toml"))
+        .arg(synth_sample("ball-r5-presetter.toml"))
         .args(["--heights-mm", "7", "-o"])
         .arg(&bad)
         .assert()
@@ -291,7 +287,7 @@ fn closed_stdout_is_not_a_failure() {
     let svg = dir.path().join("r.svg");
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_crest"))
         .args(["plot", "runout", "--tool"])
-        .arg(sample("ball-r5-presetter.toml"))
+        .arg(synth_sample("ball-r5-presetter.toml"))
         .args(["--json", "-o"])
         .arg(&svg)
         .stdout(std::process::Stdio::piped())

@@ -186,7 +186,8 @@ proptest! {
             if last_of_run {
                 prop_assert!(dth > 0.0 && dth <= dtheta * (1.0 + 1e-6));
             } else {
-                prop_assert!(abs_diff_eq!(dth, dtheta, epsilon = 1e-12 * (1.0 + w[1].theta_rad)), "dθ {}", dth);
+                let tol = 1e-12 * (1.0 + w[1].theta_rad);
+                prop_assert!(abs_diff_eq!(dth, dtheta, epsilon = tol), "dθ {}", dth);
                 prop_assert!(w[1].s_mm >= w[0].s_mm);
             }
             let omega = w[1].theta_rad / w[1].t_s.max(1e-300);

@@ -1,21 +1,17 @@
 //! `crest synth`: stepover and pass count in --json, CLSF and contact12 outputs, errors.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
-use crate::util::{crest, output_json, read, repo, tempdir, write};
-
-fn sample(name: &str) -> PathBuf {
-    repo("samples/synth").join(name)
-}
+use crate::util::{crest, output_json, read, synth_sample, tempdir, write};
 
 fn synth(args: &[&str], tool: &str, out: &Path) -> std::process::Output {
     crest()
         .arg("synth")
         .args(args)
         .arg("--tool")
-        .arg(sample(tool))
+        .arg(synth_sample(tool))
         .arg("-o")
         .arg(out)
         .output()

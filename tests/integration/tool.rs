@@ -344,7 +344,8 @@ proptest! {
         let zt = u * rc;
         let q = torus.edge_point(j, zt, theta);
         let rho = q.xy().norm() - (radius - rc);
-        prop_assert!(abs_diff_eq!(rho * rho + (zt - rc) * (zt - rc), rc * rc, epsilon = 1e-9 * radius.max(1.0)));
+        let on_torus = rho * rho + (zt - rc) * (zt - rc);
+        prop_assert!(abs_diff_eq!(on_torus, rc * rc, epsilon = 1e-9 * radius.max(1.0)));
     }
 
     /// With zero run-out every tooth cuts under both rules and the marks are fz apart.

@@ -43,6 +43,11 @@ pub fn repo(rel: &str) -> PathBuf {
     Path::new(ROOT).join(rel)
 }
 
+/// A file of `samples/synth/` (synthetic paths and their tools).
+pub fn synth_sample(name: &str) -> PathBuf {
+    repo("samples/synth").join(name)
+}
+
 /// A file of `../shared/samples-external/`.
 pub fn external(name: &str) -> PathBuf {
     Path::new(external_file!("")).join(name)
