@@ -170,7 +170,7 @@ impl ReferenceSource {
 #[derive(Debug, Clone)]
 pub enum Output {
     /// A height map on a window or patch.
-    Grid(Simulation),
+    Grid(Box<Simulation>),
     /// A point cloud over the part.
     Map(PartMap),
 }
@@ -691,10 +691,10 @@ pub fn simulate(
                 length_mm,
                 width_mm,
             };
-            Output::Grid(
+            Output::Grid(Box::new(
                 surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                     .map_err(|e| miette!("{file}: {e}"))?,
-            )
+            ))
         }
         GridRequest::PatchAt { s_mm, .. } => {
             let last = samples.last().map_or(0.0, |s| s.s_mm);
@@ -703,15 +703,15 @@ pub fn simulate(
                     "--patch-at {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
                 ));
             }
-            Output::Grid(
+            Output::Grid(Box::new(
                 surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                     .map_err(|e| miette!("{file}: {e}"))?,
-            )
+            ))
         }
-        GridRequest::Window { .. } => Output::Grid(
+        GridRequest::Window { .. } => Output::Grid(Box::new(
             surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                 .map_err(|e| miette!("{file}: {e}"))?,
-        ),
+        )),
     };
     let (nodes, nodes_cut) = match &output {
         Output::Grid(sim) => (sim.map.nx * sim.map.ny, sim.nodes_cut),

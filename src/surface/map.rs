@@ -179,8 +179,9 @@ pub fn map_part(
             for i in 0..sim.map.nx {
                 let (p, nrm) = sim.node_point(i, j);
                 // Half-open cells, closed at the region's far side.
-                let inside =
-                    (0..3).all(|k| p[k] >= c_lo[k] && (p[k] < c_hi[k] || (c_hi[k] >= hi[k] && p[k] <= hi[k])));
+                let inside = (0..3).all(|k| {
+                    p[k] >= c_lo[k] && (p[k] < c_hi[k] || (c_hi[k] >= hi[k] && p[k] <= hi[k]))
+                });
                 if !inside {
                     continue;
                 }

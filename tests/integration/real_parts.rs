@@ -1,22 +1,8 @@
 //! Real parts (issue 15): the design surface as input, contact data from the part or the
 //! path, the N-buffer along the part's normals, patches and maps on real NX exports.
 
-use assert_cmd::Command;
+use crate::util::{ROOT, crest, external as shared, json};
 use std::path::{Path, PathBuf};
-
-const ROOT: &str = env!("CARGO_MANIFEST_DIR");
-
-fn crest() -> Command {
-    Command::cargo_bin("crest").unwrap()
-}
-
-fn shared(name: &str) -> PathBuf {
-    Path::new(ROOT).join("../shared/samples-external").join(name)
-}
-
-fn json(out: &[u8]) -> serde_json::Value {
-    serde_json::from_slice(out).unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(out)))
-}
 
 const BALL: &str = "samples/synth/ball-r5.toml";
 
@@ -27,9 +13,24 @@ fn synth(dir: &Path, surface: &str, three_axis: bool) -> (PathBuf, PathBuf) {
     let stl = dir.join(format!("{surface}.stl"));
     let mut c = crest();
     c.current_dir(ROOT).args([
-        "synth", surface, "--tool", BALL, "--stepover-mm", "0.4", "--stepover-along-surface",
-        "--size-mm", "4,4", "--point-step-mm", "0.05", "--feed-mm-min", "1000", "--rpm",
-        "20000", "--part-tol-um", "0.01", "-o",
+        "synth",
+        surface,
+        "--tool",
+        BALL,
+        "--stepover-mm",
+        "0.4",
+        "--stepover-along-surface",
+        "--size-mm",
+        "4,4",
+        "--point-step-mm",
+        "0.05",
+        "--feed-mm-min",
+        "1000",
+        "--rpm",
+        "20000",
+        "--part-tol-um",
+        "0.01",
+        "-o",
     ]);
     c.arg(&cls).arg("--part-stl").arg(&stl);
     if three_axis {
@@ -75,7 +76,10 @@ fn n_buffer_crests_on_plane_and_cylinders_match_the_closed_forms() {
     for (surface, want) in [
         ("plane", plane),
         ("convex-cylinder", two_circle_crest_um(20.0, 5.0, 0.4, true)),
-        ("concave-cylinder", two_circle_crest_um(20.0, 5.0, 0.4, false)),
+        (
+            "concave-cylinder",
+            two_circle_crest_um(20.0, 5.0, 0.4, false),
+        ),
     ] {
         for three_axis in [false, true] {
             let (cls, stl) = synth(dir.path(), surface, three_axis);
@@ -88,8 +92,18 @@ fn n_buffer_crests_on_plane_and_cylinders_match_the_closed_forms() {
                 .args(["--tool", BALL, "--part"])
                 .arg(&stl)
                 .args([
-                    "--model", "dome", "--grid-um", "1", "--fz-mm", "0.01", "--patch-near",
-                    "0,0,0", "--patch-mm", "0.2,1.0", "--json", "-o",
+                    "--model",
+                    "dome",
+                    "--grid-um",
+                    "1",
+                    "--fz-mm",
+                    "0.01",
+                    "--patch-near",
+                    "0,0,0",
+                    "--patch-mm",
+                    "0.05,0.5",
+                    "--json",
+                    "-o",
                 ])
                 .arg(&out)
                 .assert()
@@ -100,7 +114,10 @@ fn n_buffer_crests_on_plane_and_cylinders_match_the_closed_forms() {
             let max = j["heights_um"]["max"].as_f64().unwrap();
             let min = j["heights_um"]["min"].as_f64().unwrap();
             let dev = (max - want).abs() / want;
-            assert!(dev < 0.03, "{surface} 3-axis {three_axis}: crest {max} µm, closed form {want} µm");
+            assert!(
+                dev < 0.03,
+                "{surface} 3-axis {three_axis}: crest {max} µm, closed form {want} µm"
+            );
             // No gouge: nothing below the design surface beyond its facets (0.01 µm).
             assert!(min > -0.02, "{surface} {three_axis}: lowest {min} µm");
         }
@@ -143,11 +160,21 @@ fn contact_from_the_part_is_within_a_micrometre_and_a_tenth_of_a_degree() {
             let d = dy.hypot(dz);
             let (ey, ez) = (dy / d, dz / d);
             let exact = [f[0], ay + rs * ey, az + rs * ez];
-            let normal = if convex { [0.0, ey, ez] } else { [0.0, -ey, -ez] };
-            let err = ((f[6] - exact[0]).powi(2) + (f[7] - exact[1]).powi(2) + (f[8] - exact[2]).powi(2)).sqrt();
+            let normal = if convex {
+                [0.0, ey, ez]
+            } else {
+                [0.0, -ey, -ez]
+            };
+            let err =
+                ((f[6] - exact[0]).powi(2) + (f[7] - exact[1]).powi(2) + (f[8] - exact[2]).powi(2))
+                    .sqrt();
             assert!(err < 1e-3, "{surface}: contact {:?} vs {exact:?}", &f[6..9]);
             let dot = f[9] * normal[0] + f[10] * normal[1] + f[11] * normal[2];
-            assert!(dot.clamp(-1.0, 1.0).acos().to_degrees() < 0.1, "{surface}: normal {:?}", &f[9..12]);
+            assert!(
+                dot.clamp(-1.0, 1.0).acos().to_degrees() < 0.1,
+                "{surface}: normal {:?}",
+                &f[9..12]
+            );
             checked += 1;
         }
         assert!(checked > 500, "{checked}");
@@ -166,8 +193,20 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
             .arg("simulate")
             .arg(shared(file))
             .args([
-                "--teeth", "2", "--rpm", "8000", "--model", "dome", "--grid-um", "10",
-                "--patch-near", near, "--patch-mm", "4,4", "--json", "-o",
+                "--teeth",
+                "2",
+                "--rpm",
+                "8000",
+                "--model",
+                "dome",
+                "--grid-um",
+                "10",
+                "--patch-near",
+                near,
+                "--patch-mm",
+                "4,4",
+                "--json",
+                "-o",
             ])
             .arg(&out)
             .assert()
@@ -186,7 +225,20 @@ fn a_tool_from_tldata_needs_its_tooth_count_by_name() {
     let a = crest()
         .arg("simulate")
         .arg(shared("nx_fixed_contour_nurbs.cls"))
-        .args(["--rpm", "8000", "--model", "dome", "--grid-um", "10", "--patch-near", "-94.4,101,253", "--patch-mm", "1,1", "-o", "x.gsf"])
+        .args([
+            "--rpm",
+            "8000",
+            "--model",
+            "dome",
+            "--grid-um",
+            "10",
+            "--patch-near",
+            "-94.4,101,253",
+            "--patch-mm",
+            "1,1",
+            "-o",
+            "x.gsf",
+        ])
         .assert()
         .code(2);
     let err = String::from_utf8_lossy(&a.get_output().stderr);
@@ -205,12 +257,25 @@ fn a_patch_away_from_the_path_is_refused_and_a_thin_cut_exits_1() {
         .arg(&cls)
         .args(["--tool", BALL, "--part"])
         .arg(&stl)
-        .args(["--model", "dome", "--grid-um", "10", "--patch-near", "30,0,0", "--patch-mm", "1,1", "-o"])
+        .args([
+            "--model",
+            "dome",
+            "--grid-um",
+            "10",
+            "--patch-near",
+            "30,0,0",
+            "--patch-mm",
+            "1,1",
+            "-o",
+        ])
         .arg(&out)
         .assert()
         .code(2);
     let err = String::from_utf8_lossy(&a.get_output().stderr);
-    assert!(err.contains("does not cut there") || err.contains("within reach"), "{err}");
+    assert!(
+        err.contains("does not cut there") || err.contains("within reach"),
+        "{err}"
+    );
     assert!(!out.exists());
     // A window that the field covers only at one edge: exit 1, said on stderr and in JSON.
     let out = dir.path().join("thin.csv");
@@ -218,7 +283,18 @@ fn a_patch_away_from_the_path_is_refused_and_a_thin_cut_exits_1() {
         .current_dir(ROOT)
         .arg("simulate")
         .arg(&cls)
-        .args(["--tool", BALL, "--model", "dome", "--grid-um", "20", "--window", "1.9,-2,12,2", "--json", "-o"])
+        .args([
+            "--tool",
+            BALL,
+            "--model",
+            "dome",
+            "--grid-um",
+            "100",
+            "--window",
+            "2.5,-2,60,2",
+            "--json",
+            "-o",
+        ])
         .arg(&out)
         .assert()
         .code(1);
@@ -239,7 +315,20 @@ fn a_part_map_is_a_point_cloud_with_heights() {
         .arg(&cls)
         .args(["--tool", BALL, "--part"])
         .arg(&stl)
-        .args(["--model", "dome", "--grid-um", "10", "--fz-mm", "0.05", "--map-mm", "0.05", "--region", "-1,-1,-1,1,1,1", "--json", "-o"])
+        .args([
+            "--model",
+            "dome",
+            "--grid-um",
+            "10",
+            "--fz-mm",
+            "0.05",
+            "--map-mm",
+            "0.05",
+            "--region",
+            "-1,-1,-1,1,1,1",
+            "--json",
+            "-o",
+        ])
         .arg(&out)
         .assert()
         .success();
@@ -252,7 +341,11 @@ fn a_part_map_is_a_point_cloud_with_heights() {
         .lines()
         .skip_while(|l| *l != "end_header")
         .skip(1)
-        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split_whitespace()
+                .map(|t| t.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     // A 2 × 2 mm region at 0.05 mm: about 40 × 40 points, all on the cylinder, all cut,
     // heights between 0 and the crest.
@@ -282,9 +375,16 @@ fn bad_meshes_exit_2_naming_file_and_triangle() {
         .assert()
         .code(2);
     let err = String::from_utf8_lossy(&a.get_output().stderr);
-    assert!(err.contains("cut.stl:1:") && err.contains("header says"), "{err}");
+    assert!(
+        err.contains("cut.stl:1:") && err.contains("header says"),
+        "{err}"
+    );
     let bad = dir.path().join("bad.obj");
-    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 nan\nf 1 2 3\nf 1 3 4\n").unwrap();
+    std::fs::write(
+        &bad,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 nan\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
     let a = crest()
         .current_dir(ROOT)
         .arg("contact")
