@@ -398,3 +398,99 @@ fn bad_meshes_exit_2_naming_file_and_triangle() {
     let err = String::from_utf8_lossy(&a.get_output().stderr);
     assert!(err.contains("bad.obj:4:"), "{err}");
 }
+
+mod properties {
+    use crest::math::{Point3, Vec3};
+    use crest::part::{Mesh, Part};
+    use crest::surface::{GridSpec, Model, Options, Reference, simulate_with};
+    use crest::tool::{Cutter, Shape};
+    use proptest::prelude::*;
+
+    /// The plane z = `z` as two triangles over ±20 mm.
+    fn plane_part(z: f64) -> Part {
+        let p = |x: f64, y: f64| Point3::new(x, y, z);
+        Part::new(Mesh {
+            vertices: vec![p(-20.0, -20.0), p(20.0, -20.0), p(20.0, 20.0), p(-20.0, 20.0)],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        })
+        .unwrap()
+    }
+
+    fn pass() -> (Cutter, Vec<crest::resample::Sample>) {
+        let c = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
+        let s = crest::synth::pass::straight_pass(&c, 10f64.to_radians(), 0.05, -2.0, 4.0, 10.0).unwrap();
+        (c, s)
+    }
+
+    fn window(y0: f64) -> Options {
+        let mut o = Options::new(
+            Model::Dome,
+            GridSpec::Window { x0_mm: -0.3, y0_mm: y0, x1_mm: 0.3, y1_mm: y0 + 0.6 },
+            0.01,
+        );
+        o.depth_mm = 0.05;
+        o
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(6))]
+
+        /// Raising the plane part by d (the path unchanged) lowers every reached height by
+        /// exactly 1000·d µm, and the same nodes are reached. (The ICE model: its triangles
+        /// do not depend on the band; the dome's angular mesh follows the levels in the band,
+        /// so it agrees only to its 0.01 µm chord tolerance.)
+        #[test]
+        fn raising_the_part_lowers_every_height_by_d(d in -0.003f64..0.003, y0 in -0.5f64..0.0) {
+            let (c, s) = pass();
+            let mut o = window(y0);
+            o.model = Model::Ice { dtheta_rad: 2f64.to_radians() };
+            let a = simulate_with(&s, &c, &o, Reference::Part(&plane_part(0.0)), &|_, _| {}).unwrap();
+            let b = simulate_with(&s, &c, &o, Reference::Part(&plane_part(d)), &|_, _| {}).unwrap();
+            prop_assert!(a.nodes_cut > 0);
+            for (ha, hb) in a.map.z_um.iter().zip(&b.map.z_um) {
+                prop_assert_eq!(ha.is_nan(), hb.is_nan());
+                if ha.is_finite() {
+                    prop_assert!((ha - hb - 1000.0 * d).abs() < 1e-6, "{} {} {}", ha, hb, d);
+                }
+            }
+        }
+    }
+
+    /// Nodes the tool never reaches are reported as not reached (NaN), never as zero; the
+    /// result is the same for one and two threads.
+    #[test]
+    fn unreached_nodes_are_nan_and_threads_do_not_matter() {
+        let (c, s) = pass();
+        // The pass runs along y = 0; the window reaches 3 mm across, beyond the ball's reach
+        // within the 0.05 mm depth (√(2 R ap) ≈ 0.71 mm).
+        let mut o = window(0.0);
+        o.grid = GridSpec::Window { x0_mm: -0.2, y0_mm: -0.2, x1_mm: 0.2, y1_mm: 3.0 };
+        let part = plane_part(0.0);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| simulate_with(&s, &c, &o, Reference::Part(&part), &|_, _| {}).unwrap())
+        };
+        let one = run(1);
+        let two = run(2);
+        assert_eq!(
+            one.map.z_um.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            two.map.z_um.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        let m = &one.map;
+        for j in 0..m.ny {
+            let y = m.y0_mm + j as f64 * m.dy_um * 1e-3;
+            for &h in m.row(j) {
+                if y > 1.0 {
+                    assert!(h.is_nan(), "y {y}: {h}");
+                } else if y < 0.5 {
+                    assert!(h.is_finite(), "y {y}: {h}");
+                }
+            }
+        }
+        assert!(m.z_um.iter().all(|h| h.is_nan() || *h > -1e-9));
+        let _ = Vec3::z();
+    }
+}
