@@ -342,6 +342,7 @@ fn run_heightmap(a: HeightmapArgs) -> miette::Result<Outcome> {
 
 /// Read a two-column numeric table (optional header; commas, semicolons, tabs or blanks).
 fn read_two_columns(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
+    crest::io::output::register_input(path);
     let text = std::fs::read_to_string(path)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot read {}", path.display()))?;

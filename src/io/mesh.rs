@@ -106,6 +106,7 @@ pub fn read_part(path: &Path) -> Result<PartFile, MeshFileError> {
             "unknown mesh format (expected .stl, .obj or .ply)".into(),
         )
     })?;
+    super::output::register_input(path);
     let bytes = std::fs::read(path).map_err(|e| err("1".into(), format!("cannot read: {e}")))?;
     let parsed = match format {
         MeshFormat::Stl => parse_stl(&bytes),

@@ -21,6 +21,7 @@ mod xyz;
 
 pub mod measured;
 pub mod mesh;
+pub mod output;
 pub mod tables;
 pub mod text;
 pub mod toolpath;
@@ -30,45 +31,11 @@ use std::path::{Path, PathBuf};
 
 use crate::surface::HeightMap;
 
-/// Write a file through a temporary file in the same directory, renamed at the end, so that
-/// a failure never leaves a partial output behind.
-pub fn write_atomic<F>(path: &Path, fill: F) -> std::io::Result<()>
-where
-    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
-{
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".crest-").suffix(".tmp");
-    // tempfile creates 0600 files; outputs are ordinary files (0666 less the umask).
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(dir)?;
-    {
-        let mut buffered = std::io::BufWriter::with_capacity(1 << 16, tmp.as_file_mut());
-        fill(&mut buffered)?;
-        buffered.flush()?;
-    }
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
-}
+pub use output::write_atomic;
 
-/// Write a set of files `(name, bytes)` into the folder `dir` (created if needed), each
-/// through [`write_atomic`]; returns the paths written, in order.
+/// Write a set of files into the folder `dir`, whole or not at all (see [`output::write_set`]).
 pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> std::io::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir)?;
-    let mut written = Vec::with_capacity(files.len());
-    for (name, bytes) in files {
-        let path = dir.join(name);
-        write_atomic(&path, |w| w.write_all(bytes))?;
-        written.push(path);
-    }
-    Ok(written)
+    output::write_set(dir, files)
 }
 
 /// A height-map file format.
@@ -208,6 +175,7 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
     let format = HeightMapFormat::from_path(path).ok_or_else(|| HeightMapError::UnknownFormat {
         path: path.to_path_buf(),
     })?;
+    output::register_input(path);
     let bytes = std::fs::read(path).map_err(|source| HeightMapError::Io {
         path: path.to_path_buf(),
         source,

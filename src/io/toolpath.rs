@@ -163,6 +163,7 @@ pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
 }
 
 fn open(path: &Path) -> miette::Result<BufReader<File>> {
+    super::output::register_input(path);
     let f =
         File::open(path).map_err(|e| miette::miette!("{}: cannot open: {e}", path.display()))?;
     Ok(BufReader::with_capacity(1 << 16, f))
