@@ -29,6 +29,7 @@ pub mod math;
 
 pub mod kinematics;
 pub mod metrics;
+pub mod nc;
 pub mod parse;
 pub mod part;
 pub mod resample;

@@ -257,6 +257,12 @@ impl Lowerer {
         }
     }
 
+    /// Record a finding of a front end that lowers its own input through this lowering
+    /// (G-code): at most five of one `kind` are kept, the rest counted.
+    pub fn note(&mut self, kind: &'static str, line: u32, column: u32, message: String) {
+        self.warn(kind, line, column, message);
+    }
+
     /// Start a tool path explicitly (contact12 input, or motion before any `TOOL PATH`).
     pub fn begin_path(
         &mut self,

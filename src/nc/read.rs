@@ -1,0 +1,727 @@
+//! Reading G-code through the machine: the NC's modal state, every block that moves turned
+//! into CL records (`TOOL PATH`, `SPINDL`, `FEDRAT`, `RAPID`, `CIRCLE`, `GOTO`, `CONTACT`)
+//! for [`Lowerer`] through the forward kinematics (see the module docs of [`crate::nc`]).
+
+use super::{Rtcp, joint_letters};
+use crate::kinematics::{Joints, Machine};
+use crate::math::{Point3, Vec3, normalize_or_none};
+use crate::parse::gcode::{Block, Word};
+use crate::parse::{Arg, FeedUnit, Numbers, Record, RecordKind};
+use crate::toolpath::{ArcMove, LowerError, Lowerer, PostureSink};
+
+/// mm per inch.
+const MM_PER_INCH: f64 = 25.4;
+/// Arc ends farther than this from the circle through the start are reported, mm.
+const ARC_END_TOL_MM: f64 = 0.005;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Motion {
+    Rapid,
+    Line,
+    Cw,
+    Ccw,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FeedMode {
+    PerMinute,
+    InverseTime,
+    PerRevolution,
+}
+
+fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError {
+    LowerError::Invalid {
+        line,
+        column,
+        expected: expected.to_string(),
+        found,
+    }
+}
+
+/// The modal state of the NC and the bookkeeping of the paths it opens (see the module
+/// docs of [`crate::nc`]).
+pub struct NcReader<'m> {
+    machine: &'m Machine,
+    rtcp: Rtcp,
+    letters: [u8; 5],
+    name: String,
+    motion: Option<Motion>,
+    /// Index (0 = X, 1 = Y, 2 = Z) of the axis normal to the arc plane.
+    plane: usize,
+    absolute: bool,
+    inch: bool,
+    feed_mode: FeedMode,
+    f: Option<f64>,
+    s: Option<f64>,
+    spindle_on: bool,
+    tcp: bool,
+    joints: Joints,
+    tip: Point3,
+    /// Which of X, Y, Z, rotary 1, rotary 2 have been programmed.
+    known: [bool; 5],
+    tool_label: String,
+    path_open: bool,
+    path_moved: bool,
+    /// Records waiting for the path to open (`TLDATA` comments).
+    queue: Vec<Record>,
+    feed_out: Option<f64>,
+    spindle_out: Option<f64>,
+    warned_letters: Vec<u8>,
+}
+
+impl<'m> NcReader<'m> {
+    /// A reader for `machine`; `name` names the tool paths (the file's stem). Fails when
+    /// the machine's axis names are not G-code address letters.
+    pub fn new(machine: &'m Machine, rtcp: Rtcp, name: &str) -> Result<NcReader<'m>, String> {
+        let letters = joint_letters(machine)?;
+        let joints = [0.0; 5];
+        Ok(NcReader {
+            machine,
+            rtcp,
+            letters,
+            name: name.to_string(),
+            motion: None,
+            plane: 2,
+            absolute: true,
+            inch: false,
+            feed_mode: FeedMode::PerMinute,
+            f: None,
+            s: None,
+            spindle_on: false,
+            tcp: rtcp == Rtcp::On,
+            joints,
+            tip: machine.forward(&joints).tip,
+            known: [false; 5],
+            tool_label: String::new(),
+            path_open: false,
+            path_moved: false,
+            queue: Vec::new(),
+            feed_out: None,
+            spindle_out: None,
+            warned_letters: Vec::new(),
+        })
+    }
+
+    fn scale(&self) -> f64 {
+        if self.inch { MM_PER_INCH } else { 1.0 }
+    }
+
+    fn set_tcp(&mut self, on: bool) {
+        if self.rtcp == Rtcp::Auto {
+            self.tcp = on;
+        }
+    }
+
+    fn emit(
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+        kind: RecordKind,
+        line: u32,
+        column: u32,
+    ) -> Result<(), LowerError> {
+        low.push(&Record { kind, line, column }, sink)
+    }
+
+    /// Open a tool path (once per tool) and bring the spindle up to date.
+    fn open(
+        &mut self,
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+        line: u32,
+    ) -> Result<(), LowerError> {
+        if !self.path_open {
+            let kind = RecordKind::ToolPath {
+                name: self.name.clone(),
+                tool: self.tool_label.clone(),
+            };
+            Self::emit(low, sink, kind, line, 1)?;
+            self.path_open = true;
+            self.path_moved = false;
+            self.feed_out = None;
+            self.spindle_out = None;
+            for r in std::mem::take(&mut self.queue) {
+                low.push(&r, sink)?;
+            }
+        }
+        let want = if self.spindle_on { self.s } else { None };
+        if want != self.spindle_out {
+            let args = match want {
+                Some(v) => vec![
+                    Arg::Word("RPM".into()),
+                    Arg::Num(v),
+                    Arg::Word("CLW".into()),
+                ],
+                None => vec![Arg::Word("OFF".into())],
+            };
+            Self::emit(low, sink, RecordKind::Spindl(args), line, 1)?;
+            self.spindle_out = want;
+        }
+        Ok(())
+    }
+
+    fn close(
+        &mut self,
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+        line: u32,
+    ) -> Result<(), LowerError> {
+        if self.path_open {
+            Self::emit(low, sink, RecordKind::EndOfPath, line, 1)?;
+            self.path_open = false;
+        }
+        Ok(())
+    }
+
+    /// Read one block.
+    pub fn push(
+        &mut self,
+        b: &Block,
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        let line = b.line;
+        // G codes: modal groups and the blocks whose axis words are not a move.
+        let mut not_a_move = false;
+        let mut motion_word: Option<&Word> = None;
+        for w in b.words.iter().filter(|w| w.letter == b'G') {
+            let code = w
+                .code()
+                .ok_or_else(|| invalid(line, w.column, "a G code", format!("G{}", w.value)))?;
+            match code {
+                0 | 10 | 20 | 30 => {
+                    self.motion = Some(match code {
+                        0 => Motion::Rapid,
+                        10 => Motion::Line,
+                        20 => Motion::Cw,
+                        _ => Motion::Ccw,
+                    });
+                    motion_word = Some(w);
+                }
+                170 => self.plane = 2,
+                180 => self.plane = 1,
+                190 => self.plane = 0,
+                200 => self.inch = true,
+                210 => self.inch = false,
+                900 => self.absolute = true,
+                910 => self.absolute = false,
+                930 => self.feed_mode = FeedMode::InverseTime,
+                940 => self.feed_mode = FeedMode::PerMinute,
+                950 => self.feed_mode = FeedMode::PerRevolution,
+                434 => self.set_tcp(true),
+                490 => self.set_tcp(false),
+                // Dwell, data setting, macro call: their words are no move.
+                40 | 100 | 650 => not_a_move = true,
+                280 | 300 | 530 | 920 => {
+                    not_a_move = true;
+                    low.note(
+                        "gcode-ignored",
+                        line,
+                        w.column,
+                        format!(
+                            "G{} is not interpreted: the axis words of its block are no move",
+                            fmt_code(code)
+                        ),
+                    );
+                }
+                410 | 420 => low.note(
+                    "gcode-cutcom",
+                    line,
+                    w.column,
+                    "cutter radius compensation (G41/G42) is not applied: the path is read as programmed".into(),
+                ),
+                // No effect on postures: compensation cancel and length offsets, work
+                // offsets (the part frame is the machine's), path control, cycles off,
+                // high-speed modes, coordinate rotation and scaling cancel.
+                400 | 430 | 440 | 540..=590 | 610 | 611 | 640 | 800 | 980 | 990 | 150
+                | 690 | 500 | 50 | 51 | 80 | 1870 => {}
+                _ => low.note(
+                    "gcode-unknown",
+                    line,
+                    w.column,
+                    format!("G{} is not interpreted", fmt_code(code)),
+                ),
+            }
+        }
+        let mut tool_change = false;
+        let mut program_end = false;
+        for w in b.words.iter().filter(|w| w.letter == b'M') {
+            match w.code() {
+                Some(30 | 40) => self.spindle_on = true,
+                Some(50) => self.spindle_on = false,
+                Some(60) => tool_change = true,
+                Some(20 | 300) => program_end = true,
+                Some(1280) => self.set_tcp(true),
+                Some(1290) => self.set_tcp(false),
+                _ => {}
+            }
+        }
+        for k in &b.keywords {
+            match k.name.as_str() {
+                "TRAORI" => self.set_tcp(true),
+                "TRAFOOF" => self.set_tcp(false),
+                _ => low.note(
+                    "gcode-keyword",
+                    line,
+                    k.column,
+                    format!("{} is not interpreted", k.text),
+                ),
+            }
+        }
+        self.check_letters(b, low);
+        if let Some(w) = b.word(b'F') {
+            if w.value < 0.0 {
+                return Err(invalid(
+                    line,
+                    w.column,
+                    "a feed ≥ 0",
+                    format!("{}", w.value),
+                ));
+            }
+            self.f = Some(w.value);
+        }
+        if let Some(w) = b.word(b'S') {
+            if w.value < 0.0 {
+                return Err(invalid(
+                    line,
+                    w.column,
+                    "a spindle speed ≥ 0",
+                    format!("{}", w.value),
+                ));
+            }
+            self.s = Some(w.value);
+        }
+        if let Some(w) = b.word(b'T') {
+            self.tool_label = if w.value.fract() == 0.0 && w.value.abs() < 1e9 {
+                format!("T{}", w.value as i64)
+            } else {
+                format!("T{}", w.value)
+            };
+        }
+        if tool_change && self.path_moved {
+            self.close(low, sink, line)?;
+        }
+        for r in &b.records {
+            let rec = Record {
+                kind: r.kind.clone(),
+                line,
+                column: r.column,
+            };
+            if matches!(r.kind, RecordKind::Tldata { .. }) {
+                if self.path_open {
+                    low.push(&rec, sink)?;
+                } else {
+                    self.queue.push(rec);
+                }
+            }
+        }
+        if !not_a_move {
+            self.motion_block(b, motion_word, low, sink)?;
+        }
+        if program_end {
+            self.close(low, sink, line)?;
+        }
+        Ok(())
+    }
+
+    /// Warn once per address letter that means nothing here.
+    fn check_letters(&mut self, b: &Block, low: &mut Lowerer) {
+        for w in &b.words {
+            let known = b"NOGMFSTHDPQLXYZIJKR".contains(&w.letter)
+                || w.letter == self.letters[3]
+                || w.letter == self.letters[4];
+            if !known && !self.warned_letters.contains(&w.letter) {
+                self.warned_letters.push(w.letter);
+                low.note(
+                    "gcode-letter",
+                    b.line,
+                    w.column,
+                    format!(
+                        "{} words are no axis of the machine and are ignored",
+                        w.letter as char
+                    ),
+                );
+            }
+        }
+    }
+
+    /// The move of a block, if it has one.
+    fn motion_block(
+        &mut self,
+        b: &Block,
+        motion_word: Option<&Word>,
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        let line = b.line;
+        let axis_letters = [b'X', b'Y', b'Z', self.letters[3], self.letters[4]];
+        let has_axis = axis_letters.iter().any(|l| b.word(*l).is_some());
+        let arc = matches!(self.motion, Some(Motion::Cw | Motion::Ccw));
+        let has_centre = [b'I', b'J', b'K', b'R']
+            .iter()
+            .any(|l| b.word(*l).is_some());
+        if !(has_axis || arc && has_centre && motion_word.is_some()) {
+            return Ok(());
+        }
+        let motion = match self.motion {
+            Some(m) => m,
+            None => {
+                low.note(
+                    "gcode-no-motion",
+                    line,
+                    1,
+                    "axis words before any G0, G1, G2 or G3: read as a rapid move (G0)".into(),
+                );
+                self.motion = Some(Motion::Rapid);
+                Motion::Rapid
+            }
+        };
+        let scale = self.scale();
+        // Program coordinates of the start: the tip (TCP on) or the linear joints.
+        let start_prog = if self.tcp {
+            self.tip.coords
+        } else {
+            let mut v = Vec3::zeros();
+            for j in 0..3 {
+                v[(self.letters[j] - b'X') as usize] = self.joints[j];
+            }
+            v
+        };
+        let mut end_prog = start_prog;
+        let mut joints = self.joints;
+        let mut missing = Vec::new();
+        for (k, letter) in axis_letters.iter().enumerate() {
+            match b.word(*letter) {
+                Some(w) => {
+                    let v = if k < 3 {
+                        w.value * scale
+                    } else {
+                        w.value.to_radians()
+                    };
+                    let (target, base) = if k < 3 {
+                        (&mut end_prog[k], start_prog[k])
+                    } else {
+                        (&mut joints[k], self.joints[k])
+                    };
+                    *target = if self.absolute { v } else { base + v };
+                    self.known[k] = true;
+                }
+                None if !self.known[k] => {
+                    self.known[k] = true;
+                    missing.push(*letter as char);
+                }
+                None => {}
+            }
+        }
+        if !missing.is_empty() {
+            let list: Vec<String> = missing.iter().map(|c| c.to_string()).collect();
+            low.note(
+                "gcode-unprogrammed",
+                line,
+                1,
+                format!(
+                    "axis {} not programmed before this move: taken as 0",
+                    list.join(", ")
+                ),
+            );
+        }
+        for j in 0..3 {
+            joints[j] = end_prog[(self.letters[j] - b'X') as usize];
+        }
+        // The pose at the end of the block.
+        let (tip, axis) = if self.tcp {
+            let tip = Point3::from(end_prog);
+            let axis = self
+                .machine
+                .forward(&[0.0, 0.0, 0.0, joints[3], joints[4]])
+                .axis;
+            self.machine.linear_joints(&mut joints, &tip);
+            (tip, axis)
+        } else {
+            let pose = self.machine.forward(&joints);
+            (pose.tip, pose.axis)
+        };
+        let arc_move = match motion {
+            Motion::Cw | Motion::Ccw => {
+                Some(self.arc(b, motion, &start_prog, &end_prog, &joints, low)?)
+            }
+            _ => None,
+        };
+        let length = match &arc_move {
+            Some(a) => a.length_mm(&self.tip, &tip),
+            None => (tip - self.tip).norm(),
+        };
+        let feed = if motion == Motion::Rapid {
+            None
+        } else {
+            self.tip_feed(b, length, &start_prog, &end_prog, &joints, low)
+        };
+        self.open(low, sink, line)?;
+        if let Some(f) = feed
+            && Some(f) != self.feed_out
+        {
+            let kind = RecordKind::Fedrat {
+                unit: Some(FeedUnit::Mmpm),
+                value: f,
+            };
+            Self::emit(low, sink, kind, line, 1)?;
+            self.feed_out = Some(f);
+        }
+        if motion == Motion::Rapid {
+            Self::emit(low, sink, RecordKind::Rapid, line, 1)?;
+        }
+        if let Some(a) = &arc_move {
+            let v = [
+                a.centre.x,
+                a.centre.y,
+                a.centre.z,
+                a.axis.x,
+                a.axis.y,
+                a.axis.z,
+                a.radius_mm,
+            ];
+            let numbers = Numbers::from_slice(&v).unwrap_or_else(|| unreachable!("7 numbers"));
+            Self::emit(
+                low,
+                sink,
+                RecordKind::Circle {
+                    numbers,
+                    times: None,
+                },
+                line,
+                1,
+            )?;
+        }
+        let v = [tip.x, tip.y, tip.z, axis.x, axis.y, axis.z];
+        let numbers = Numbers::from_slice(&v).unwrap_or_else(|| unreachable!("6 numbers"));
+        Self::emit(low, sink, RecordKind::Goto(numbers), line, 1)?;
+        for r in &b.records {
+            if matches!(r.kind, RecordKind::Contact(_)) {
+                Self::emit(low, sink, r.kind.clone(), line, r.column)?;
+            }
+        }
+        self.path_moved = true;
+        self.tip = tip;
+        self.joints = joints;
+        Ok(())
+    }
+
+    /// The feed at the tool tip of a feed move of tip length `length`, mm/min; `None`
+    /// keeps the feed before (no F yet, or no tip motion to spread it over).
+    fn tip_feed(
+        &mut self,
+        b: &Block,
+        length: f64,
+        start_prog: &Vec3,
+        end_prog: &Vec3,
+        joints: &Joints,
+        low: &mut Lowerer,
+    ) -> Option<f64> {
+        let Some(f) = self.f else {
+            low.note(
+                "gcode-no-feed",
+                b.line,
+                1,
+                "a feed move before any F word: its feed is unknown".into(),
+            );
+            return None;
+        };
+        if self.feed_mode == FeedMode::InverseTime && b.word(b'F').is_none() {
+            low.note(
+                "gcode-inverse-time",
+                b.line,
+                1,
+                "inverse-time feed (G93) without F in the block: the F before is used".into(),
+            );
+        }
+        let scale = self.scale();
+        let per_minute = match self.feed_mode {
+            FeedMode::PerMinute => f,
+            FeedMode::PerRevolution => match self.s {
+                Some(s) if self.spindle_on => f * s,
+                _ => {
+                    low.note(
+                        "gcode-per-rev",
+                        b.line,
+                        1,
+                        "feed per revolution (G95) with the spindle off: feed unknown".into(),
+                    );
+                    return None;
+                }
+            },
+            FeedMode::InverseTime => {
+                return (length > 1e-12).then_some(fedrat_digits(length * f));
+            }
+        };
+        if self.tcp {
+            return Some(per_minute * scale);
+        }
+        // TCP off: the NC spreads F over the joint motion (linear in program units,
+        // rotary in degrees).
+        let lin = (end_prog - start_prog).norm() / scale;
+        let lin = if matches!(self.motion, Some(Motion::Cw | Motion::Ccw)) {
+            length / scale
+        } else {
+            lin
+        };
+        let rot = ((joints[3] - self.joints[3]).to_degrees().powi(2)
+            + (joints[4] - self.joints[4]).to_degrees().powi(2))
+        .sqrt();
+        let d = (lin * lin + rot * rot).sqrt();
+        if d <= 1e-12 || length <= 1e-12 || per_minute <= 0.0 {
+            return None;
+        }
+        Some(fedrat_digits(length * per_minute / d))
+    }
+
+    /// The arc of a G2/G3 block in the part frame.
+    fn arc(
+        &self,
+        b: &Block,
+        motion: Motion,
+        start: &Vec3,
+        end: &Vec3,
+        joints: &Joints,
+        low: &mut Lowerer,
+    ) -> Result<ArcMove, LowerError> {
+        let line = b.line;
+        let n = self.plane;
+        let normal = Vec3::ith(n, 1.0);
+        let flat = |v: Vec3| v - normal * v[n];
+        let scale = self.scale();
+        let cw = motion == Motion::Cw;
+        let centre = if let Some(r) = b.word(b'R') {
+            let chord = flat(end - start);
+            let d = chord.norm();
+            let rr = r.value.abs() * scale;
+            if d < 1e-12 {
+                return Err(invalid(
+                    line,
+                    r.column,
+                    "I, J, K for a full circle (R gives no centre when start and end meet)",
+                    "R".into(),
+                ));
+            }
+            let h2 = rr * rr - 0.25 * d * d;
+            if h2 < -1e-6 * rr.max(1.0) {
+                return Err(invalid(
+                    line,
+                    r.column,
+                    "a radius at least half the chord",
+                    format!("R{} for a chord of {:.6} mm", r.value, d / scale),
+                ));
+            }
+            let h = h2.max(0.0).sqrt();
+            let left = normal.cross(&(chord / d));
+            let side = if cw { -1.0 } else { 1.0 } * if r.value < 0.0 { -1.0 } else { 1.0 };
+            start + 0.5 * (end - start) - normal * (0.5 * (end - start)[n]) + left * (side * h)
+        } else {
+            let mut c = *start;
+            let mut any = false;
+            for (k, l) in [b'I', b'J', b'K'].iter().enumerate() {
+                if let Some(w) = b.word(*l) {
+                    any = true;
+                    if k != n {
+                        c[k] += w.value * scale;
+                    }
+                }
+            }
+            if !any {
+                return Err(invalid(
+                    line,
+                    1,
+                    "the centre of the arc (I, J, K or R)",
+                    "none".into(),
+                ));
+            }
+            c
+        };
+        let radius = flat(start - centre).norm();
+        let off = (flat(end - centre).norm() - radius).abs();
+        if off > ARC_END_TOL_MM {
+            low.note(
+                "gcode-arc-end",
+                line,
+                1,
+                format!("the arc ends {off:.4} mm off the circle through its start"),
+            );
+        }
+        let sense = if cw { 1.0 } else { -1.0 };
+        if self.tcp {
+            return Ok(ArcMove {
+                centre: Point3::from(centre),
+                axis: normal * sense,
+                radius_mm: radius,
+                extra_turns: 0,
+            });
+        }
+        // TCP off: the arc of the linear joints, carried into the part frame by the
+        // (fixed) rotary axes.
+        if (joints[3] - self.joints[3]).abs() > 1e-12 || (joints[4] - self.joints[4]).abs() > 1e-12
+        {
+            return Err(invalid(
+                line,
+                1,
+                "an arc (G2, G3) with the rotary axes at rest (or tool-centre-point control on)",
+                "rotary motion in the arc's block".into(),
+            ));
+        }
+        let at = |p: &Vec3| {
+            let mut q = *joints;
+            for j in 0..3 {
+                q[j] = p[(self.letters[j] - b'X') as usize];
+            }
+            self.machine.forward(&q).tip
+        };
+        let c = at(&centre);
+        let dir = at(&(centre + normal)) - c;
+        let mirror = self.linear_mirror();
+        let axis = normalize_or_none(&dir, 1e-12).unwrap_or(normal) * (sense * mirror);
+        Ok(ArcMove {
+            centre: c,
+            axis,
+            radius_mm: radius,
+            extra_turns: 0,
+        })
+    }
+
+    /// −1 when the machine's linear axes (with their signs) form a left-handed frame.
+    fn linear_mirror(&self) -> f64 {
+        let col = |k: usize| self.machine.linear[k].direction * self.machine.linear[k].sign;
+        let mut cols = [col(0), col(1), col(2)];
+        // Columns in X, Y, Z order of the program.
+        let mut ordered = cols;
+        for j in 0..3 {
+            ordered[(self.letters[j] - b'X') as usize] = cols[j];
+        }
+        cols = ordered;
+        if cols[0].cross(&cols[1]).dot(&cols[2]) < 0.0 {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+
+    /// Close the last tool path.
+    pub fn finish(
+        &mut self,
+        low: &mut Lowerer,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        self.close(low, sink, 0)
+    }
+}
+
+/// A feed worked out from the joint motion or inverse time carries the rounding of the
+/// printed joints: keep the four decimals of a FEDRAT.
+fn fedrat_digits(f: f64) -> f64 {
+    (f * 1e4).round() / 1e4
+}
+
+/// `43.4` for 434, `1` for 10.
+fn fmt_code(tenths: i64) -> String {
+    if tenths % 10 == 0 {
+        format!("{}", tenths / 10)
+    } else {
+        format!("{}.{}", tenths / 10, (tenths % 10).abs())
+    }
+}
