@@ -725,3 +725,178 @@ fn fmt_code(tenths: i64) -> String {
         format!("{}.{}", tenths / 10, (tenths % 10).abs())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::machine::TABLE_I_AC_TOML;
+    use crate::parse::GcodeReader;
+    use crate::toolpath::{LowerOptions, MotionKind, Program};
+    use approx::assert_relative_eq;
+
+    fn ac() -> Machine {
+        Machine::from_toml_str(TABLE_I_AC_TOML).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn read(text: &str, rtcp: Rtcp) -> Result<Program, LowerError> {
+        let m = ac();
+        let mut nc = NcReader::new(&m, rtcp, "prog").unwrap_or_else(|e| panic!("{e}"));
+        let mut low = Lowerer::new(LowerOptions::default());
+        let mut sink = |_: &crate::toolpath::Toolpath, _: &crate::toolpath::Posture| Ok(());
+        for b in GcodeReader::new(text.as_bytes()) {
+            let b = b.unwrap_or_else(|e| panic!("{e}"));
+            nc.push(&b, &mut low, &mut sink)?;
+        }
+        nc.finish(&mut low, &mut sink)?;
+        low.finish(&mut sink)
+    }
+
+    fn ok(text: &str, rtcp: Rtcp) -> Program {
+        read(text, rtcp).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn dir(tilt_deg: f64, az_deg: f64) -> Vec3 {
+        let (t, a) = (tilt_deg.to_radians(), az_deg.to_radians());
+        Vec3::new(t.sin() * a.cos(), t.sin() * a.sin(), t.cos())
+    }
+
+    #[test]
+    fn joints_through_the_forward_kinematics() {
+        // kinematics.md K6: (A, C) = (30°, −30°) puts the tool at tilt 30°, azimuth 120°.
+        let p = ok(
+            "G90 G94 G21\nS10000 M3\nG0 X0 Y0 Z50 A0 C0\nG1 X10 Y0 Z0 A30 C-30 F1000\n",
+            Rtcp::Auto,
+        );
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+        let ps = &p.paths[0].postures;
+        assert_eq!(ps[0].motion, MotionKind::Rapid);
+        assert_eq!(ps[1].spindle_rpm, Some(10000.0));
+        assert_relative_eq!(ps[1].axis, dir(30.0, 120.0), epsilon = 1e-12);
+        let m = ac();
+        let pose = m.forward(&[10.0, 0.0, 0.0, 30f64.to_radians(), -30f64.to_radians()]);
+        assert_relative_eq!(ps[1].position, pose.tip, epsilon = 1e-12);
+        // TCP off: F spreads over √(ΔX² + ΔZ² + ΔA² + ΔC²) (mm and degrees).
+        let d = (100.0f64 + 2500.0 + 900.0 + 900.0).sqrt();
+        let len = (ps[1].position - ps[0].position).norm();
+        assert_relative_eq!(
+            ps[1].feed_mm_min.unwrap_or(0.0),
+            (1000.0 * len / d * 1e4).round() / 1e4,
+            epsilon = 1e-9
+        );
+    }
+
+    #[test]
+    fn tool_centre_point_control_and_its_switches() {
+        let text = "G0 X1 Y2 Z3 A0 C0\nG43.4 H1\nG1 X1 Y2 Z3 A30 C-30 F500\nG91 X1 C10\nG49\nG90 G1 X0 Y0 Z0\n";
+        let p = ok(text, Rtcp::Auto);
+        let ps = &p.paths[0].postures;
+        assert_eq!(ps[1].position, Point3::new(1.0, 2.0, 3.0));
+        assert_relative_eq!(ps[1].axis, dir(30.0, 120.0), epsilon = 1e-12);
+        assert_eq!(ps[1].feed_mm_min, Some(500.0));
+        assert_relative_eq!(ps[2].position, Point3::new(2.0, 2.0, 3.0), epsilon = 1e-12);
+        assert_relative_eq!(ps[2].axis, dir(30.0, 110.0), epsilon = 1e-12);
+        // G49: X Y Z are joints again (A, C kept).
+        let m = ac();
+        let q = [0.0, 0.0, 0.0, 30f64.to_radians(), (-20f64).to_radians()];
+        assert_relative_eq!(ps[3].position, m.forward(&q).tip, epsilon = 1e-12);
+        // --rtcp on: the first block is a tip in the part frame too.
+        let on = ok(text, Rtcp::On);
+        assert_eq!(on.paths[0].postures[0].position, Point3::new(1.0, 2.0, 3.0));
+        assert_eq!(on.paths[0].postures[3].position, Point3::origin());
+        let t = ok("TRAORI\nG1 X1 Y2 Z3 A0 C0 F100\nTRAFOOF\n", Rtcp::Auto);
+        assert_eq!(t.paths[0].postures[0].position, Point3::new(1.0, 2.0, 3.0));
+    }
+
+    #[test]
+    fn arcs_in_the_three_planes() {
+        let p = ok(
+            "G43.4\nG0 X10 Y0 Z0 A0 C0\nG17 G2 X0 Y-10 I-10 J0 F100\nG3 X10 Y0 R-10\nG18 G2 X20 Z0 I5 K0\nG91 G19 G3 Y0 Z0 J0 K5\n",
+            Rtcp::Auto,
+        );
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+        let t = &p.paths[0];
+        assert_eq!(t.stats.circles, 4);
+        let a = t.postures[1].arc.as_ref().unwrap_or_else(|| panic!("arc"));
+        assert_eq!(
+            (a.centre, a.axis, a.radius_mm),
+            (Point3::origin(), Vec3::z(), 10.0)
+        );
+        // R < 0: the long way round, counter-clockwise: three quarters of a turn.
+        let b = t.postures[2].arc.as_ref().unwrap_or_else(|| panic!("arc"));
+        assert_relative_eq!(b.centre, Point3::new(10.0, -10.0, 0.0), epsilon = 1e-12);
+        assert_eq!(b.axis, -Vec3::z());
+        let sweep = b.sweep_rad(&t.postures[1].position, &t.postures[2].position);
+        assert_relative_eq!(sweep, 1.5 * std::f64::consts::PI, epsilon = 1e-12);
+        let c = t.postures[3].arc.as_ref().unwrap_or_else(|| panic!("arc"));
+        assert_eq!((c.centre, c.axis), (Point3::new(15.0, 0.0, 0.0), Vec3::y()));
+        // G19 full circle about −X (incremental, end = start).
+        let d = t.postures[4].arc.as_ref().unwrap_or_else(|| panic!("arc"));
+        assert_eq!(d.axis, -Vec3::x());
+        assert_relative_eq!(
+            t.stats.length_mm,
+            35.0 * std::f64::consts::PI,
+            epsilon = 1e-9
+        );
+    }
+
+    #[test]
+    fn inches_inverse_time_spindle_and_tool_changes() {
+        let p = ok(
+            "G20 G43.4\nT1 M6\nS8000 M3\nG0 X0 Y0 Z1 A0 C0\nG93 G1 Z0 F60\nM5\nG94 G1 X1 F10\nT2 M6\nS9000 M4\nG1 X2\nM30\n",
+            Rtcp::Auto,
+        );
+        assert_eq!(p.paths.len(), 2);
+        let (a, b) = (&p.paths[0], &p.paths[1]);
+        assert_eq!((a.name.as_str(), a.tool_name.as_str()), ("prog", "T1"));
+        assert_eq!(b.tool_name, "T2");
+        assert_eq!(a.postures[0].position, Point3::new(0.0, 0.0, 25.4));
+        // Inverse time: 25.4 mm in 1/60 min.
+        assert_relative_eq!(
+            a.postures[1].feed_mm_min.unwrap_or(0.0),
+            1524.0,
+            epsilon = 1e-9
+        );
+        assert_eq!(a.postures[1].spindle_rpm, Some(8000.0));
+        assert_eq!(a.postures[2].spindle_rpm, None);
+        assert_relative_eq!(
+            a.postures[2].feed_mm_min.unwrap_or(0.0),
+            254.0,
+            epsilon = 1e-9
+        );
+        assert_eq!(b.postures[0].spindle_rpm, Some(9000.0));
+        assert_eq!(b.postures[0].position, Point3::new(50.8, 0.0, 0.0));
+    }
+
+    #[test]
+    fn findings_and_errors_name_line_and_column() {
+        let p = ok(
+            "G1 X1 F100\nG68.2 X0\nCYCLE832(0.01)\nG1 X2 Y1 Z0 A0 C0 B5\n",
+            Rtcp::Auto,
+        );
+        let msgs: Vec<(u32, String)> = p
+            .warnings
+            .iter()
+            .map(|w| (w.line, w.message.clone()))
+            .collect();
+        assert!(
+            msgs[0].1.contains("axis Y, Z, A, C not programmed"),
+            "{msgs:?}"
+        );
+        assert_eq!(msgs[1], (2, "G68.2 is not interpreted".into()));
+        assert_eq!(msgs[2], (3, "CYCLE832(0.01) is not interpreted".into()));
+        assert!(msgs[3].1.starts_with("B words"), "{msgs:?}");
+        for (text, at) in [
+            ("G0 X0 Y0 Z0 A0 C0\nG2 X1 Y1\n", (2, 1)),
+            ("G0 X0 Y0 Z0 A0 C0\nG2 X10 Y0 R2\n", (2, 11)),
+            ("G0 X0 Y0 Z0 A0 C0\nG2 X10 Y0 A5 I5\n", (2, 1)),
+            ("F-5\n", (1, 1)),
+        ] {
+            match read(text, Rtcp::Auto) {
+                Err(LowerError::Invalid { line, column, .. }) => {
+                    assert_eq!((line, column), at, "{text}")
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+    }
+}

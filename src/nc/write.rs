@@ -104,6 +104,7 @@ impl<'m> GcodeWriter<'m> {
     }
 
     fn solve(&mut self, p: &Point3, u: &Vec3, line: u32) -> io::Result<Joints> {
+        let u = &u.normalize();
         self.ik.solve(p, u).map(|s| s.joints).map_err(|e| {
             io::Error::other(match e {
                 IkFailure::Unreachable => format!(
@@ -376,4 +377,103 @@ fn clean(s: &str) -> String {
         })
         .collect();
     if t.trim().is_empty() { "-".into() } else { t }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::machine::TABLE_I_AC_TOML;
+    use crate::nc::{NcReader, Rtcp};
+    use crate::parse::GcodeReader;
+    use crate::parse::clsf::parse_str;
+    use crate::toolpath::{LowerOptions, Lowerer, Program, lower_records};
+    use approx::assert_relative_eq;
+
+    fn ac() -> Machine {
+        Machine::from_toml_str(TABLE_I_AC_TOML).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn write(program: &Program, m: &Machine, tcp: bool) -> io::Result<String> {
+        let mut w = GcodeWriter::new(m, tcp).unwrap_or_else(|e| panic!("{e}"));
+        let mut out = Vec::new();
+        for path in &program.paths {
+            w.begin_path(path, &mut out)?;
+            for p in &path.postures {
+                w.posture(p, &mut out)?;
+            }
+            w.end_path(&mut out)?;
+        }
+        w.finish(&mut out)?;
+        Ok(String::from_utf8(out).unwrap_or_default())
+    }
+
+    fn read(text: &str, m: &Machine) -> Program {
+        let mut nc = NcReader::new(m, Rtcp::Auto, "p").unwrap_or_else(|e| panic!("{e}"));
+        let mut low = Lowerer::new(LowerOptions::default());
+        let mut sink = |_: &Toolpath, _: &Posture| Ok(());
+        for b in GcodeReader::new(text.as_bytes()) {
+            let b = b.unwrap_or_else(|e| panic!("{e}"));
+            nc.push(&b, &mut low, &mut sink)
+                .unwrap_or_else(|e| panic!("{e}"));
+        }
+        nc.finish(&mut low, &mut sink)
+            .unwrap_or_else(|e| panic!("{e}"));
+        low.finish(&mut sink).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn clsf(text: &str) -> Program {
+        let recs = parse_str(text).unwrap_or_else(|e| panic!("{e}"));
+        lower_records(&recs, LowerOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn arcs_and_tilted_moves_round_trip() {
+        let p = clsf(
+            "TOOL PATH/A,TOOL,T1\nTLDATA/MILL,10,5,75,0,0\nSPINDL/RPM,12000,CLW\nRAPID\nGOTO/10,0,5,0,0,1\nFEDRAT/MMPM,800\nGOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10,0.06,0.5,10,5\nGOTO/0,-10,0\nCIRCLE/0,0,-1,0,0,-1,10,0.06,0.5,10,5\nGOTO/10,0,-1\nGOTO/12,1,-1,0.3,0.4,0.866025404\nCIRCLE/12,5,-1,0.6,0,0.8,4,0.06,0.5,10,5\nGOTO/12,9,-1\nEND-OF-PATH\n",
+        );
+        let m = ac();
+        for tcp in [false, true] {
+            let text = write(&p, &m, tcp).unwrap_or_else(|e| panic!("{e}"));
+            // The XY arcs are G2/G3 (joints at rest in the TCP-off case); the tilted one
+            // becomes lines.
+            assert_eq!(text.matches("G17 G2 X").count(), 1, "{text}");
+            assert_eq!(text.matches("G17 G3 X").count(), 1, "{text}");
+            assert!(text.contains("written as"), "{text}");
+            let back = read(&text, &m);
+            let (a, b) = (&p.paths[0], &back.paths[0]);
+            assert_eq!(b.tool.as_ref().map(|t| t.diameter_mm), Some(10.0));
+            let sampled = b.postures.len() - a.postures.len();
+            assert!(sampled >= 1);
+            // Every posture of the CLSF is there (the sampled arc adds lines before its end).
+            let mut k = 0;
+            for q in &a.postures {
+                while (b.postures[k].position - q.position).norm() > 1e-6 {
+                    k += 1;
+                }
+                assert_relative_eq!(b.postures[k].axis, q.axis, epsilon = 1e-9);
+                assert_eq!(b.postures[k].arc.is_some(), q.arc.is_some() && k < 4, "{k}");
+                assert_relative_eq!(
+                    b.postures[k].feed_mm_min.unwrap_or(0.0),
+                    q.feed_mm_min.unwrap_or(0.0),
+                    epsilon = 1e-4
+                );
+                assert_eq!(b.postures[k].spindle_rpm, q.spindle_rpm);
+            }
+            assert_relative_eq!(b.stats.length_mm, a.stats.length_mm, epsilon = 0.05);
+        }
+    }
+
+    #[test]
+    fn unreachable_axes_name_the_line() {
+        // A travels ±120°: a tool axis 150° from +Z is out of reach.
+        let p = clsf("TOOL PATH/A,TOOL,T\nGOTO/0,0,0,0.5,0,-0.866025404\nEND-OF-PATH\n");
+        let e = write(&p, &ac(), false)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.starts_with("line 2: every joint solution is outside"),
+            "{e}"
+        );
+    }
 }
