@@ -315,3 +315,92 @@ fn gcode_errors_name_line_and_column_and_need_the_machine() {
         .code(2);
     assert!(!out.exists());
 }
+
+#[test]
+fn gcode_feeds_every_command_like_its_clsf() {
+    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let cls = repo("samples/synth/hyperbolic-paraboloid.cls");
+    let m = repo("samples/machines/table1_nutating45.toml");
+    let nc = dir.path().join("hp.nc");
+    crest()
+        .arg("convert")
+        .arg(&cls)
+        .arg("-o")
+        .arg(&nc)
+        .arg("--machine")
+        .arg(&m)
+        .assert()
+        .success();
+    // Back to CLSF: the same records, the same numbers (axes are unit vectors after the
+    // kinematics: a written axis 1e-9 off unit length may change in its ninth decimal).
+    let back = dir.path().join("back.cls");
+    crest()
+        .arg("convert")
+        .arg(&nc)
+        .arg("-o")
+        .arg(&back)
+        .arg("--machine")
+        .arg(&m)
+        .assert()
+        .success();
+    let gotos = |p: &Path| -> Vec<String> {
+        std::fs::read_to_string(p)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .lines()
+            .filter(|l| l.starts_with("GOTO/") || l.starts_with("FEDRAT/") || l == &"RAPID")
+            .map(str::to_string)
+            .collect()
+    };
+    let (a, b) = (gotos(&cls), gotos(&back));
+    assert_eq!(a.len(), b.len());
+    let nums = |l: &str| -> Vec<f64> {
+        l.split(['/', ','])
+            .filter_map(|t| t.parse::<f64>().ok())
+            .collect()
+    };
+    for (la, lb) in a.iter().zip(&b) {
+        assert_eq!(la.split('/').next(), lb.split('/').next());
+        let (na, nb) = (nums(la), nums(lb));
+        assert_eq!(na.len(), nb.len(), "{la} / {lb}");
+        for (x, y) in na.iter().zip(&nb) {
+            assert!((x - y).abs() <= 1.5e-9, "{la} / {lb}");
+        }
+    }
+    // Resample (streaming) and the planned feed: the same numbers.
+    let json = |args: &[&str], file: &Path, machine: bool| -> serde_json::Value {
+        let mut c = crest();
+        c.args(&args[..1]).arg(file).args(&args[1..]);
+        if machine {
+            c.arg("--machine").arg(&m);
+        }
+        let out = c
+            .arg("--json")
+            .assert()
+            .success()
+            .get_output()
+            .stdout
+            .clone();
+        serde_json::from_slice(&out).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let csv = dir.path().join("r.csv");
+    let csv = csv.to_str().unwrap_or("r.csv");
+    let args = [
+        "resample", "--mode", "fz", "--fz-mm", "0.1", "--teeth", "1", "-o", csv,
+    ];
+    let a = json(&args, &cls, false);
+    let b = json(&args, &nc, true);
+    assert_eq!(b["feed"], "programmed");
+    assert_eq!(a["samples"], b["samples"]);
+    let (ta, tb) = (
+        a["paths"][0]["stats"]["duration_s"].as_f64().unwrap_or(0.0),
+        b["paths"][0]["stats"]["duration_s"].as_f64().unwrap_or(1.0),
+    );
+    assert!((ta - tb).abs() < 1e-9 * ta, "{ta} vs {tb}");
+    let a = json(&["feed"], &cls, true);
+    let b = json(&["feed"], &nc, true);
+    let (ta, tb) = (
+        a["total_time_s"].as_f64().unwrap_or(0.0),
+        b["total_time_s"].as_f64().unwrap_or(1.0),
+    );
+    assert!((ta - tb).abs() < 1e-6 * ta, "{ta} vs {tb}");
+}
