@@ -10,7 +10,8 @@ use crest::tool::{Cutter, Shape};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
-#[path = "../tests/surface_common/mod.rs"]
+#[path = "../tests/integration/util/passes.rs"]
+#[allow(dead_code)]
 mod surface_common;
 
 fn cutter() -> Cutter {

@@ -267,7 +267,7 @@ fn quadric_normal<'a>(
     let (cxx, cxy, cyy) = (sxx / sw - mx * mx, sxy / sw - mx * my, syy / sw - my * my);
     let det = cxx * cyy - cxy * cxy;
     let tr = cxx + cyy;
-    if !(tr > 0.0) {
+    if tr.is_nan() || tr <= 0.0 {
         return None;
     }
     // Smaller principal spread under 2 % of the larger (in length): the points lie along a

@@ -172,7 +172,7 @@ impl ReferenceSource {
 #[derive(Debug, Clone)]
 pub enum Output {
     /// A height map on a window or patch.
-    Grid(Simulation),
+    Grid(Box<Simulation>),
     /// A point cloud over the part.
     Map(PartMap),
 }
@@ -544,7 +544,9 @@ pub fn simulate(
             },
         ),
     };
-    let (model, mode) = req.model.with_resampling(req.dtheta_deg.to_radians());
+    let (model, mode) =
+        req.model
+            .with_resampling(req.dtheta_deg.to_radians(), cutting.fz_mm, cutter.teeth());
     let mut ropts =
         resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
     if let Some(f) = cutting.feed_mm_min {
@@ -636,7 +638,7 @@ pub fn simulate(
                     ));
                 }
             }
-            let tile = (256.0 * spacing_mm).clamp(1.0, 20.0).max(spacing_mm);
+            let tile = (128.0 * spacing_mm).clamp(0.5, 10.0).max(spacing_mm);
             sopts.spacing_mm = spacing_mm;
             let region = reach.map(|r| (r.lo, r.hi));
             let m = surface::map_part(
@@ -706,10 +708,10 @@ pub fn simulate(
                 length_mm,
                 width_mm,
             };
-            Output::Grid(
+            Output::Grid(Box::new(
                 surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                     .map_err(|e| miette!("{file}: {e}"))?,
-            )
+            ))
         }
         GridRequest::PatchAt { s_mm, .. } => {
             let last = samples.last().map_or(0.0, |s| s.s_mm);
@@ -718,15 +720,15 @@ pub fn simulate(
                     "--patch-at {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
                 ));
             }
-            Output::Grid(
+            Output::Grid(Box::new(
                 surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                     .map_err(|e| miette!("{file}: {e}"))?,
-            )
+            ))
         }
-        GridRequest::Window { .. } => Output::Grid(
+        GridRequest::Window { .. } => Output::Grid(Box::new(
             surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
                 .map_err(|e| miette!("{file}: {e}"))?,
-        ),
+        )),
     };
     let (nodes, nodes_cut) = match &output {
         Output::Grid(sim) => (sim.map.nx * sim.map.ny, sim.nodes_cut),

@@ -162,7 +162,7 @@ pub fn simulate_run(
         .ok_or_else(|| "the synthetic program has no tool path".to_string())?;
 
     let dtheta = design.dtheta_deg.unwrap_or(DEFAULT_DTHETA_DEG).to_radians();
-    let (model, mode) = design.model.with_resampling(dtheta);
+    let (model, mode) = design.model.with_resampling(dtheta, fz_mm, cutter.teeth());
     let ropts = crate::resample::Options::new(mode, fz_mm, cutter.teeth())
         .with_rpm(design.rpm)
         .with_feed_mm_min(p.feed_mm_min);

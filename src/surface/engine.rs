@@ -790,31 +790,31 @@ impl Setup<'_> {
     }
 
     /// Nominal height and cos β at every node of a tile: exact on a global sub-lattice
-    /// every 8 nodes, bilinear in between (the nominal is smooth at that scale: the error
-    /// is κ (8 d)²/8, 4·10⁻⁷ mm for a 20 mm radius at 1 µm). The sub-lattice is global so
-    /// the result does not depend on the tiling.
+    /// every K nodes, bilinear in between, K ≤ 8 and K·d ≤ 20 µm (the error is κ (K d)²/8:
+    /// 4·10⁻⁷ mm for a 20 mm radius at 1 µm, 2.5·10⁻⁶ mm at most). The sub-lattice is
+    /// global so the result does not depend on the tiling.
     fn tile_nominal(&self, i0: usize, j0: usize, w: usize, h: usize) -> Vec<(f64, f64)> {
-        const K: usize = 8;
+        let k = ((0.02 / self.d + 1e-9).floor() as usize).clamp(1, 8);
         let (nx, ny) = (self.nx, self.ny);
-        let gi0 = i0 / K;
-        let gj0 = j0 / K;
-        let gi1 = (i0 + w - 1).div_ceil(K);
-        let gj1 = (j0 + h - 1).div_ceil(K);
+        let gi0 = i0 / k;
+        let gj0 = j0 / k;
+        let gi1 = (i0 + w - 1).div_ceil(k);
+        let gj1 = (j0 + h - 1).div_ceil(k);
         let sw = gi1 - gi0 + 1;
         let mut sub = Vec::with_capacity(sw * (gj1 - gj0 + 1));
         for gj in gj0..=gj1 {
             for gi in gi0..=gi1 {
                 sub.push(
                     self.nominal
-                        .q_cos((gi * K).min(nx - 1), (gj * K).min(ny - 1)),
+                        .q_cos((gi * k).min(nx - 1), (gj * k).min(ny - 1)),
                 );
             }
         }
         let lerp = |p: f64, q: f64, t: f64| p + (q - p) * t;
         let frac = |x: usize, n: usize| {
-            let g = x / K;
-            let a = (g * K).min(n - 1);
-            let b = ((g + 1) * K).min(n - 1);
+            let g = x / k;
+            let a = (g * k).min(n - 1);
+            let b = ((g + 1) * k).min(n - 1);
             (
                 g,
                 if b > a {

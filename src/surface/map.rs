@@ -71,7 +71,7 @@ pub fn map_part(
         ));
     }
     let n: Vec<usize> = (0..3)
-        .map(|k| (((hi[k] - lo[k]) / tile_mm).floor() as usize + 1).max(1))
+        .map(|k| (((hi[k] - lo[k]) / tile_mm).ceil() as usize).max(1))
         .collect();
     let cells = n[0].saturating_mul(n[1]).saturating_mul(n[2]);
     if cells > 10_000_000 {
@@ -85,7 +85,12 @@ pub fn map_part(
         for ky in 0..n[1] {
             for kx in 0..n[0] {
                 let c_lo = lo + Vec3::new(kx as f64, ky as f64, kz as f64) * tile_mm;
-                let c_hi = c_lo + Vec3::repeat(tile_mm);
+                // Cells end at the region's far side.
+                let c_hi = Point3::new(
+                    (c_lo.x + tile_mm).min(hi.x),
+                    (c_lo.y + tile_mm).min(hi.y),
+                    (c_lo.z + tile_mm).min(hi.z),
+                );
                 if !part.touches_box(&c_lo, &c_hi) {
                     continue;
                 }
@@ -111,11 +116,12 @@ pub fn map_part(
         .collect();
     let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&tips);
     let reach = cutter.radius_mm + opts.depth_mm + 1.0;
-    // A patch large enough to hold the cell's surface seen along any normal.
-    let side = tile_mm * 3f64.sqrt() + 2.0 * spacing_mm;
     let mut points = Vec::new();
     let mut nodes_cut = 0;
     for (done, (c_lo, c_hi, c)) in centres.iter().enumerate() {
+        // A patch large enough to hold the cell's surface seen along any normal.
+        let diag = (c_hi - c_lo).norm();
+        let side = diag + 2.0 * spacing_mm;
         let r = 0.5 * side * 2f64.sqrt() + reach;
         let mut idx: Vec<usize> = tree
             .within_unsorted::<SquaredEuclidean>(&[c.point.x, c.point.y, c.point.z], r * r)
@@ -172,7 +178,10 @@ pub fn map_part(
         for j in 0..sim.map.ny {
             for i in 0..sim.map.nx {
                 let (p, nrm) = sim.node_point(i, j);
-                let inside = (0..3).all(|k| p[k] >= c_lo[k] && p[k] < c_hi[k]);
+                // Half-open cells, closed at the region's far side.
+                let inside = (0..3).all(|k| {
+                    p[k] >= c_lo[k] && (p[k] < c_hi[k] || (c_hi[k] >= hi[k] && p[k] <= hi[k]))
+                });
                 if !inside {
                     continue;
                 }

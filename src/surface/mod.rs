@@ -66,15 +66,30 @@ impl ModelKind {
         }
     }
 
-    /// The model with the ICE step `dtheta_rad`, and the resampling it needs: one sample
-    /// per feed per tooth for the dome; for ICE a sample every ≥ 8° of spindle (a whole
-    /// number of Δθ), which the engine subdivides to Δθ, so that the samples are a few µm
-    /// apart (straight interpolation exact far below a nanometre) and memory stays small.
-    pub fn with_resampling(self, dtheta_rad: f64) -> (Model, crate::resample::Mode) {
+    /// The model with the ICE step `dtheta_rad`, and the resampling it needs for feed per
+    /// tooth `fz_mm` and `teeth`: one sample per feed per tooth for the dome; for ICE a
+    /// sample every ≥ 8° of spindle and ≥ [`ICE_SAMPLE_STEP_MM`] of travel (a whole number
+    /// of Δθ), which the engine subdivides to Δθ (poses interpolated straight between
+    /// samples so close), so that memory stays small on long paths and tiny feeds. The
+    /// discretisation is Δθ either way; where the sample spacing changes, the substeps at
+    /// move ends fall differently, which moves heights by the model's Δθ error.
+    pub fn with_resampling(
+        self,
+        dtheta_rad: f64,
+        fz_mm: f64,
+        teeth: usize,
+    ) -> (Model, crate::resample::Mode) {
         match self {
             ModelKind::Dome => (Model::Dome, crate::resample::Mode::FeedPerTooth),
             ModelKind::Ice => {
-                let coarse = dtheta_rad * (8f64.to_radians() / dtheta_rad).floor().max(1.0);
+                let per_rev = fz_mm * teeth.max(1) as f64;
+                let travel = if per_rev > 0.0 && per_rev.is_finite() {
+                    std::f64::consts::TAU * ICE_SAMPLE_STEP_MM / per_rev
+                } else {
+                    0.0
+                };
+                let coarse_angle = 8f64.to_radians().max(travel.min(1e6));
+                let coarse = dtheta_rad * (coarse_angle / dtheta_rad).floor().max(1.0);
                 (
                     Model::Ice { dtheta_rad },
                     crate::resample::Mode::SpindleStep { dtheta_rad: coarse },
@@ -83,6 +98,10 @@ impl ModelKind {
         }
     }
 }
+
+/// Largest travel between the ICE model's resampled poses that the engine subdivides, mm
+/// (at tiny feeds per tooth 8° of spindle is far less).
+pub const ICE_SAMPLE_STEP_MM: f64 = 0.005;
 
 /// Where the grid lies.
 #[derive(Debug, Clone, Copy, PartialEq)]

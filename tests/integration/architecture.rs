@@ -1,0 +1,196 @@
+//! The invariants of ARCHITECTURE.md that a machine can check, read off the source: which
+//! stages a stage imports, which stages may use rayon, which may touch files or the terminal,
+//! file sizes and stray files. Code after a file's `#[cfg(test)]` is test code and exempt
+//! (tests may build fixtures with later stages).
+
+use std::path::{Path, PathBuf};
+
+/// The library's stages in pipeline order; a stage may use only earlier ones.
+const STAGES: [&str; 17] = [
+    "math",
+    "parse",
+    "toolpath",
+    "resample",
+    "tool",
+    "part",
+    "synth",
+    "kinematics",
+    "nc",
+    "surface",
+    "metrics",
+    "study",
+    "config",
+    "io",
+    "plot",
+    "report",
+    "pipeline",
+];
+
+/// Stages that may run rayon (fixed chunking: results identical for any thread count).
+const RAYON: [&str; 4] = ["part", "kinematics", "surface", "study"];
+
+/// Stages that may touch files or the terminal.
+const FILES: [&str; 3] = ["io", "plot", "report"];
+
+fn root() -> PathBuf {
+    PathBuf::from(crate::util::ROOT)
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The non-test code of a file, with comment lines dropped.
+fn code(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    let body = match text.find("#[cfg(test)]") {
+        Some(i) => &text[..i],
+        None => &text[..],
+    };
+    body.lines()
+        .filter(|l| {
+            let t = l.trim_start();
+            !(t.starts_with("//") || t.starts_with("/*") || t.starts_with('*'))
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The stage a library file belongs to (`src/<stage>/…` or `src/<stage>.rs`).
+fn stage_of(path: &Path) -> Option<&'static str> {
+    let rel = path.strip_prefix(root().join("src")).ok()?;
+    let first = rel.components().next()?.as_os_str().to_str()?;
+    let name = first.strip_suffix(".rs").unwrap_or(first);
+    STAGES.iter().copied().find(|s| *s == name)
+}
+
+fn library_files() -> Vec<(PathBuf, &'static str)> {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    files
+        .into_iter()
+        .filter_map(|p| stage_of(&p).map(|s| (p, s)))
+        .collect()
+}
+
+#[test]
+fn stages_import_only_earlier_stages() {
+    let mut bad = Vec::new();
+    for (path, stage) in library_files() {
+        let rank = STAGES.iter().position(|s| *s == stage).unwrap();
+        let text = code(&path);
+        for (i, later) in STAGES.iter().enumerate().skip(rank + 1) {
+            for pat in [
+                format!("crate::{later}::"),
+                format!("crate::{later}}}"),
+                format!("crate::{later};"),
+            ] {
+                if text.contains(&pat) {
+                    bad.push(format!(
+                        "{} ({stage}) uses {later} (stage {i})",
+                        path.display()
+                    ));
+                }
+            }
+        }
+    }
+    bad.dedup();
+    assert!(
+        bad.is_empty(),
+        "imports against the pipeline order:\n{}",
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn only_the_batch_stages_use_rayon() {
+    let bad: Vec<String> = library_files()
+        .into_iter()
+        .filter(|(p, s)| !RAYON.contains(s) && code(p).contains("rayon::"))
+        .map(|(p, _)| p.display().to_string())
+        .collect();
+    assert!(bad.is_empty(), "rayon outside {RAYON:?}: {bad:?}");
+}
+
+#[test]
+fn only_the_edge_stages_touch_files_or_the_terminal() {
+    let touches = [
+        "std::fs::",
+        "File::open",
+        "File::create",
+        "tempfile::",
+        "println!",
+        "eprintln!",
+        "print!(",
+        "std::io::stdout",
+        "std::io::stderr",
+    ];
+    let bad: Vec<String> = library_files()
+        .into_iter()
+        .filter(|(p, s)| !FILES.contains(s) && touches.iter().any(|t| code(p).contains(t)))
+        .map(|(p, _)| p.display().to_string())
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "files or terminal touched outside {FILES:?}: {bad:?}"
+    );
+}
+
+#[test]
+fn no_source_file_is_over_1200_lines_and_no_stray_files() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let long: Vec<String> = files
+        .iter()
+        .filter_map(|p| {
+            let n = std::fs::read_to_string(p).unwrap().lines().count();
+            (n > 1200).then(|| format!("{} ({n} lines)", p.display()))
+        })
+        .collect();
+    assert!(long.is_empty(), "files over 1,200 lines: {long:?}");
+    let mut all = Vec::new();
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    walk(&root().join("src"), &mut all);
+    let stray: Vec<String> = all
+        .iter()
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|x| x == "orig" || x == "rej" || x == "bak")
+        })
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(stray.is_empty(), "stray merge or backup files: {stray:?}");
+}
+
+#[test]
+fn every_source_file_opens_with_a_line_that_says_its_job() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let bad: Vec<String> = files
+        .iter()
+        .filter(|p| {
+            !std::fs::read_to_string(p)
+                .unwrap()
+                .trim_start()
+                .starts_with("//!")
+        })
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(bad.is_empty(), "files without a leading //! line: {bad:?}");
+}

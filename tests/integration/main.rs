@@ -1,0 +1,20 @@
+//! crest's integration tests as one binary (ripgrep style): one module per area, the
+//! helpers in `util`. insta snapshots are in `snapshots/`; proptest keeps failure seeds in
+//! `tests/proptest-regressions/<module>.txt` (its default for a crate root with a `main.rs`)
+//! and replays them first.
+
+mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
+mod convert; // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
+mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
+mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
+mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
+mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
+mod plot; // `crest plot`: every plot kind, titles and axis labels
+mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
+mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
+mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
+mod study; // `crest study`: designed experiments through the whole pipeline, their effects
+mod surface; // z-map and N-buffer: closed forms, patches, R7 trials, properties, `crest simulate`
+mod synth; // `crest synth`: synthetic paths, exact stepovers, CLSF and contact12 outputs
+mod tool; // cutters: model.md R1-R3, properties, `crest tool`, `crest runout`
+mod util; // helpers written once: commands, paths, files, JSON/CSV outputs, passes, generators
