@@ -410,7 +410,12 @@ mod properties {
     fn plane_part(z: f64) -> Part {
         let p = |x: f64, y: f64| Point3::new(x, y, z);
         Part::new(Mesh {
-            vertices: vec![p(-20.0, -20.0), p(20.0, -20.0), p(20.0, 20.0), p(-20.0, 20.0)],
+            vertices: vec![
+                p(-20.0, -20.0),
+                p(20.0, -20.0),
+                p(20.0, 20.0),
+                p(-20.0, 20.0),
+            ],
             triangles: vec![[0, 1, 2], [0, 2, 3]],
         })
         .unwrap()
@@ -418,14 +423,20 @@ mod properties {
 
     fn pass() -> (Cutter, Vec<crest::resample::Sample>) {
         let c = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
-        let s = crest::synth::pass::straight_pass(&c, 10f64.to_radians(), 0.05, -2.0, 4.0, 10.0).unwrap();
+        let s = crest::synth::pass::straight_pass(&c, 10f64.to_radians(), 0.05, -2.0, 4.0, 10.0)
+            .unwrap();
         (c, s)
     }
 
     fn window(y0: f64) -> Options {
         let mut o = Options::new(
             Model::Dome,
-            GridSpec::Window { x0_mm: -0.3, y0_mm: y0, x1_mm: 0.3, y1_mm: y0 + 0.6 },
+            GridSpec::Window {
+                x0_mm: -0.3,
+                y0_mm: y0,
+                x1_mm: 0.3,
+                y1_mm: y0 + 0.6,
+            },
             0.01,
         );
         o.depth_mm = 0.05;
@@ -464,7 +475,12 @@ mod properties {
         // The pass runs along y = 0; the window reaches 3 mm across, beyond the ball's reach
         // within the 0.05 mm depth (√(2 R ap) ≈ 0.71 mm).
         let mut o = window(0.0);
-        o.grid = GridSpec::Window { x0_mm: -0.2, y0_mm: -0.2, x1_mm: 0.2, y1_mm: 3.0 };
+        o.grid = GridSpec::Window {
+            x0_mm: -0.2,
+            y0_mm: -0.2,
+            x1_mm: 0.2,
+            y1_mm: 3.0,
+        };
         let part = plane_part(0.0);
         let run = |threads: usize| {
             rayon::ThreadPoolBuilder::new()

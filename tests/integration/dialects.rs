@@ -3,20 +3,14 @@
 //! 5-axis tool axes kept, no warning on a standard record; NX contact-contour data turned
 //! into tool tips.
 
-use assert_cmd::Command;
+use crate::util::{crest, repo, tempdir};
 use crest::io::toolpath::read_program;
 use crest::math::{Point3, Vec3};
 use crest::toolpath::{MotionKind, Program};
-use std::path::{Path, PathBuf};
-
-fn crest() -> Command {
-    Command::cargo_bin("crest").unwrap_or_else(|e| panic!("{e}"))
-}
+use std::path::PathBuf;
 
 fn sample(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("samples/apt")
-        .join(name)
+    repo("samples/apt").join(name)
 }
 
 fn inspect(name: &str) -> serde_json::Value {
@@ -172,7 +166,7 @@ fn nx_contact_contour_points_become_tool_tips() {
 
 #[test]
 fn contact_contour_without_normals_says_what_is_missing() {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let f = dir.path().join("cc.cls");
     std::fs::write(
         &f,

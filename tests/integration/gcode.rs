@@ -3,19 +3,11 @@
 //! the forward kinematics: the same postures; `crest simulate` of the CLSF and of its G-code;
 //! a hand-written program read by `inspect`; errors that name line and column.
 
-use assert_cmd::Command;
+use crate::util::{crest, repo, tempdir};
 use crest::io::toolpath::{ReadOptions, read_program_with};
 use crest::kinematics::Machine;
 use crest::toolpath::{LowerOptions, MotionKind, Program};
-use std::path::{Path, PathBuf};
-
-fn crest() -> Command {
-    Command::cargo_bin("crest").unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn repo(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
-}
+use std::path::Path;
 
 fn machine(rel: &str) -> Machine {
     let text = std::fs::read_to_string(repo(rel)).unwrap_or_else(|e| panic!("{e}"));
@@ -69,7 +61,7 @@ fn compare(a: &Program, b: &Program) -> (f64, f64) {
 }
 
 fn round_trip(cls: &str, machine_file: &str, rtcp: &str) -> (f64, f64) {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let nc = dir.path().join("out.nc");
     crest()
         .arg("convert")
@@ -132,7 +124,7 @@ fn heights(csv: &Path) -> Vec<f64> {
 
 #[test]
 fn simulate_from_the_clsf_and_from_its_gcode() {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let cls = repo("samples/synth/plane-trial3.cls");
     let m = repo("samples/machines/table1_ac.toml");
     let tool = repo("samples/synth/torus-r5-rc1.5.toml");
@@ -213,7 +205,7 @@ N120 M30
 
 #[test]
 fn inspect_reads_a_hand_written_program() {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let nc = dir.path().join("blade.nc");
     std::fs::write(&nc, PROGRAM).unwrap_or_else(|e| panic!("{e}"));
     let out = crest()
@@ -256,7 +248,7 @@ fn inspect_reads_a_hand_written_program() {
 
 #[test]
 fn gcode_errors_name_line_and_column_and_need_the_machine() {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let nc = dir.path().join("bad.nc");
     std::fs::write(&nc, "G90 G21\nG1 X1 Y2 Z-q F100\n").unwrap_or_else(|e| panic!("{e}"));
     let m = repo("samples/machines/table1_ac.toml");
@@ -318,7 +310,7 @@ fn gcode_errors_name_line_and_column_and_need_the_machine() {
 
 #[test]
 fn gcode_feeds_every_command_like_its_clsf() {
-    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let dir = tempdir();
     let cls = repo("samples/synth/hyperbolic-paraboloid.cls");
     let m = repo("samples/machines/table1_nutating45.toml");
     let nc = dir.path().join("hp.nc");
