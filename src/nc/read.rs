@@ -359,7 +359,7 @@ impl<'m> NcReader<'m> {
         let has_centre = [b'I', b'J', b'K', b'R']
             .iter()
             .any(|l| b.word(*l).is_some());
-        if !(has_axis || arc && has_centre && motion_word.is_some()) {
+        if !(has_axis || (arc && has_centre && motion_word.is_some())) {
             return Ok(());
         }
         let motion = match self.motion {
