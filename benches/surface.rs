@@ -1,11 +1,14 @@
 //! Surface engine benchmarks. B-SIM (issue 5): a 2 mm × 2 mm window at 1 µm (4.0 M nodes)
 //! of a plane finished by a ball end R 5 mm, 4 teeth, helix 30°, lead 15°, stepover
 //! 0.2 mm, fz 0.05 mm, run-out 10 µm, ICE with Δθ = 1°; plus scaling with window area
-//! and with path length.
+//! and with path length; and the N-buffer on a curved part (issue 15): the same tool and
+//! raster mapped onto a convex cylinder of radius 20 mm (the design surface an STL-like
+//! mesh), a 2 mm × 2 mm patch at 1 µm along the part's normals.
 
 use crest::math::{Point3, Vec3};
+use crest::part::Part;
 use crest::resample::Sample;
-use crest::surface::{GridSpec, Model, Options, simulate};
+use crest::surface::{GridFrame, GridSpec, Model, Options, Reference, simulate, simulate_with};
 use crest::tool::{Cutter, Shape};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -65,6 +68,41 @@ fn run(samples: &[Sample], c: &Cutter, side_mm: f64, grid_mm: f64) -> usize {
         .unwrap_or(0)
 }
 
+/// The B-SIM raster on the convex cylinder z = √(R² − y²) − R (R = 20 mm, axis x): passes
+/// along +x, 0.2 mm apart along the surface, the axis leaning 15° into the feed from the
+/// normal, contact points every 8° of spindle.
+fn raster_on_cylinder(c: &Cutter, x0: f64, x1: f64, a0: f64, a1: f64) -> Vec<Sample> {
+    let r = 20.0;
+    let lead = 15f64.to_radians();
+    let fz = 0.05;
+    let ds = 4.0 * fz * 8.0 / 360.0;
+    let n = ((a1 - a0) / 0.2).round() as usize;
+    let mut out = Vec::new();
+    for k in 0..=n {
+        let phi = (a0 + 0.2 * k as f64) / r;
+        let normal = Vec3::new(0.0, phi.sin(), phi.cos());
+        let axis = (Vec3::x() * lead.sin() + normal * lead.cos()).normalize();
+        let m = ((x1 - x0) / ds).round() as usize;
+        for i in 0..=m {
+            let s = i as f64 * ds;
+            let cc = Point3::new(x0 + s, r * phi.sin(), r * phi.cos() - r);
+            out.push(Sample {
+                run: k,
+                s_mm: s,
+                t_s: s / 1000.0,
+                theta_rad: std::f64::consts::TAU * s / (4.0 * fz),
+                position: crest::synth::tool_tip(c, &cc, &normal, &axis),
+                axis,
+                contact: Some(cc),
+                normal: Some(normal),
+                feed_dir: Vec3::x(),
+                feed_mm_min: 1000.0,
+            });
+        }
+    }
+    out
+}
+
 fn bench(cr: &mut Criterion) {
     let c = cutter();
     let mut g = cr.benchmark_group("surface");
@@ -87,6 +125,36 @@ fn bench(cr: &mut Criterion) {
             b.iter(|| black_box(run(&long, &c, 2.0, 0.002)))
         });
     }
+    // N-buffer on the design surface of a convex cylinder (B-SIM tool and raster).
+    let cyl = raster_on_cylinder(&c, -1.2, 3.2, -2.2, 2.2);
+    let surface = crest::synth::Surface::ConvexCylinder { radius_mm: 20.0 };
+    let mesh = crest::synth::mesh::surface_mesh(&surface, (8.0, 8.0), 0.0, 0.0, 1e-5).unwrap();
+    let part = Part::new(mesh).unwrap();
+    let patch = Options::new(
+        Model::Ice {
+            dtheta_rad: 1f64.to_radians(),
+        },
+        GridSpec::Oriented {
+            frame: GridFrame {
+                origin: Point3::new(1.0, 0.0, 0.0),
+                u: Vec3::x(),
+                v: Vec3::y(),
+                w: Vec3::z(),
+            },
+            length_mm: 2.0,
+            width_mm: 2.0,
+        },
+        0.001,
+    );
+    g.bench_function("nbuffer_cylinder_2mm_1um_ice", |b| {
+        b.iter(|| {
+            black_box(
+                simulate_with(&cyl, &c, &patch, Reference::Part(&part), &|_, _| {})
+                    .map(|s| s.nodes_cut)
+                    .unwrap_or(0),
+            )
+        })
+    });
     g.finish();
 }
 

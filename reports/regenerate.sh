@@ -21,3 +21,6 @@ sh reports/lavernhe-fig7/regenerate.sh
 
 # Feed prediction on the 000 hyperbolic paraboloid (issue 8): Fig 5 and Fig 11.
 sh reports/feed-paraboloid/regenerate.sh
+
+# Curvature (issue 15): convex against concave against plane, the N-buffer on design surfaces.
+sh reports/curvature/regenerate.sh

@@ -224,8 +224,7 @@ pub fn simulate_with(
     let mut total = pending.len();
     loop {
         let last = band >= opts.depth_mm;
-        let thr = setup.nominal.q_max + band;
-        let strips = setup.strips(thr);
+        let strips = setup.strips(band);
         strips_total += strips.0.len();
         let bins = setup.bin(&strips.0, &strips.1, t, ntx, nty, &pending);
         let mut uncertain = Vec::new();
@@ -505,15 +504,32 @@ impl Setup<'_> {
         Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
     }
 
-    /// All strips within `thr`, with their node-space bounding boxes.
-    fn strips(&self, thr: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
+    /// The threshold of sample `k`: the band above the highest nominal the tool can reach
+    /// from there (the nominal's bound over the nodes within the tool's reach of its tip).
+    fn threshold(&self, k: usize, band: f64) -> f64 {
+        let p = self.pose(k, 0.0, false);
+        let top = self.profile.levels[self.profile.levels.len() - 1];
+        let reach = ((top.r * top.r + top.z * top.z).sqrt() + self.profile.runout_bound) / self.d;
+        // Tips farther than the step to the next sample lie within its reach too.
+        let step = if k + 1 < self.samples.len() {
+            (self.samples[k + 1].position - self.samples[k].position).norm() / self.d
+        } else {
+            0.0
+        };
+        self.nominal.local_max(p.b.x, p.b.y, reach + step + 1.0) + band
+    }
+
+    /// All strips within the band above the nominal, with their node-space bounding boxes.
+    fn strips(&self, band: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
         let n = self.samples.len();
         let chunks: Vec<(Vec<Strip>, Vec<[f64; 4]>)> = (0..n)
             .into_par_iter()
             .with_min_len(64)
             .map(|k| match self.opts.model {
-                Model::Ice { dtheta_rad } => self.ice_strips(k, dtheta_rad, thr),
-                Model::Dome => self.dome_strips(k, thr),
+                Model::Ice { dtheta_rad } => {
+                    self.ice_strips(k, dtheta_rad, self.threshold(k, band), band)
+                }
+                Model::Dome => self.dome_strips(k, self.threshold(k, band)),
             })
             .collect();
         let mut strips = Vec::new();
@@ -525,7 +541,16 @@ impl Setup<'_> {
         (strips, boxes)
     }
 
-    fn ice_strips(&self, k: usize, dtheta: f64, thr: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
+    /// The ICE strips of the pair of samples `k`, `k + 1`: `thr` bounds the whole pair
+    /// (quick rejection and candidate levels), `band` the edge points, each against the
+    /// nominal's bound under it.
+    fn ice_strips(
+        &self,
+        k: usize,
+        dtheta: f64,
+        thr: f64,
+        band: f64,
+    ) -> (Vec<Strip>, Vec<[f64; 4]>) {
         let mut strips = Vec::new();
         let mut boxes = Vec::new();
         if k + 1 >= self.samples.len() || self.samples[k + 1].run != self.samples[k].run {
@@ -572,7 +597,10 @@ impl Setup<'_> {
                     let mut lo = usize::MAX;
                     let mut hi = 0;
                     for i in 0..wa.len() {
-                        if wa[i][2] <= thr || wb[i][2] <= thr {
+                        let low = |p: &[f64; 3]| {
+                            p[2] <= thr && p[2] <= self.nominal.cell_bound(p[0], p[1]) + band
+                        };
+                        if low(&wa[i]) || low(&wb[i]) {
                             lo = lo.min(i);
                             hi = i;
                         }

@@ -73,6 +73,8 @@ pub(crate) struct Nominal {
     quad: Vec<[f64; 6]>,
     /// An upper bound of q over the whole grid, mm.
     pub q_max: f64,
+    /// Per lattice node, an upper bound of q over the coarse cells around it, mm.
+    bounds: Vec<f64>,
 }
 
 impl Nominal {
@@ -87,6 +89,7 @@ impl Nominal {
             d,
             quad: vec![[level, 0.0, 0.0, 0.0, 0.0, 0.0]; cnx * cny],
             q_max: level,
+            bounds: vec![level; cnx * cny],
         }
     }
 
@@ -133,10 +136,50 @@ impl Nominal {
                     + (c[3].abs() + c[4].abs() + c[5].abs()) * h * h;
                 q_max = q_max.max(bound);
                 nominal.quad[cj * nominal.cnx + ci] = c;
+                nominal.bounds[cj * nominal.cnx + ci] = bound;
             }
         }
         nominal.q_max = q_max;
         Some(nominal)
+    }
+
+    /// An upper bound of q over the fine nodes within `radius` nodes of (x, y) (node
+    /// coordinates, possibly outside the grid).
+    pub fn local_max(&self, x: f64, y: f64, radius: f64) -> f64 {
+        let s = self.stride as f64;
+        let lo = |v: f64, n: usize| (((v - radius) / s).floor().max(0.0) as usize).min(n - 1);
+        let hi = |v: f64, n: usize| {
+            let h = ((v + radius) / s).ceil();
+            if h < 0.0 { 0 } else { (h as usize).min(n - 1) }
+        };
+        let (i0, i1) = (lo(x, self.cnx), hi(x, self.cnx));
+        let (j0, j1) = (lo(y, self.cny), hi(y, self.cny));
+        if i0 == 0 && j0 == 0 && i1 + 1 == self.cnx && j1 + 1 == self.cny {
+            return self.q_max;
+        }
+        let mut m = f64::NEG_INFINITY;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                m = m.max(self.bounds[j * self.cnx + i]);
+            }
+        }
+        m
+    }
+
+    /// An upper bound of q over the coarse cell holding node-space point (x, y) and its
+    /// neighbours (clamped to the grid): each lattice node's bound covers the cells around
+    /// it, so a triangle with a vertex at (x, y) and any extent up to a cell is covered.
+    pub fn cell_bound(&self, x: f64, y: f64) -> f64 {
+        let s = self.stride as f64;
+        let c = |v: f64, n: usize| ((v / s).floor().max(0.0) as usize).min(n - 1);
+        let (i, j) = (c(x, self.cnx), c(y, self.cny));
+        let mut m = f64::NEG_INFINITY;
+        for jj in j.saturating_sub(1)..=(j + 2).min(self.cny - 1) {
+            for ii in i.saturating_sub(1)..=(i + 2).min(self.cnx - 1) {
+                m = m.max(self.bounds[jj * self.cnx + ii]);
+            }
+        }
+        m
     }
 
     /// Nominal height q (mm) and slope factor cos β = 1/√(1 + |∇q|²) at fine node (i, j).
