@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 /// Options of `crest feed`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Tool-path file (CLSF or contact12).
+    /// Tool-path file (CLSF, contact12 or G-code).
     #[arg(value_name = "FILE")]
     pub file: PathBuf,
     /// Machine description (`machine.toml`, kinematics.md §3.2).
@@ -33,6 +33,10 @@ pub struct Args {
     /// Write the per-posture table as CSV.
     #[arg(short = 'o', long = "output", value_name = "POSES.CSV")]
     pub output: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input: `auto` (as the program says), `on` or
+    /// `off` (the program is read through the kinematics of `--machine`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: super::reading::RtcpArg,
 }
 
 /// The `--level` values.
@@ -79,7 +83,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         apply_msys: args.absolute,
         ..Default::default()
     };
-    let program = crest::io::toolpath::read_program_with(&args.file, opts)?;
+    let read = crest::io::toolpath::ReadOptions {
+        lower: opts,
+        machine: Some(machine.clone()),
+        rtcp: args.rtcp.into(),
+    };
+    let program = crest::io::toolpath::read_program_with(&args.file, read)?;
     let level = match args.level {
         LevelArg::Jerk => Level::Jerk,
         LevelArg::Acc => Level::Acceleration,

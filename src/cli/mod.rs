@@ -21,6 +21,7 @@ mod inspect;
 mod metrics;
 mod plot;
 mod progress;
+mod reading;
 mod report;
 mod resample;
 mod runout;

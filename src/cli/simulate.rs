@@ -45,7 +45,7 @@ impl From<ModelName> for ModelKind {
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("grid").required(true).args(["window", "patch_at", "patch_near", "map_mm"])))]
 pub struct Args {
-    /// Tool-path file (NX CLSF or contact12).
+    /// Tool-path file (NX CLSF or APT, contact12, or G-code with `--machine`).
     pub file: PathBuf,
     /// Cutter description (tool.toml); default: the file's TLDATA with --teeth.
     #[arg(long, value_name = "TOOL.TOML")]
@@ -86,6 +86,11 @@ pub struct Args {
     /// `--feed predicted`). With `--feed-mm-min V`, the machine is planned at V.
     #[arg(long, value_name = "MACHINE.TOML")]
     pub machine: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input (read through the kinematics of
+    /// `--machine`; the feed is then predicted only with `--feed predicted`): `auto` (as
+    /// the program says), `on` or `off`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: super::reading::RtcpArg,
     /// Surface model.
     #[arg(long, value_enum)]
     pub model: ModelName,
@@ -247,6 +252,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         fz_mm: args.fz_mm,
         feed: args.feed.map(Into::into),
         machine: args.machine.clone(),
+        rtcp: args.rtcp.into(),
         model: args.model.into(),
         dtheta_deg: args.dtheta_deg,
         grid_um: args.grid_um,

@@ -112,8 +112,10 @@ pub struct SimulateRequest {
     pub fz_mm: Option<f64>,
     /// Programmed or predicted feed.
     pub feed: Option<FeedSource>,
-    /// Machine description for the predicted feed.
+    /// Machine description for the predicted feed (and to read G-code through).
     pub machine: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input.
+    pub rtcp: crate::nc::Rtcp,
     /// Surface model.
     pub model: ModelKind,
     /// Spindle step of the ICE model, degrees.
@@ -420,7 +422,18 @@ pub fn simulate(
         apply_msys: req.absolute,
         ..Default::default()
     };
-    let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
+    // G-code is read through the machine, which then predicts the feed only when asked.
+    let gcode = crate::io::toolpath::detect(&req.file)? == crate::io::toolpath::InputKind::Gcode;
+    let read = crate::io::toolpath::ReadOptions {
+        lower,
+        machine: match (&req.machine, gcode) {
+            (Some(m), true) => Some(super::load_machine(m)?),
+            _ => None,
+        },
+        rtcp: req.rtcp,
+    };
+    let read_machine = read.machine.clone();
+    let mut program = crate::io::toolpath::read_program_with(&req.file, read)?;
     let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
         req.tool.as_deref(),
         &program,
@@ -430,7 +443,11 @@ pub fn simulate(
     )?;
     warnings.extend(tool_warnings);
     let cutting = resolve_cutting(req, &process, &program, cutter.teeth())?;
-    let machine = resolve_feed_source(req.feed, req.machine.as_deref())?;
+    let machine = match (gcode, req.feed) {
+        (true, Some(FeedSource::Predicted)) => read_machine,
+        (true, _) => None,
+        (false, _) => resolve_feed_source(req.feed, req.machine.as_deref())?,
+    };
     let ap_mm = req.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
         return Err(miette!("--ap-mm must be positive, got {ap_mm}"));

@@ -438,6 +438,7 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         length_mm: 75.0,
         taper_rad: 0.0,
         tip_rad: 0.0,
+        apt: None,
     };
     let path = Toolpath {
         name: spec.name.clone(),

@@ -5,6 +5,8 @@
 
 mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
 mod convert; // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
+mod dialects; // APT files of other CAM systems (samples/apt/), NX contact-contour data
+mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
