@@ -154,7 +154,7 @@ pub fn convert(args: &Args) -> miette::Result<()> {
         }
     });
     if let Some(e) = failure {
-        return Err(e);
+        return Err(crest::io::toolpath::name_output(e, output));
     }
     written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))
 }

@@ -68,7 +68,10 @@ pub(crate) fn parse(text: &str, dx_um: f64, dy_um: f64) -> Result<HeightMap, For
                     return Err(FormatError::line(
                         line_no,
                         k + 1,
-                        format!("expected a height in µm or NaN, found {:?}", f.trim()),
+                        format!(
+                            "expected a finite height in µm within ±1e6 (or NaN), found {:?}",
+                            f.trim()
+                        ),
                     ));
                 }
             }

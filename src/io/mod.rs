@@ -212,6 +212,7 @@ pub fn parse_heightmap(
         HeightMapFormat::Gsf => gsf::parse(bytes)?,
         HeightMapFormat::Sdf => sdf::parse(bytes)?,
     };
+    check_heights(&map)?;
     check_against(opts.dx_um, map.dx_um, "dx")?;
     check_against(opts.dy_um, map.dy_um, "dy")?;
     Ok(map)
@@ -296,7 +297,32 @@ pub(crate) fn parse_value(s: &str) -> Option<f64> {
     {
         return Some(f64::NAN);
     }
-    t.parse::<f64>().ok()
+    // `inf` and values that overflow to it (1e400) are not heights, nor is anything beyond
+    // a metre: refused rather than taken as missing.
+    t.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && v.abs() <= MAX_HEIGHT_UM)
+}
+
+/// Largest magnitude of a height (and of a text map's coordinate) that is read, µm (1 m).
+pub const MAX_HEIGHT_UM: f64 = 1e6;
+
+/// Refuse a map whose finite heights exceed [`MAX_HEIGHT_UM`] (binary formats), naming
+/// the first offending node.
+fn check_heights(map: &HeightMap) -> Result<(), FormatError> {
+    if let Some(k) = map
+        .z_um
+        .iter()
+        .position(|v| v.is_finite() && v.abs() > MAX_HEIGHT_UM)
+    {
+        return Err(FormatError::file(format!(
+            "the height at row {}, column {} is {} µm, beyond ±{MAX_HEIGHT_UM} µm (1 m): not a surface height",
+            k / map.nx.max(1),
+            k % map.nx.max(1),
+            map.z_um[k]
+        )));
+    }
+    Ok(())
 }
 
 /// Shortest round-trip text of a height; `NaN` for missing.

@@ -226,8 +226,8 @@ fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
             ));
         }
     }
-    if !h.zscale.is_finite() {
-        return Err(FormatError::byte(62, "Zscale is not finite"));
+    if !(h.zscale.is_finite() && h.zscale != 0.0) {
+        return Err(FormatError::byte(62, "Zscale is zero or not finite"));
     }
     check_header(&h, i64::from(b[78]), i64::from(b[80]))?;
     let size = [1usize, 2, 4, 4, 1, 2, 4, 8][h.data_type as usize];

@@ -259,10 +259,20 @@ pub fn resolve_cutting(
         (None, Some(fz), None) => (Some(fz * z * rpm), fz * z * rpm, fz),
         (None, None, Some(ff)) => (None, ff, ff / (z * rpm)),
         (None, None, None) => {
-            return Err(miette!(
-                "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
-                req.file.display()
-            ));
+            // A FEDRAT of 0 is not "no FEDRAT": name its line.
+            let zero = first_in_cut(program, |p| {
+                p.feed_mm_min.filter(|f| *f == 0.0).map(|_| p.line)
+            });
+            return Err(match zero {
+                Some(line) => miette!(
+                    "{}:{line}: the cutting moves run at FEDRAT 0 mm/min; add --feed-mm-min V or --fz-mm F",
+                    req.file.display()
+                ),
+                None => miette!(
+                    "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
+                    req.file.display()
+                ),
+            });
         }
     };
     Ok(Cutting {
@@ -381,9 +391,10 @@ pub fn simulate(
     if !(req.grid_um.is_finite() && req.grid_um > 0.0) {
         return Err(miette!("--grid-um must be positive, got {}", req.grid_um));
     }
-    if !(req.dtheta_deg.is_finite() && req.dtheta_deg > 0.0 && req.dtheta_deg <= 90.0) {
+    let dmin = crate::math::limits::MIN_DTHETA_DEG;
+    if !(req.dtheta_deg.is_finite() && req.dtheta_deg >= dmin && req.dtheta_deg <= 90.0) {
         return Err(miette!(
-            "--dtheta-deg must be in (0, 90], got {}",
+            "--dtheta-deg must be in [{dmin}, 90], got {}",
             req.dtheta_deg
         ));
     }
@@ -551,6 +562,30 @@ pub fn simulate(
         resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
     if let Some(f) = cutting.feed_mm_min {
         ropts = ropts.with_feed_mm_min(f);
+    }
+    // The budget: the samples the resampling streams (before culling) follow the path.
+    {
+        let mut extent = crate::resample::PathExtent::default();
+        for &i in &paths {
+            let p = &program.paths[i];
+            extent.cutting_mm += p.stats.cutting_length_mm;
+            extent.runs += p.cutting_runs().len();
+        }
+        let est = crate::resample::estimate_samples(
+            &extent,
+            mode,
+            cutting.fz_mm,
+            cutter.teeth(),
+            Some(cutting.rpm),
+        );
+        let cap = crate::math::limits::MAX_SAMPLES as f64;
+        if est > cap {
+            return Err(miette!(
+                "{file}: {:.1} mm of cutting moves would be resampled into about {est:.3e} poses (more than {cap:.0e}): check the feed per tooth ({} mm) and Δθ",
+                extent.cutting_mm,
+                cutting.fz_mm
+            ));
+        }
     }
     let mut subset = Subset::default();
     let mut all_samples = (0usize, 0.0f64, (f64::INFINITY, f64::NEG_INFINITY, 0.0f64));

@@ -8,6 +8,7 @@ mod convert; // `crest convert` and `crest inspect`: CLSF ↔ contact12 round tr
 mod dialects; // APT files of other CAM systems (samples/apt/), NX contact-contour data
 mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
+mod hostile; // hostile input and lost data (issue 18): each reproduction, -o like coreutils, budgets
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
