@@ -85,7 +85,7 @@ fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError 
 /// a typo in a file must not cost unbounded time or output later.
 fn check_coords(p: &Point3, line: u32, column: u32) -> Result<(), LowerError> {
     let lim = crate::math::limits::MAX_COORD_MM;
-    match p.coords.iter().find(|c| !(c.abs() <= lim)) {
+    match p.coords.iter().find(|c| c.is_nan() || c.abs() > lim) {
         Some(c) => Err(invalid(
             line,
             column,
