@@ -6,6 +6,7 @@
 mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
 mod convert; // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
 mod dialects; // APT files of other CAM systems (samples/apt/), NX contact-contour data
+mod fuzz_corpus; // the fuzz corpora replayed: every input returns (no panic, abort or hang)
 mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
 mod hostile; // hostile input and lost data (issue 18): each reproduction, -o like coreutils, budgets
