@@ -170,6 +170,59 @@ where
     result
 }
 
+/// A temporary folder beside an output folder, where a command that reads back what it
+/// wrote (the demo) builds its set of files before [`Staging::land`] moves them in; removed
+/// when dropped or on SIGINT/SIGTERM.
+#[derive(Debug)]
+pub struct Staging {
+    dir: Option<tempfile::TempDir>,
+}
+
+impl Staging {
+    /// A staging folder for the output folder `out`.
+    pub fn beside(out: &Path) -> std::io::Result<Staging> {
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent)?;
+        let dir = tempfile::Builder::new()
+            .prefix(".crest-set-")
+            .tempdir_in(&parent)?;
+        track(dir.path());
+        Ok(Staging { dir: Some(dir) })
+    }
+
+    /// The staging folder.
+    pub fn path(&self) -> &Path {
+        self.dir.as_ref().map_or(Path::new("."), |d| d.path())
+    }
+
+    /// Move every file of the staging folder into `out` (as [`write_set`]); returns the
+    /// final paths, sorted by name.
+    pub fn land(self, out: &Path) -> std::io::Result<Vec<PathBuf>> {
+        let mut files = Vec::new();
+        let mut names: Vec<_> = std::fs::read_dir(self.path())?
+            .flatten()
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        for n in names {
+            files.push((n.clone(), std::fs::read(self.path().join(&n))?));
+        }
+        write_set(out, &files)
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if let Some(d) = self.dir.take() {
+            untrack(d.path());
+        }
+    }
+}
+
 /// Write a set of files `(name, bytes)` into the folder `dir` so that the set lands whole or
 /// not at all: everything is written into a temporary folder beside `dir`, then moved in
 /// (the temporary folder becomes `dir` when `dir` does not exist yet). Returns the paths
