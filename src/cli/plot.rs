@@ -18,10 +18,11 @@ pub struct Args {
 /// The plots.
 #[derive(Debug, clap::Subcommand)]
 pub enum What {
-    /// Trochoidal paths of ICE elements (002 Fig 14a/b) and crest heights between marks.
+    /// Trochoidal paths of the cutting-edge elements along a pass and the crest heights
+    /// between consecutive marks (as Marin et al. 2023, Fig 14a/b).
     Trochoid(TrochoidArgs),
     /// Lateral run-out along the surface normal against tool height, one curve per lead
-    /// (002 Fig 14c).
+    /// (as Marin et al. 2023, Fig 14c).
     Runout(RunoutArgs),
     /// A height map as a colour map (µm scale bar, axes in mm, missing points blank).
     Heightmap(HeightmapArgs),
@@ -151,7 +152,7 @@ pub struct FeedArgs {
     /// Actual feed to overlay: two columns, path length (mm) and feed (mm/min).
     #[arg(long, value_name = "CSV")]
     pub actual: Option<PathBuf>,
-    /// Plot the feed-mark crest height (002 Eq 14 with fz = F/(Z n)) instead of the feed;
+    /// Plot the feed-mark crest height (R − √(R² − fz²/4) with fz = F/(Z n)) instead of the feed;
     /// needs --tool.
     #[arg(long, requires = "tool")]
     pub crest: bool,

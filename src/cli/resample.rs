@@ -38,7 +38,7 @@ pub enum ModeArg {
 pub enum AxisArg {
     /// Spherical linear interpolation.
     Slerp,
-    /// Normalised linear interpolation (the model.md reference).
+    /// Normalised linear interpolation of the axis.
     Nlerp,
 }
 
@@ -56,7 +56,7 @@ pub struct Args {
     /// Number of teeth Z.
     #[arg(long)]
     pub teeth: usize,
-    /// Spindle step Δθ for `--mode dtheta`, degrees (model.md §5.3 suggests ≤ 0.5°).
+    /// Spindle step Δθ for `--mode dtheta`, degrees (0.5° or less resolves the edges' sweep).
     #[arg(long, default_value_t = 0.5)]
     pub dtheta_deg: f64,
     /// Spindle speed, rpm. Default: derived from fz and the programmed feed
@@ -68,7 +68,7 @@ pub struct Args {
     pub feed_mm_min: Option<f64>,
     /// Which feed drives the clock and the spacing: `programmed` (FEDRAT or
     /// `--feed-mm-min`) or `predicted` (the feed the machine of `--machine` really reaches,
-    /// `crest feed`, kinematics.md; linear in time between postures, model.md §5.3).
+    /// `crest feed`; linear in time between postures).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
     pub feed: Option<super::feed::FeedSource>,

@@ -6,7 +6,7 @@
 //! tool = "../tools/ball-r5-z4-presetter.toml"   # relative to the study file
 //! model = "crest"                               # or "simulate"
 //! fz_mm = 0.05
-//! rule = "paper"                                # or "exact"
+//! rule = "paper"                                # or "exact" (the default)
 //! ap_mm = 0.4
 //! [runout]                                      # optional: replaces the tool's [runout]
 //! tooth_radius_deviation_um = [-10, -15, -24, -25]

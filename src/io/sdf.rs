@@ -182,8 +182,14 @@ fn parse_text(text: &str) -> Result<HeightMap, FormatError> {
 }
 
 fn finish(h: Header, z: Vec<f64>) -> Result<HeightMap, FormatError> {
-    HeightMap::from_rows(h.nx, h.ny, h.xscale * 1e6, h.yscale * 1e6, z)
-        .ok_or_else(|| FormatError::file("internal: size mismatch"))
+    HeightMap::from_rows(
+        h.nx,
+        h.ny,
+        super::tidy(h.xscale * 1e6),
+        super::tidy(h.yscale * 1e6),
+        z,
+    )
+    .ok_or_else(|| FormatError::file("internal: size mismatch"))
 }
 
 fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
