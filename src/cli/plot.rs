@@ -4,7 +4,7 @@
 use super::Outcome;
 use crest::plot::profile::{LineChart, Series};
 use crest::plot::{Format, feed, heightmap, profile, trochoid};
-use miette::{IntoDiagnostic, WrapErr, miette};
+use miette::miette;
 use std::path::{Path, PathBuf};
 
 /// Options of `crest plot`.
@@ -149,7 +149,8 @@ pub struct ProfileArgs {
 pub struct FeedArgs {
     /// Tool path: CLSF or contact12.
     pub path: PathBuf,
-    /// Actual feed to overlay: two columns, path length (mm) and feed (mm/min).
+    /// Actual feed to overlay: the poses CSV of `crest feed -o` (matched by source line), or
+    /// two columns, path length (mm) and feed (mm/min).
     #[arg(long, value_name = "CSV")]
     pub actual: Option<PathBuf>,
     /// Plot the feed-mark crest height (R − √(R² − fz²/4) with fz = F/(Z n)) instead of the feed;
@@ -367,51 +368,7 @@ fn run_heightmap(a: HeightmapArgs) -> miette::Result<Outcome> {
 
 /// Read a two-column numeric table (optional header; commas, semicolons, tabs or blanks).
 fn read_two_columns(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
-    crest::io::output::register_input(path);
-    let text = std::fs::read_to_string(path)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot read {}", path.display()))?;
-    let (mut xs, mut ys) = (Vec::new(), Vec::new());
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line
-            .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
-            .filter(|f| !f.is_empty())
-            .collect();
-        let parsed: Vec<Option<f64>> = fields.iter().map(|f| f.parse::<f64>().ok()).collect();
-        if xs.is_empty() && parsed.iter().all(|v| v.is_none()) {
-            continue; // header
-        }
-        if fields.len() < 2 {
-            return Err(miette!(
-                "{}:{}: expected two numbers, found {}",
-                path.display(),
-                i + 1,
-                fields.len()
-            ));
-        }
-        for (k, v) in parsed.iter().take(2).enumerate() {
-            if v.is_none() {
-                let col = line.find(fields[k]).unwrap_or(0) + 1;
-                return Err(miette!(
-                    "{}:{}:{}: expected a number, found '{}'",
-                    path.display(),
-                    i + 1,
-                    col,
-                    fields[k]
-                ));
-            }
-        }
-        xs.push(parsed[0].unwrap_or(f64::NAN));
-        ys.push(parsed[1].unwrap_or(f64::NAN));
-    }
-    if xs.is_empty() {
-        return Err(miette!("{}: no data rows", path.display()));
-    }
-    Ok((xs, ys))
+    crest::io::series::read_two_columns(path).map_err(|e| miette!("{e}"))
 }
 
 fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
@@ -482,12 +439,14 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
     };
     // Path length of the CL point over cutting moves; runs are separated by a gap (NaN).
     let (mut s, mut feed, mut rpm) = (Vec::new(), Vec::new(), Vec::new());
+    let mut lines: Vec<Option<u32>> = Vec::new();
     let mut len = 0.0;
     for run in tp.cutting_runs() {
         if !s.is_empty() {
             s.push(f64::NAN);
             feed.push(f64::NAN);
             rpm.push(f64::NAN);
+            lines.push(None);
         }
         for i in run.clone() {
             if i > run.start {
@@ -495,6 +454,7 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             }
             let p = &tp.postures[i];
             s.push(len);
+            lines.push(Some(p.line));
             feed.push(p.feed_mm_min.or(a.feed_mm_min).unwrap_or(f64::NAN));
             rpm.push(a.rpm.or(p.spindle_rpm).unwrap_or(f64::NAN));
         }
@@ -549,9 +509,38 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
         );
     }
     let mut series = vec![Series::new("programmed", &s, &feed)];
+    let mut actual_points = 0;
     if let Some(p) = &a.actual {
-        let (x, y) = read_two_columns(p)?;
-        series.push(Series::new("actual", &x, &y));
+        match crest::io::series::read_planned_feed(p).map_err(|e| miette!("{e}"))? {
+            // The poses of `crest feed -o`: the planned feed at each posture's source line.
+            Some(planned) => {
+                let y: Vec<f64> = lines
+                    .iter()
+                    .map(|l| match l {
+                        Some(l) => planned
+                            .get(&(tp.name.clone(), *l))
+                            .copied()
+                            .unwrap_or(f64::NAN),
+                        None => f64::NAN,
+                    })
+                    .collect();
+                if y.iter().all(|v| !v.is_finite()) {
+                    return Err(miette!(
+                        "{}: no planned feed for tool path '{}' of {} (was it written by `crest feed` for this file?)",
+                        p.display(),
+                        tp.name,
+                        a.path.display()
+                    ));
+                }
+                actual_points = len_points(&y);
+                series.push(Series::new("actual (planned)", &s, &y));
+            }
+            None => {
+                let (x, y) = read_two_columns(p)?;
+                actual_points = len_points(&y);
+                series.push(Series::new("actual", &x, &y));
+            }
+        }
     }
     let title = a
         .common
@@ -571,7 +560,7 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
     done(
         &a.common,
         "feed",
-        serde_json::json!({ "points": len_points(&s), "length_mm": len }),
+        serde_json::json!({ "points": len_points(&s), "length_mm": len, "actual_points": actual_points }),
     )
 }
 

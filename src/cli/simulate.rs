@@ -260,21 +260,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         ap_mm: args.ap_mm,
         path: args.path,
     };
-    let bar = super::progress::bar(0, "simulate", if map { "cells" } else { "tiles" });
-    let progress = |done: usize, total: usize| {
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-        }
-    };
+    let progress = super::progress::Phases::new();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
-    let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress))?;
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
+    let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress));
+    progress.finish();
+    let run = run?;
     for w in &run.warnings {
         eprintln!("warning: {w}");
     }

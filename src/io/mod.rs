@@ -22,6 +22,7 @@ mod xyz;
 pub mod measured;
 pub mod mesh;
 pub mod output;
+pub mod series;
 pub mod tables;
 pub mod text;
 pub mod toolpath;
@@ -392,6 +393,31 @@ mod tests {
             Some(HeightMapFormat::Sdf)
         );
         assert_eq!(HeightMapFormat::from_path(Path::new("b.png")), None);
+    }
+
+    #[test]
+    fn spacing_and_origin_survive_every_format() {
+        let mut map =
+            HeightMap::from_rows(3, 2, 20.0, 10.0, vec![0.5, -1.25, 2.0, 3.0, f64::NAN, 4.5])
+                .unwrap();
+        map.x0_mm = -12.5;
+        map.y0_mm = 3.02;
+        for format in [
+            HeightMapFormat::Csv,
+            HeightMapFormat::Xyz,
+            HeightMapFormat::Gsf,
+            HeightMapFormat::Sdf,
+        ] {
+            let mut bytes = Vec::new();
+            write_heightmap_to(&mut bytes, format, &map).unwrap();
+            let back = parse_heightmap(&bytes, format, &ReadOptions::default())
+                .unwrap_or_else(|e| panic!("{format:?}: {e}"));
+            assert_eq!((back.nx, back.ny), (3, 2), "{format:?}");
+            assert_eq!((back.dx_um, back.dy_um), (20.0, 10.0), "{format:?}");
+            assert_eq!((back.x0_mm, back.y0_mm), (-12.5, 3.02), "{format:?}");
+            assert_eq!(back.z_um[1], -1.25, "{format:?}");
+            assert!(back.z_um[4].is_nan(), "{format:?}");
+        }
     }
 
     #[test]

@@ -147,7 +147,7 @@ fn parse_text(text: &str) -> Result<HeightMap, FormatError> {
     let mut z = Vec::with_capacity(n);
     let zf = h.zscale * 1e6;
     let mut last_line = 0;
-    'outer: for (idx, raw) in lines {
+    'outer: for (idx, raw) in lines.by_ref() {
         last_line = idx + 1;
         for tok in raw.split_whitespace() {
             if tok == "*" {
@@ -178,7 +178,35 @@ fn parse_text(text: &str) -> Result<HeightMap, FormatError> {
             ),
         ));
     }
-    finish(h, z)
+    // The trailer after the closing `*`: crest writes the map's origin there
+    // (`XOffset`/`YOffset`, metres); other keys are kept by nobody and ignored.
+    let mut offset = [0.0f64; 2];
+    for (idx, raw) in lines {
+        let Some((k, v)) = raw.split_once('=') else {
+            continue;
+        };
+        let slot = match k.trim().to_ascii_lowercase().as_str() {
+            "xoffset" => 0,
+            "yoffset" => 1,
+            _ => continue,
+        };
+        let v = v.trim();
+        offset[slot] = v
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite() && x.abs() < 1e3)
+            .ok_or_else(|| {
+                FormatError::line(
+                    idx + 1,
+                    0,
+                    format!("{} = {v:?} is not a valid offset in metres", k.trim()),
+                )
+            })?;
+    }
+    let mut map = finish(h, z)?;
+    map.x0_mm = super::tidy(offset[0] * 1e3);
+    map.y0_mm = super::tidy(offset[1] * 1e3);
+    Ok(map)
 }
 
 fn finish(h: Header, z: Vec<f64>) -> Result<HeightMap, FormatError> {
@@ -337,6 +365,15 @@ pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
         w.write_all(line.as_bytes())?;
     }
     w.write_all(b"*\n")?;
+    // Trailer: the origin, so that the map reads back where it was.
+    w.write_all(
+        format!(
+            "XOffset = {:e}\nYOffset = {:e}\n",
+            map.x0_mm * 1e-3,
+            map.y0_mm * 1e-3
+        )
+        .as_bytes(),
+    )?;
     Ok(())
 }
 

@@ -6,8 +6,10 @@
 pub mod inputs;
 
 pub use inputs::{ToolFileError, load_machine, load_process, load_tool, tool_from_text};
+pub use progress::{Progress, Silent};
 pub mod contact;
 pub mod design;
+pub mod progress;
 pub mod report;
 pub mod runout;
 pub mod simulate;

@@ -400,12 +400,15 @@ fn has_contacts(program: &Program) -> bool {
         .any(|p| p.motion == MotionKind::Cut && p.contact.is_some())
 }
 
-/// Run a simulation. `progress(done, total)` is called from the calling thread after each
-/// batch of tiles (each cell of a map). Runs on the current rayon pool.
+/// Run a simulation, reporting each phase to `progress` (the simulation itself counts
+/// tiles of the grid, or cells of a map, out of a total fixed when it starts). Runs on the
+/// current rayon pool.
 pub fn simulate(
     req: &SimulateRequest,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &dyn super::Progress,
 ) -> miette::Result<SimulateRun> {
+    let tiles = |done: usize, total: usize| progress.advance(done as u64, total as u64);
+    let tiles: &(dyn Fn(usize, usize) + Sync) = &tiles;
     if let Some(g) = req.grid_um {
         if !(g.is_finite() && g > 0.0) {
             return Err(miette!("--grid-um must be positive, got {g}"));
@@ -434,6 +437,7 @@ pub fn simulate(
     let mut warnings = Vec::new();
     let part = match &req.part {
         Some(p) => {
+            progress.phase(&format!("reading {}", p.display()), "");
             let f = crate::io::mesh::read_part(p)?;
             warnings.extend(f.warnings);
             Some(f.part)
@@ -464,6 +468,7 @@ pub fn simulate(
         rtcp: req.rtcp,
     };
     let read_machine = read.machine.clone();
+    progress.phase(&format!("reading {}", req.file.display()), "");
     let mut program = crate::io::toolpath::read_program_with(&req.file, read)?;
     let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
         req.tool.as_deref(),
@@ -495,6 +500,7 @@ pub fn simulate(
     } else if from_file {
         ReferenceSource::File
     } else if needs_contacts || matches!(req.grid, GridRequest::PatchAt { .. }) {
+        progress.phase("deriving contact points from the path", "");
         if derive_contacts(&mut program, &cutter) == 0 {
             match req.grid {
                 GridRequest::Window { .. } => ReferenceSource::None,
@@ -587,7 +593,7 @@ pub fn simulate(
         ropts = ropts.with_feed_mm_min(f);
     }
     // The budget: the samples the resampling streams (before culling) follow the path.
-    {
+    let estimated_samples = {
         let mut extent = crate::resample::PathExtent::default();
         for &i in &paths {
             let p = &program.paths[i];
@@ -609,7 +615,10 @@ pub fn simulate(
                 cutting.fz_mm
             ));
         }
-    }
+        est
+    };
+    progress.phase("resampling", "poses");
+    let mut streamed = 0u64;
     let mut subset = Subset::default();
     let mut all_samples = (0usize, 0.0f64, (f64::INFINITY, f64::NEG_INFINITY, 0.0f64));
     let mut run_base = 0;
@@ -635,6 +644,10 @@ pub fn simulate(
             figures.push(&s);
             let keep = reach.as_ref().is_none_or(|r| r.near(&s.position, margin));
             subset.push(&s, keep);
+            streamed += 1;
+            if streamed % 8192 == 0 {
+                progress.advance(streamed, (estimated_samples as u64).max(streamed));
+            }
         })
         .map_err(|e| miette!("{file}: tool path {} ({}): {e}", i + 1, path.name))?;
         run_base = last_run + 1;
@@ -699,8 +712,9 @@ pub fn simulate(
             let tile = (128.0 * spacing_mm).clamp(0.5, 10.0).max(spacing_mm);
             sopts.spacing_mm = spacing_mm;
             let region = reach.map(|r| (r.lo, r.hi));
+            progress.phase("simulating the part map", "cells");
             let m = surface::map_part(
-                &samples, &cutter, &sopts, p, spacing_mm, tile, region, progress,
+                &samples, &cutter, &sopts, p, spacing_mm, tile, region, tiles,
             )
             .map_err(|e| miette!("{file}: {e}"))?;
             Output::Map(m)
@@ -767,8 +781,11 @@ pub fn simulate(
                 width_mm,
             };
             Output::Grid(Box::new(
-                surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
-                    .map_err(|e| miette!("{file}: {e}"))?,
+                {
+                    progress.phase("simulating", "tiles");
+                    surface::simulate_with(&samples, &cutter, &sopts, reference_arg, tiles)
+                }
+                .map_err(|e| miette!("{file}: {e}"))?,
             ))
         }
         GridRequest::PatchAt { s_mm, .. } => {
@@ -779,13 +796,19 @@ pub fn simulate(
                 ));
             }
             Output::Grid(Box::new(
-                surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
-                    .map_err(|e| miette!("{file}: {e}"))?,
+                {
+                    progress.phase("simulating", "tiles");
+                    surface::simulate_with(&samples, &cutter, &sopts, reference_arg, tiles)
+                }
+                .map_err(|e| miette!("{file}: {e}"))?,
             ))
         }
         GridRequest::Window { .. } => Output::Grid(Box::new(
-            surface::simulate_with(&samples, &cutter, &sopts, reference_arg, progress)
-                .map_err(|e| miette!("{file}: {e}"))?,
+            {
+                progress.phase("simulating", "tiles");
+                surface::simulate_with(&samples, &cutter, &sopts, reference_arg, tiles)
+            }
+            .map_err(|e| miette!("{file}: {e}"))?,
         )),
     };
     let (nodes, nodes_cut) = match &output {

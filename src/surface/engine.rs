@@ -220,8 +220,10 @@ pub fn simulate_with(
     let mut band = opts.band_mm.min(opts.depth_mm);
     let mut strips_total = 0;
     let mut widened = 0;
-    let mut done = 0;
-    let mut total = pending.len();
+    // Tiles finished (certain, or computed with the full depth) out of all tiles: the
+    // total is fixed up front; a tile widened for a second pass is finished only then.
+    let mut finished = 0;
+    let total = pending.len();
     loop {
         let last = band >= opts.depth_mm;
         let strips = setup.strips(band);
@@ -243,18 +245,18 @@ pub fn simulate_with(
                     let dst = (j0 + r) * nx + i0;
                     map.z_um[dst..dst + w].copy_from_slice(&h[r * w..(r + 1) * w]);
                 }
-                if unc {
+                if unc && !last {
                     uncertain.push(tid);
+                } else {
+                    finished += 1;
                 }
             }
-            done += chunk.len();
-            progress(done, total);
+            progress(finished, total);
         }
         if uncertain.is_empty() || last {
             break;
         }
         widened += uncertain.len();
-        total += uncertain.len();
         pending = uncertain;
         band = (band * 4.0).min(opts.depth_mm);
     }

@@ -711,6 +711,36 @@ fn five_axis_file_on_both_machines_with_csv() {
 }
 
 #[test]
+fn feed_poses_chain_into_plot_feed() {
+    let dir = tempdir();
+    let csv = dir.path().join("poses.csv");
+    crest()
+        .args(["feed", CIRCLE, "--machine", AC, "-o"])
+        .arg(&csv)
+        .assert()
+        .success();
+    let svg = dir.path().join("feed.svg");
+    let v = stdout_json(
+        &crest()
+            .args(["plot", "feed", CIRCLE, "--json", "--actual"])
+            .arg(&csv)
+            .arg("-o")
+            .arg(&svg)
+            .assert()
+            .success(),
+    );
+    let points = v["points"].as_u64().unwrap();
+    assert!(points > 5);
+    // Every cutting posture finds its planned feed by its source line.
+    assert_eq!(v["actual_points"].as_u64().unwrap(), points);
+    assert!(
+        std::fs::read_to_string(&svg)
+            .unwrap()
+            .contains("actual (planned)")
+    );
+}
+
+#[test]
 fn bad_machine_names_file_key_and_line() {
     let dir = tempdir();
     let bad = dir.path().join("m.toml");

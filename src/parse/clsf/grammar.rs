@@ -253,7 +253,7 @@ fn point_numbers<'a>(i: Span<'a>, allowed: &'static [usize], what: &str) -> Res<
 fn comment_body(after: Span<'_>) -> Res<'_, RecordKind> {
     let (i, _) = space0(after)?;
     let frag = i.fragment();
-    if frag.len() >= 7 && frag[..7].eq_ignore_ascii_case("CONTACT") {
+    if frag.len() >= 7 && frag.as_bytes()[..7].eq_ignore_ascii_case(b"CONTACT") {
         let rest = take_n(i, 7);
         if let Ok((j, ())) = slash(rest) {
             let (j, n) = point_numbers(j, &[3, 6], "CONTACT")?;
@@ -307,7 +307,7 @@ pub(super) fn parse_record(i: Span<'_>) -> Res<'_, RecordKind> {
         "TOOL" => {
             if let Ok((j, _)) = space1::<_, PErr>(i)
                 && j.fragment().len() >= 4
-                && j.fragment()[..4].eq_ignore_ascii_case("PATH")
+                && j.fragment().as_bytes()[..4].eq_ignore_ascii_case(b"PATH")
             {
                 let j = take_n(j, 4);
                 let (j, ()) = need_slash(j, "TOOL PATH")?;
@@ -649,7 +649,7 @@ fn circle(i: Span<'_>) -> Res<'_, RecordKind> {
     let mut j = j;
     if let Ok((k, ())) = comma(j) {
         let frag = k.fragment();
-        if frag.len() >= 5 && frag[..5].eq_ignore_ascii_case("TIMES") {
+        if frag.len() >= 5 && frag.as_bytes()[..5].eq_ignore_ascii_case(b"TIMES") {
             let (k, ()) = comma(take_n(k, 5)).map_err(|_| {
                 nom::Err::Failure(PErr {
                     at: take_n(k, 5),
