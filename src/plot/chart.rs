@@ -57,6 +57,41 @@ pub struct Chart {
     pub size: (u32, u32),
     /// Panels per row (panels fill the grid row by row); 0 or 1 = one column.
     pub columns: usize,
+    /// Lines of explanation under the panels (what the series mean), or none.
+    pub notes: Vec<String>,
+}
+
+/// Legend labels of a panel's series, where a series that lies exactly on an earlier one
+/// says so (`… (= lead 5°)`): coincident curves would otherwise show as one.
+fn legend_labels(panel: &Panel) -> Vec<String> {
+    let same = |a: &[(f64, f64)], b: &[(f64, f64)]| {
+        a.len() == b.len()
+            && a.iter().zip(b).all(|(p, q)| {
+                let close = |u: f64, v: f64| {
+                    (u.is_nan() && v.is_nan())
+                        || (u - v).abs() <= 1e-9 * u.abs().max(v.abs()).max(1e-12)
+                };
+                close(p.0, q.0) && close(p.1, q.1)
+            })
+    };
+    panel
+        .series
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let earlier = panel.series[..k].iter().find(|e| {
+                e.line
+                    && s.line
+                    && !e.label.is_empty()
+                    && !s.points.is_empty()
+                    && same(&e.points, &s.points)
+            });
+            match earlier {
+                Some(e) if !s.label.is_empty() => format!("{} (= {})", s.label, e.label),
+                _ => s.label.clone(),
+            }
+        })
+        .collect()
 }
 
 /// The palette: black, vermilion, blue, bluish green, orange, reddish purple, sky blue, grey.
@@ -138,6 +173,22 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart: &Chart) -> Res
     let body = root
         .titled(&chart.title, (FONT, 24).into_font().color(&BLACK))
         .map_err(|e| e.to_string())?;
+    let body = if chart.notes.is_empty() {
+        body
+    } else {
+        let h = body.dim_in_pixel().1 as i32;
+        let foot_h = 21 * chart.notes.len() as i32 + 12;
+        let (top, foot) = body.split_vertically(h - foot_h);
+        for (k, line) in chart.notes.iter().enumerate() {
+            foot.draw_text(
+                line,
+                &(FONT, 15).into_font().color(&RGBColor(40, 40, 40)),
+                (16, 6 + 21 * k as i32),
+            )
+            .map_err(|e| e.to_string())?;
+        }
+        top
+    };
     let cols = chart.columns.max(1);
     let rows = chart.panels.len().max(1).div_ceil(cols);
     let areas = body.split_evenly((rows, cols));
@@ -243,7 +294,8 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart: &Chart) -> Res
             .light_line_style(TRANSPARENT)
             .draw()
             .map_err(|e| e.to_string())?;
-        for s in &panel.series {
+        let labels = legend_labels(panel);
+        for (s, label) in panel.series.iter().zip(&labels) {
             let c = color(s.color);
             let style = c.stroke_width(2);
             let pts = s.points.clone();
@@ -258,8 +310,8 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart: &Chart) -> Res
                     cc.draw_series(LineSeries::new(pts.clone(), style))
                         .map_err(|e| e.to_string())?
                 };
-                if !s.label.is_empty() {
-                    anno.label(s.label.as_str()).legend(move |(x, y)| {
+                if !label.is_empty() {
+                    anno.label(label.as_str()).legend(move |(x, y)| {
                         let (gap0, gap1) = if dashed { (9, 15) } else { (12, 12) };
                         let shape = if markers {
                             Some(shape_of(color_index))
@@ -335,14 +387,7 @@ pub fn render_svg(chart: &Chart) -> io::Result<String> {
 
 /// Render `chart` as PNG bytes, in memory.
 pub fn render_png(chart: &Chart) -> io::Result<Vec<u8>> {
-    init_fonts();
-    let (w, h) = chart.size;
-    let mut rgb = vec![0u8; w as usize * h as usize * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, chart.size).into_drawing_area();
-        draw(&root, chart).map_err(io::Error::other)?;
-    }
-    super::encode_png(&rgb, chart.size)
+    super::svg_to_png(&render_svg(chart)?)
 }
 
 #[cfg(test)]
@@ -354,6 +399,7 @@ mod tests {
             title: "Test".into(),
             x_label: "x (mm)".into(),
             columns: 1,
+            notes: Vec::new(),
             panels: vec![Panel {
                 caption: String::new(),
                 y_label: "y (µm)".into(),

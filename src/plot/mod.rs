@@ -25,15 +25,36 @@ pub fn init_fonts() {
     });
 }
 
-/// Encode an RGB8 buffer of `size` pixels as PNG, in memory (the same encoder and settings
-/// plotters uses when it saves a bitmap to a path).
-pub fn encode_png(rgb: &[u8], size: (u32, u32)) -> std::io::Result<Vec<u8>> {
-    use image::ImageEncoder;
-    let mut out = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut out)
-        .write_image(rgb, size.0, size.1, image::ColorType::Rgb8)
-        .map_err(std::io::Error::other)?;
-    Ok(out)
+/// Rasterise an SVG document drawn by this module into PNG bytes, with the embedded font.
+/// Every PNG of crest is its SVG rasterised here (resvg), so both show the same picture and
+/// text is laid out by a text shaper (plotters' own bitmap text ran glyphs into each other).
+pub fn svg_to_png(svg: &str) -> std::io::Result<Vec<u8>> {
+    use resvg::{tiny_skia, usvg};
+    use std::sync::{Arc, OnceLock};
+    static FONTS: OnceLock<(Arc<usvg::fontdb::Database>, String)> = OnceLock::new();
+    let (db, family) = FONTS.get_or_init(|| {
+        let mut db = usvg::fontdb::Database::new();
+        db.load_font_data(epaint_default_fonts::UBUNTU_LIGHT.to_vec());
+        let family = db
+            .faces()
+            .next()
+            .and_then(|f| f.families.first().map(|(name, _)| name.clone()))
+            .unwrap_or_else(|| "Ubuntu".to_string());
+        db.set_sans_serif_family(family.clone());
+        (Arc::new(db), family)
+    });
+    let opt = usvg::Options {
+        font_family: family.clone(),
+        fontdb: db.clone(),
+        ..Default::default()
+    };
+    let tree = usvg::Tree::from_str(svg, &opt).map_err(std::io::Error::other)?;
+    let size = tree.size().to_int_size();
+    let mut pixmap = tiny_skia::Pixmap::new(size.width(), size.height())
+        .ok_or_else(|| std::io::Error::other("picture has no pixels"))?;
+    pixmap.fill(tiny_skia::Color::WHITE);
+    resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
+    pixmap.encode_png().map_err(std::io::Error::other)
 }
 
 /// Output kind chosen from a file name.

@@ -56,27 +56,16 @@ pub(crate) fn render_bytes(
     chart: &impl Draw,
 ) -> Result<Vec<u8>, PlotError> {
     init_fonts();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        chart.draw(&root).map_err(draw_err)?;
+        root.present().map_err(draw_err)?;
+    }
     match format {
-        Format::Svg => {
-            let mut svg = String::new();
-            {
-                let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-                root.fill(&WHITE).map_err(draw_err)?;
-                chart.draw(&root).map_err(draw_err)?;
-                root.present().map_err(draw_err)?;
-            }
-            Ok(svg.into_bytes())
-        }
-        Format::Png => {
-            let mut rgb = vec![0u8; size.0 as usize * size.1 as usize * 3];
-            {
-                let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
-                root.fill(&WHITE).map_err(draw_err)?;
-                chart.draw(&root).map_err(draw_err)?;
-                root.present().map_err(draw_err)?;
-            }
-            super::encode_png(&rgb, size).map_err(|e| PlotError::Draw(e.to_string()))
-        }
+        Format::Svg => Ok(svg.into_bytes()),
+        Format::Png => super::svg_to_png(&svg).map_err(|e| PlotError::Draw(e.to_string())),
     }
 }
 

@@ -118,6 +118,22 @@ fn size(columns: usize, rows: usize) -> (u32, u32) {
     ((560 * cols + 120).max(1000), (400 * rows + 60).max(640))
 }
 
+/// What the two participating-tooth rules say, in the words under the charts.
+fn rule_notes(study: &Study) -> Vec<String> {
+    vec![
+        format!(
+            "Which teeth cut ({} rule here). Exact rule (default): a tooth cuts where its feed marks reach below the other teeth's",
+            study.rule.name()
+        ),
+        "envelope along the feed. Paper rule (Marin et al. 2023, Eq 8; rule = \"paper\"): a tooth cuts while its radius is within".into(),
+        "the nominal crest height of the largest one, so it drops teeth, and predicts a large crest, at much smaller run-out.".into(),
+    ]
+}
+
+fn with_notes((w, h): (u32, u32), notes: &[String]) -> (u32, u32) {
+    (w, h + 21 * notes.len() as u32 + 12)
+}
+
 /// Participating teeth and effective fz against run-out: one row per quantity, one column
 /// per facet (e.g. per phase), one coloured series per lead.
 pub fn teeth_chart(rows: &[RunoutRow], study: &Study, teeth: usize, tool_name: &str) -> Chart {
@@ -144,17 +160,23 @@ pub fn teeth_chart(rows: &[RunoutRow], study: &Study, teeth: usize, tool_name: &
                 } else {
                     "effective fz (mm/tooth)".into()
                 },
+                // From zero to the tooth count, with head room for the legend above it.
                 y_range: if quantity == 0 {
-                    Some((0.0, teeth as f64 + 0.5))
+                    Some((0.0, teeth as f64 * 1.9 + 0.5))
                 } else {
                     None
                 },
                 y_integer: quantity == 0,
                 series: series
                     .iter()
-                    .map(|(color, _, v)| {
-                        line(
-                            series_name(study, v[0], split, tool_name),
+                    .flat_map(|(color, _, v)| {
+                        let name = series_name(study, v[0], split, tool_name);
+                        let mut out = vec![line(
+                            if quantity == 0 {
+                                format!("{name}, {} rule", study.rule.name())
+                            } else {
+                                name.clone()
+                            },
                             v.iter()
                                 .map(|r| {
                                     let y = if quantity == 0 {
@@ -167,12 +189,29 @@ pub fn teeth_chart(rows: &[RunoutRow], study: &Study, teeth: usize, tool_name: &
                                 .collect(),
                             *color,
                             false,
-                        )
+                        )];
+                        if quantity == 0 {
+                            // The other rule, dashed, on the same axes.
+                            let (other, pick): (&str, fn(&RunoutRow) -> usize) =
+                                if study.rule == Rule::Paper {
+                                    ("exact", |r| r.zc_exact)
+                                } else {
+                                    ("paper", |r| r.zc_paper)
+                                };
+                            out.push(line(
+                                format!("{name}, {other} rule"),
+                                v.iter().map(|r| (x.of(&r.case), pick(r) as f64)).collect(),
+                                *color,
+                                true,
+                            ));
+                        }
+                        out
                     })
                     .collect(),
             });
         }
     }
+    let notes = rule_notes(study);
     Chart {
         title: format!(
             "Participating teeth and effective feed per tooth against run-out ({} rule)",
@@ -180,13 +219,14 @@ pub fn teeth_chart(rows: &[RunoutRow], study: &Study, teeth: usize, tool_name: &
         ),
         x_label: x.label().to_string(),
         panels,
-        size: size(cols, 2),
+        size: with_notes(size(cols, 2), &notes),
         columns: cols,
+        notes,
     }
 }
 
 /// Crest height against run-out for each lead: the corrected crest under the study's rule
-/// (solid) and, under the paper rule, the exact 1-D crest (dashed), one column per facet.
+/// (solid) and the crest of the exact 1-D envelope (dashed), one column per facet.
 pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart {
     let f = facets(rows, study);
     let split = f.len() > 1 || f.first().is_some_and(|(l, _)| !l.is_empty());
@@ -196,7 +236,6 @@ pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart 
             .iter()
             .all(|k| *k == "lead_deg" || *k == study.x.key());
     let x = study.x;
-    let paper = study.rule == Rule::Paper;
     let cols = f.len().max(1);
     let panels = f
         .iter()
@@ -205,27 +244,21 @@ pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart 
             for (color, _, v) in series {
                 let name = series_name(study, v[0], split, tool_name);
                 out.push(line(
-                    if paper {
-                        format!("{name}, Eq 14 at fz_eff")
-                    } else {
-                        name.clone()
-                    },
+                    format!("{name}, at fz_eff of the {} rule", study.rule.name()),
                     v.iter()
                         .map(|r| (x.of(&r.case), r.crest_height_corrected_um))
                         .collect(),
                     *color,
                     false,
                 ));
-                if paper {
-                    out.push(line(
-                        format!("{name}, exact 1-D"),
-                        v.iter()
-                            .map(|r| (x.of(&r.case), r.crest_height_exact_um))
-                            .collect(),
-                        *color,
-                        true,
-                    ));
-                }
+                out.push(line(
+                    format!("{name}, envelope of the marks"),
+                    v.iter()
+                        .map(|r| (x.of(&r.case), r.crest_height_exact_um))
+                        .collect(),
+                    *color,
+                    true,
+                ));
             }
             Panel {
                 caption: caption(facet),
@@ -236,6 +269,11 @@ pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart 
             }
         })
         .collect();
+    let mut notes = vec![
+        "Solid: the crest R − √(R² − fz_eff²/4) at the effective feed per tooth of the rule; dashed: the crest of the lower".into(),
+        "envelope of every tooth's marks along the feed (the exact 1-D profile).".into(),
+    ];
+    notes.extend(rule_notes(study));
     Chart {
         title: format!(
             "Feed-direction crest height against run-out ({} rule)",
@@ -243,8 +281,9 @@ pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart 
         ),
         x_label: x.label().to_string(),
         panels,
-        size: size(cols, 1),
+        size: with_notes(size(cols, 1), &notes),
         columns: cols,
+        notes,
     }
 }
 
@@ -281,6 +320,7 @@ pub fn lateral_chart(curves: &[LateralCurve], tool_name: &str) -> Chart {
             series,
         }],
         size: (1000, 640),
+        notes: Vec::new(),
     }
 }
 

@@ -642,15 +642,56 @@ const RUNOUT_STUDY: &str = repo_file!("samples/studies/runout.toml");
 #[test]
 fn sample_study_writes_csv_and_plots() {
     let dir = tempdir();
-    let v = success_json(
+    // The sample uses the exact rule; the paper's rule is one line away.
+    let sample = std::fs::read_to_string(RUNOUT_STUDY).unwrap();
+    assert!(sample.contains("\nrule = \"exact\""));
+    let tool = std::path::Path::new(RUNOUT_STUDY)
+        .parent()
+        .unwrap()
+        .join("../tools/ball-r5-z4-runout.toml");
+    let paper = write(
+        dir.path(),
+        "paper.toml",
+        &sample
+            .replace("\nrule = \"exact\"", "\nrule = \"paper\"")
+            .replace(
+                "\"../tools/ball-r5-z4-runout.toml\"",
+                &format!("{:?}", tool.to_str().unwrap()),
+            ),
+    );
+    let exact_dir = dir.path().join("exact");
+    success_json(
         crest()
             .args(["runout", RUNOUT_STUDY, "-o"])
-            .arg(dir.path())
+            .arg(&exact_dir)
+            .arg("--json"),
+    );
+    let mut exact = read_csv(&exact_dir.join("runout.csv"));
+    let head = exact.remove(0);
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    for r in &exact {
+        assert_eq!(r[col("rule")], "exact");
+        assert_eq!(r[col("zc")], r[col("zc_exact")], "{r:?}");
+    }
+    // Both rules are explained under the plots.
+    let svg = std::fs::read_to_string(exact_dir.join("runout-teeth.svg")).unwrap();
+    assert!(
+        svg.contains("Paper rule (Marin et al. 2023, Eq 8"),
+        "no rule note"
+    );
+    assert!(svg.contains("paper rule") && svg.contains("exact rule"));
+    let dir = dir.path().join("paper");
+    let v = success_json(
+        crest()
+            .args(["runout"])
+            .arg(&paper)
+            .arg("-o")
+            .arg(&dir)
             .arg("--json"),
     );
     // 3 leads × 1 fz × 13 offsets × 2 phases.
     assert_eq!(v["cases"], 78);
-    let mut rows = read_csv(&dir.path().join("runout.csv"));
+    let mut rows = read_csv(&dir.join("runout.csv"));
     let header = rows.remove(0);
     assert_eq!(rows.len(), 78);
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
@@ -678,7 +719,7 @@ fn sample_study_writes_csv_and_plots() {
         "runout-lateral.svg",
         "runout-lateral.png",
     ] {
-        let bytes = std::fs::read(dir.path().join(name)).unwrap();
+        let bytes = std::fs::read(dir.join(name)).unwrap();
         assert!(bytes.len() > 1000, "{name} is too small");
         if name.ends_with(".png") {
             assert_eq!(&bytes[..4], b"\x89PNG");
