@@ -261,7 +261,7 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
         ));
     }
     let cutter = crest::pipeline::load_tool(&a.tool)?;
-    let top = cutter.corner_radius_mm();
+    let top = cutter.end_height_mm();
     if let Some(z) = a
         .heights_mm
         .iter()

@@ -671,6 +671,7 @@ fn describe_tool(c: &Cutter) -> String {
             format!("torus, corner radius {corner_radius_mm} mm")
         }
         crate::tool::Shape::Flat => "flat end".to_string(),
+        _ => c.describe(),
     };
     format!(
         "{shape}, R = {} mm, {} teeth, helix {}°",
