@@ -29,6 +29,7 @@ mod effective;
 mod ice;
 pub mod meridian;
 mod section;
+mod shapes;
 mod teeth;
 pub mod trochoid;
 
