@@ -781,6 +781,72 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
     }
 
     #[test]
+    fn every_shape_loads() {
+        let tail = "teeth = 2\nhelix_deg = 0\n";
+        let ok = |head: &str| {
+            load_tool_toml(&format!("{head}{tail}")).unwrap_or_else(|e| panic!("{head}: {e}"))
+        };
+        let c = ok("shape = \"round_insert\"\nradius_mm = 10\ncorner_radius_mm = 5\n");
+        assert_eq!(
+            c.shape,
+            Shape::RoundInsert {
+                insert_radius_mm: 5.0
+            }
+        );
+        assert_relative_eq!(c.profile_height(2.5).unwrap(), 5.0 - 18.75f64.sqrt());
+        let c = ok("shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\n");
+        assert_relative_eq!(c.radius_mm, 5.0, epsilon = 1e-12);
+        assert_eq!(c.shape.name(), "apt");
+        let c = ok("shape = \"profile\"\nprofile_mm = [[0, 0], [3, 0], [5, 2, 2], [5, 8]]\n");
+        assert_relative_eq!(c.radius_mm, 5.0, epsilon = 1e-12);
+        assert_relative_eq!(c.end_height_mm(), 2.0, epsilon = 1e-12);
+        for (head, name) in [
+            (
+                "shape = \"barrel\"\nradius_mm = 8\nsegment_radius_mm = 250\nsegment_height_mm = 10\ncorner_radius_mm = 1\n",
+                "barrel",
+            ),
+            (
+                "shape = \"lens\"\nradius_mm = 5\nsegment_radius_mm = 50\ncorner_radius_mm = 1\n",
+                "lens",
+            ),
+            (
+                "shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\ntip_radius_mm = 2\n",
+                "oval",
+            ),
+            (
+                "shape = \"taper_barrel\"\nradius_mm = 3\nsegment_radius_mm = 250\ntip_radius_mm = 1\ntaper_deg = 10\n",
+                "taper_barrel",
+            ),
+        ] {
+            let c = ok(head);
+            assert_eq!(c.shape.name(), name);
+        }
+        let c = ok("shape = \"ball\"\nradius_mm = 5\n[runout]\ntooth_axial_deviation_um = [0, 9]\n");
+        assert_relative_eq!(c.tooth_axial_dev_mm(1), 0.009);
+    }
+
+    #[test]
+    fn shape_errors_point_at_the_key() {
+        let tail = "teeth = 2\nhelix_deg = 0\n";
+        let e = err(&format!(
+            "shape = \"lens\"\nradius_mm = 5\nsegment_radius_mm = 4\ncorner_radius_mm = 1\n{tail}"
+        ));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("describes no cutter"), "{e}");
+        let e = err(&format!(
+            "shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\nradius_mm = 4\n{tail}"
+        ));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("largest radius"), "{e}");
+        let e = err(&format!("shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\n{tail}"));
+        assert_eq!(e.line(), 1);
+        assert!(e.to_string().contains("tip_radius_mm"), "{e}");
+        let e = err(&format!("shape = \"flat\"\nradius_mm = 5\nprofile_mm = [[0, 0], [5, 0]]\n{tail}"));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("not used"), "{e}");
+    }
+
+    #[test]
     fn uneven_pitch() {
         let c = load_tool_toml(
             "shape = \"ball\"\nradius_mm = 5\nteeth = 3\nhelix_deg = 0\ntooth_pitch_deg = [0, 100, 230]\n",
