@@ -61,7 +61,14 @@ fn is_gcode_output(path: &Path) -> bool {
 }
 
 /// Convert `args.file` to `args.output` (streaming).
-pub fn convert(args: &Args) -> miette::Result<()> {
+/// What a conversion wrote: postures read, and data rows written to a contact12 CSV
+/// (`None` for CLSF and G-code outputs).
+pub struct Converted {
+    postures: usize,
+    rows: Option<usize>,
+}
+
+pub fn convert(args: &Args) -> miette::Result<Converted> {
     let (input, output, all_moves, absolute) =
         (&args.file, &args.output, args.all_moves, args.absolute);
     let kind = detect(input)?;
@@ -98,7 +105,10 @@ pub fn convert(args: &Args) -> miette::Result<()> {
         })?),
         None => None,
     };
+    let gcode_out = gcode.is_some();
     let mut failure: Option<miette::Report> = None;
+    let mut rows = 0usize;
+    let mut postures = 0usize;
     let to_clsf = is_clsf_output(output);
     let written = crest::io::write_atomic(output, |w| {
         let result = if let Some(gw) = gcode.as_mut() {
@@ -142,11 +152,21 @@ pub fn convert(args: &Args) -> miette::Result<()> {
         } else {
             let mut cw = Contact12Writer::new(all_moves);
             cw.header(w)?;
-            let mut sink = |_: &Toolpath, p: &Posture| cw.posture(p, w);
+            let mut sink = |_: &Toolpath, p: &Posture| {
+                if all_moves
+                    || (p.contact.is_some() && p.motion == crest::toolpath::MotionKind::Cut)
+                {
+                    rows += 1;
+                }
+                cw.posture(p, w)
+            };
             stream_from(input, kind, reader, opts, &mut sink)
         };
         match result {
-            Ok(_) => Ok(()),
+            Ok(program) => {
+                postures = program.paths.iter().map(|p| p.stats.postures).sum();
+                Ok(())
+            }
             Err(e) => {
                 failure = Some(e);
                 Err(std::io::Error::other("conversion failed"))
@@ -154,14 +174,34 @@ pub fn convert(args: &Args) -> miette::Result<()> {
         }
     });
     if let Some(e) = failure {
-        return Err(e);
+        return Err(crest::io::toolpath::name_output(e, output));
     }
-    written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))
+    written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))?;
+    let csv = !to_clsf && !gcode_out;
+    Ok(Converted {
+        postures,
+        rows: csv.then_some(rows),
+    })
 }
 
 /// Run `crest convert`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    convert(&args)?;
+    let c = convert(&args)?;
     let _ = std::io::stderr().flush();
+    if c.postures == 0 {
+        eprintln!(
+            "crest convert: {} has no motion: nothing was converted",
+            args.file.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
+    if c.rows == Some(0) {
+        eprintln!(
+            "crest convert: no cutting posture of {} has contact data, so {} holds only its header: give --all-moves to write every posture, or compute the contact data with `crest contact`",
+            args.file.display(),
+            args.output.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
     Ok(Outcome::Ok)
 }

@@ -309,8 +309,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         print_text(&report, &mut out)
     };
     match written {
-        Ok(()) => Ok(Outcome::Ok),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(Outcome::Ok),
-        Err(e) => Err(miette::miette!("writing to stdout failed: {e}")),
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(Outcome::Ok),
+        Err(e) => return Err(miette::miette!("writing to stdout failed: {e}")),
     }
+    // Nothing to summarise is not a success: say why.
+    if report.paths.iter().all(|p| p.postures == 0) {
+        eprintln!(
+            "crest inspect: {} has no motion (no GOTO, CIRCLE or contact12 row): it does not look like a tool path (CLSF, APT, contact12 or G-code)",
+            args.file.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
+    Ok(Outcome::Ok)
 }

@@ -38,7 +38,7 @@ pub enum ModeArg {
 pub enum AxisArg {
     /// Spherical linear interpolation.
     Slerp,
-    /// Normalised linear interpolation (the model.md reference).
+    /// Normalised linear interpolation of the axis.
     Nlerp,
 }
 
@@ -56,7 +56,7 @@ pub struct Args {
     /// Number of teeth Z.
     #[arg(long)]
     pub teeth: usize,
-    /// Spindle step Δθ for `--mode dtheta`, degrees (model.md §5.3 suggests ≤ 0.5°).
+    /// Spindle step Δθ for `--mode dtheta`, degrees (0.5° or less resolves the edges' sweep).
     #[arg(long, default_value_t = 0.5)]
     pub dtheta_deg: f64,
     /// Spindle speed, rpm. Default: derived from fz and the programmed feed
@@ -68,7 +68,7 @@ pub struct Args {
     pub feed_mm_min: Option<f64>,
     /// Which feed drives the clock and the spacing: `programmed` (FEDRAT or
     /// `--feed-mm-min`) or `predicted` (the feed the machine of `--machine` really reaches,
-    /// `crest feed`, kinematics.md; linear in time between postures, model.md §5.3).
+    /// `crest feed`; linear in time between postures).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
     pub feed: Option<super::feed::FeedSource>,
@@ -93,6 +93,12 @@ pub struct Args {
     /// Output CSV.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
+    /// Refuse to start when the output is estimated beyond this many GB (see --force).
+    #[arg(long, value_name = "GB", default_value_t = 1.0)]
+    pub max_output_gb: f64,
+    /// Write however large the estimated output is.
+    #[arg(long)]
+    pub force: bool,
     /// Print one JSON object with the counts on stdout.
     #[arg(long)]
     pub json: bool,
@@ -131,6 +137,32 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     // The predicted feed needs the whole path (`--feed predicted`, or `--machine` with a
     // CLSF or contact12 file, and the invalid combinations, reported there as before): in
     // memory. Otherwise the file is read, resampled and written posture by posture.
+    // Invalid options first, then the budget: estimate the samples (one pass over the file)
+    // before any work.
+    Resampler::new(&opts).map_err(|e| miette::miette!("{}: {e}", args.file.display()))?;
+    if !(args.max_output_gb.is_finite() && args.max_output_gb > 0.0) {
+        return Err(miette::miette!(
+            "--max-output-gb must be positive, got {}",
+            args.max_output_gb
+        ));
+    }
+    let extent = crest::pipeline::inputs::path_extent(
+        &args.file,
+        read.clone(),
+        args.path.map(|n| n.saturating_sub(1)),
+    )?;
+    let samples =
+        crest::resample::estimate_samples(&extent, mode, args.fz_mm, args.teeth, args.rpm);
+    crest::pipeline::inputs::check_output_budget(
+        &format!(
+            "{}: resampling {:.1} mm of cutting moves into about {samples:.3e} samples",
+            args.file.display(),
+            extent.cutting_mm
+        ),
+        samples * crest::pipeline::inputs::RESAMPLE_ROW_BYTES,
+        args.max_output_gb,
+        args.force,
+    )?;
     let predicted = matches!(args.feed, Some(super::feed::FeedSource::Predicted));
     let in_memory = predicted || (!gcode && args.machine.is_some());
     let (per_path, predicted) = if in_memory {
@@ -496,7 +528,7 @@ fn stream_pass(
         Ok(())
     });
     if let Some(e) = failure {
-        return Err(e);
+        return Err(crest::io::toolpath::name_output(e, &args.output));
     }
     match (written, outcome) {
         (Ok(()), Some(done @ PassResult::Done(_))) => Ok(done),

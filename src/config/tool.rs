@@ -275,6 +275,19 @@ impl ToolConfig {
     /// from (for line numbers).
     pub fn to_cutter(&self, text: &str) -> Result<Cutter, ToolConfigError> {
         let (shape, radius) = self.shape_and_radius(text)?;
+        let max_r = crate::math::limits::MAX_TOOL_RADIUS_MM;
+        if radius <= 0.0 || radius > max_r {
+            let span = match &self.radius_mm {
+                Some(v) => v.span(),
+                None => self.shape.span(),
+            };
+            return Err(invalid(
+                text,
+                "radius_mm",
+                span,
+                format!("must lie in (0, {max_r}] mm, found {radius}"),
+            ));
+        }
         let teeth = *self.teeth.get_ref();
         if !(1..=MAX_TEETH).contains(&teeth) {
             return Err(invalid(
@@ -321,6 +334,18 @@ impl ToolConfig {
         }
         if let Some(r) = &self.runout {
             let offset_um = opt_finite(text, "runout.offset_um", &r.offset_um)?;
+            if offset_um.abs() > 1e3 * radius {
+                if let Some(o) = &r.offset_um {
+                    return Err(invalid(
+                        text,
+                        "runout.offset_um",
+                        o.span(),
+                        format!(
+                            "must not exceed the tool radius ({radius} mm), found {offset_um} µm"
+                        ),
+                    ));
+                }
+            }
             let tilt_deg = opt_finite(text, "runout.axis_tilt_deg", &r.axis_tilt_deg)?;
             if tilt_deg.abs() >= 45.0 {
                 if let Some(s) = &r.axis_tilt_deg {
@@ -338,6 +363,21 @@ impl ToolConfig {
                 &r.tooth_radius_deviation_um,
                 teeth,
             )?;
+            // A deviation may shorten a tooth, not turn it inside out.
+            if let (Some(d), Some(bad)) = (
+                &r.tooth_radius_deviation_um,
+                devs.iter().find(|v| radius + **v <= 0.0),
+            ) {
+                return Err(invalid(
+                    text,
+                    "runout.tooth_radius_deviation_um",
+                    d.span(),
+                    format!(
+                        "value {} µm makes a tooth radius negative (radius_mm = {radius})",
+                        bad * 1e3
+                    ),
+                ));
+            }
             let axial = per_tooth(
                 text,
                 "runout.tooth_axial_deviation_um",

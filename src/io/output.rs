@@ -10,50 +10,90 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// Files the process has opened as inputs: (device, inode) on Unix, canonical paths
-/// elsewhere.
-static INPUTS: Mutex<Vec<FileId>> = Mutex::new(Vec::new());
+/// Files the process has opened as inputs: their canonical path and (on Unix) device and
+/// inode.
+static INPUTS: Mutex<Vec<Input>> = Mutex::new(Vec::new());
 /// Temporary files and folders not yet renamed into place.
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-enum FileId {
-    #[cfg(unix)]
-    Inode(u64, u64),
-    #[cfg_attr(unix, allow(dead_code))]
-    Path(PathBuf),
+struct Input {
+    path: PathBuf,
+    inode: Option<(u64, u64)>,
 }
 
-fn file_id(path: &Path) -> Option<FileId> {
+/// The (device, inode) of a file, and whether it has more than one hard link.
+fn inode_links(path: &Path) -> Option<((u64, u64), bool)> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
-        let m = std::fs::metadata(path).ok()?;
-        Some(FileId::Inode(m.dev(), m.ino()))
+        std::fs::metadata(path)
+            .ok()
+            .filter(|m| m.ino() != 0)
+            .map(|m| ((m.dev(), m.ino()), m.nlink() > 1))
     }
     #[cfg(not(unix))]
     {
-        std::fs::canonicalize(path).ok().map(FileId::Path)
+        let _ = path;
+        None
     }
 }
 
-/// Record `path` as an input of this process: writing an output onto it will be refused.
+fn inode(path: &Path) -> Option<(u64, u64)> {
+    inode_links(path).map(|(id, _)| id)
+}
+
+/// The (device, inode) of a possible output, only when it has more than one hard link: the
+/// only case where a second canonical path names the same file. A file with one link is told
+/// apart from the inputs by its path alone (some sandboxed file systems report inode numbers
+/// that repeat across files, and a match on those would refuse ordinary outputs).
+fn linked_inode(path: &Path) -> Option<(u64, u64)> {
+    inode_links(path).and_then(|(id, many)| many.then_some(id))
+}
+
+/// Record `path` as an input of this process: writing an output onto it (or onto a link or
+/// a hard link to it) will be refused.
 pub fn register_input(path: &Path) {
-    if let Some(id) = file_id(path) {
-        let mut v = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
-        if !v.contains(&id) {
-            v.push(id);
-        }
+    let Ok(canonical) = std::fs::canonicalize(path) else {
+        return;
+    };
+    let entry = Input {
+        inode: inode(&canonical),
+        path: canonical,
+    };
+    let mut v = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
+    if !v.contains(&entry) {
+        v.push(entry);
     }
 }
 
 fn is_input(path: &Path) -> bool {
-    file_id(path).is_some_and(|id| {
-        INPUTS
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .contains(&id)
-    })
+    let Ok(canonical) = std::fs::canonicalize(path) else {
+        return false;
+    };
+    let id = linked_inode(&canonical);
+    INPUTS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .iter()
+        .any(|i| {
+            // The same path, or a hard link to a file that is still that input (an inode
+            // freed by a deleted input and reused is not).
+            i.path == canonical
+                || (id.is_some()
+                    && i.inode == id
+                    && inode(&i.path) == id
+                    && same_contents_stamp(&i.path, &canonical))
+        })
+}
+
+/// Two names of one file share its length and modification time; files that merely report
+/// the same inode number on an unusual file system rarely do.
+fn same_contents_stamp(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(a), Ok(b)) => a.len() == b.len() && a.modified().ok() == b.modified().ok(),
+        _ => false,
+    }
 }
 
 fn track(path: &Path) {
@@ -170,6 +210,59 @@ where
     result
 }
 
+/// A temporary folder beside an output folder, where a command that reads back what it
+/// wrote (the demo) builds its set of files before [`Staging::land`] moves them in; removed
+/// when dropped or on SIGINT/SIGTERM.
+#[derive(Debug)]
+pub struct Staging {
+    dir: Option<tempfile::TempDir>,
+}
+
+impl Staging {
+    /// A staging folder for the output folder `out`.
+    pub fn beside(out: &Path) -> std::io::Result<Staging> {
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent)?;
+        let dir = tempfile::Builder::new()
+            .prefix(".crest-set-")
+            .tempdir_in(&parent)?;
+        track(dir.path());
+        Ok(Staging { dir: Some(dir) })
+    }
+
+    /// The staging folder.
+    pub fn path(&self) -> &Path {
+        self.dir.as_ref().map_or(Path::new("."), |d| d.path())
+    }
+
+    /// Move every file of the staging folder into `out` (as [`write_set`]); returns the
+    /// final paths, sorted by name.
+    pub fn land(self, out: &Path) -> std::io::Result<Vec<PathBuf>> {
+        let mut files = Vec::new();
+        let mut names: Vec<_> = std::fs::read_dir(self.path())?
+            .flatten()
+            .filter(|e| e.file_type().is_ok_and(|t| t.is_file()))
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        for n in names {
+            files.push((n.clone(), std::fs::read(self.path().join(&n))?));
+        }
+        write_set(out, &files)
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if let Some(d) = self.dir.take() {
+            untrack(d.path());
+        }
+    }
+}
+
 /// Write a set of files `(name, bytes)` into the folder `dir` so that the set lands whole or
 /// not at all: everything is written into a temporary folder beside `dir`, then moved in
 /// (the temporary folder becomes `dir` when `dir` does not exist yet). Returns the paths
@@ -273,9 +366,13 @@ mod tests {
                 .is_symlink()
         );
         assert_eq!(std::fs::read_to_string(&target).unwrap(), "through");
-        // A link to an input is refused.
+        // A link to an input is refused, and so is a hard link to it.
         register_input(&target);
         assert!(write_atomic(&link, |w| w.write_all(b"x")).is_err());
+        let hard = d.path().join("hard.txt");
+        std::fs::hard_link(&target, &hard).unwrap();
+        assert!(write_atomic(&hard, |w| w.write_all(b"x")).is_err());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "through");
         // /dev/null stays a device.
         write_atomic(Path::new("/dev/null"), |w| w.write_all(b"gone")).unwrap();
         use std::os::unix::fs::FileTypeExt;

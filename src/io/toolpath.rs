@@ -115,18 +115,42 @@ pub struct InputError {
     span: Option<SourceSpan>,
 }
 
+/// At most this many characters of an offending line (or token) are shown in a message,
+/// around the error's column.
+const SHOW_CHARS: usize = 120;
+
+/// `text` cut to [`SHOW_CHARS`] characters around character `col` (0-based), with `…`
+/// where it was cut; returns the cut text and the new position of `col`.
+fn window(text: &str, col: usize) -> (String, usize) {
+    let n = text.chars().count();
+    if n <= SHOW_CHARS {
+        return (text.to_string(), col);
+    }
+    let start = col.saturating_sub(SHOW_CHARS / 2).min(n - SHOW_CHARS);
+    let mut out: String = text.chars().skip(start).take(SHOW_CHARS).collect();
+    let mut at = col - start;
+    if start > 0 {
+        out.insert(0, '…');
+        at += 1;
+    }
+    if start + SHOW_CHARS < n {
+        out.push('…');
+    }
+    (out, at)
+}
+
 impl InputError {
     fn new(file: &Path, s: &SyntaxError) -> InputError {
-        let (src, span) = if s.line_text.is_empty() {
+        let (line_text, col) = window(&s.line_text, s.column.saturating_sub(1) as usize);
+        let (src, span) = if line_text.is_empty() {
             (None, None)
         } else {
-            let byte = s
-                .line_text
+            let byte = line_text
                 .char_indices()
-                .nth(s.column.saturating_sub(1) as usize)
+                .nth(col)
                 .map(|(b, _)| b)
-                .unwrap_or(s.line_text.len());
-            let mut text = s.line_text.clone();
+                .unwrap_or(line_text.len());
+            let mut text = line_text;
             if byte >= text.len() {
                 // At the end of the line: point at a blank after the last character.
                 text.push(' ');
@@ -149,7 +173,7 @@ impl InputError {
             line: s.line,
             column: s.column,
             expected: s.expected.clone(),
-            found: s.found.clone(),
+            found: window(&s.found, 0).0,
             src,
             span,
         }
@@ -198,9 +222,23 @@ pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
             },
         )),
         LowerError::Output(io) => miette::Report::new(IoFailure {
-            context: "writing the output failed".into(),
+            context: OUTPUT_FAILED.into(),
             source: io,
         }),
+    }
+}
+
+const OUTPUT_FAILED: &str = "writing the output failed";
+
+/// Name the output in a failure to write it (a full disk, a closed device): the lowering
+/// that streams into it does not know its name.
+pub fn name_output(e: miette::Report, output: &Path) -> miette::Report {
+    if e.downcast_ref::<IoFailure>()
+        .is_some_and(|f| f.context == OUTPUT_FAILED)
+    {
+        e.wrap_err(format!("{}: cannot write", output.display()))
+    } else {
+        e
     }
 }
 

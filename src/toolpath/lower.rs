@@ -81,6 +81,21 @@ fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError 
     }
 }
 
+/// Refuse a point beyond the plausibility limit ([`crate::math::limits::MAX_COORD_MM`]):
+/// a typo in a file must not cost unbounded time or output later.
+fn check_coords(p: &Point3, line: u32, column: u32) -> Result<(), LowerError> {
+    let lim = crate::math::limits::MAX_COORD_MM;
+    match p.coords.iter().find(|c| c.is_nan() || c.abs() > lim) {
+        Some(c) => Err(invalid(
+            line,
+            column,
+            "a coordinate within ±100000 mm (100 m)",
+            format!("{c}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Callback receiving each finished posture with the header of its path.
 pub type PostureSink<'a> = dyn FnMut(&Toolpath, &Posture) -> std::io::Result<()> + 'a;
 
@@ -685,6 +700,7 @@ impl Lowerer {
                 if self.incremental {
                     position += self.current.map_or_else(Vec3::zeros, |c| c.coords);
                 }
+                check_coords(&position, line, column)?;
                 if n.len() >= 6 {
                     self.axis = self.read_axis(n, 3, line, column)?;
                 }
@@ -703,6 +719,7 @@ impl Lowerer {
                 self.ensure_path(line, column, sink)?;
                 let s = self.scale();
                 let position = Point3::from(vec3(n.triple(0)) * s);
+                check_coords(&position, line, column)?;
                 if n.len() >= 6 {
                     self.axis = self.read_axis(n, 3, line, column)?;
                 }
@@ -760,8 +777,10 @@ impl Lowerer {
             },
             RecordKind::Cntrl(c) => {
                 let s = self.scale();
+                let p = Point3::from(vec3(*c) * s);
+                check_coords(&p, line, column)?;
                 match &mut self.nurbs {
-                    Some(nb) => nb.cntrl.push(Point3::from(vec3(*c) * s)),
+                    Some(nb) => nb.cntrl.push(p),
                     None => self.warn(
                         "cntrl-orphan",
                         line,
@@ -810,6 +829,7 @@ impl Lowerer {
         self.path_mut().stats.gotos += 1;
         let c = &row.cl_axis;
         let position = Point3::new(c[0], c[1], c[2]);
+        check_coords(&position, line, row.columns[0])?;
         let raw_axis = Vec3::new(c[3], c[4], c[5]);
         let axis = unit_as_written(raw_axis).ok_or_else(|| {
             invalid(

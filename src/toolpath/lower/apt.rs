@@ -254,9 +254,21 @@ impl Lowerer {
             self.spindle_rpm = None;
             return;
         }
-        let Some(v) = speed else {
+        let Some(mut v) = speed else {
             return; // SPINDL/ON keeps the last speed.
         };
+        if v < 0.0 {
+            self.warn(
+                "spindle-sign",
+                line,
+                column,
+                format!(
+                    "spindle speed {v}: the sign is taken as the direction, speed {}",
+                    -v
+                ),
+            );
+            v = -v;
+        }
         let diameter = self
             .path
             .as_ref()
