@@ -24,7 +24,10 @@ impl Draw for Figure {
         let r = self.profile.iter().fold(0.0f64, |m, p| m.max(p[0]));
         // Equal scales: widen the shorter extent to the area's aspect ratio.
         let (pw, ph) = root.dim_in_pixel();
-        let (pw, ph) = (pw.saturating_sub(110).max(1) as f64, ph.saturating_sub(90).max(1) as f64);
+        let (pw, ph) = (
+            pw.saturating_sub(110).max(1) as f64,
+            ph.saturating_sub(90).max(1) as f64,
+        );
         let mut sx = 2.0 * r * 1.1;
         let mut sy = (hi_z - lo_z) * 1.1 + 0.05 * r;
         if sx / sy > pw / ph {
@@ -56,14 +59,18 @@ impl Draw for Figure {
                 blue.stroke_width(3),
             ))?
             .label("meridian")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], blue.stroke_width(3))
+            });
         chart
             .draw_series(LineSeries::new(
                 self.profile.iter().map(|p| (-p[0], p[1])),
                 grey.stroke_width(2),
             ))?
             .label("mirror image")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2)));
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(2))
+            });
         let top = cy + 0.5 * sy;
         chart.draw_series(DashedLineSeries::new(
             [(0.0, cy - 0.5 * sy), (0.0, top)],
@@ -84,7 +91,7 @@ impl Draw for Figure {
             .label_font(tick_font())
             .background_style(WHITE.mix(0.9))
             .border_style(RGBColor(160, 160, 160))
-            .position(SeriesLabelPosition::UpperRight)
+            .position(SeriesLabelPosition::UpperMiddle)
             .draw()?;
         Ok(())
     }
@@ -109,6 +116,9 @@ pub fn plot_cutter(
     let profile = m.polyline(1e-3, side_mm);
     let mut joins: Vec<[f64; 2]> = m.segments().iter().map(|s| s.start()).collect();
     joins.extend(m.segments().last().map(|s| s.end()));
+    // Only the joins on the drawn part (an APT cutter's top lies far above its end).
+    let top = profile.iter().fold(f64::MIN, |t, p| t.max(p[1]));
+    joins.retain(|p| p[1] <= top + 1e-9);
     let figure = Figure {
         title: title.map_or_else(|| cutter.describe(), str::to_string),
         profile,

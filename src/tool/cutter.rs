@@ -392,7 +392,11 @@ impl Cutter {
 
     /// A one-line description: `ball end R 5 mm`, `round insert R 10 mm, insert radius 5 mm`, …
     pub fn describe(&self) -> String {
-        let r = self.radius_mm;
+        // At most six decimals: an APT cutter's R is derived and has many.
+        let r = format!("{:.6}", self.radius_mm)
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string();
         match &self.shape {
             Shape::Ball => format!("ball end R {r} mm"),
             Shape::Torus { corner_radius_mm } => {
@@ -407,10 +411,9 @@ impl Cutter {
                     "APT cutter d {}, r {}, e {}, f {}, a {}°, b {}°, h {} (R {r} mm)",
                     p[0], p[1], p[2], p[3], p[4], p[5], p[6]
                 ),
-                meridian::Family::Polyline | meridian::Family::Classic => format!(
-                    "profile of {} segments, R {r} mm",
-                    m.segments().len()
-                ),
+                meridian::Family::Polyline | meridian::Family::Classic => {
+                    format!("profile of {} segments, R {r} mm", m.segments().len())
+                }
                 meridian::Family::Barrel {
                     segment_radius_mm,
                     segment_height_mm,
