@@ -161,7 +161,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let _ = writeln!(
         s,
         "tooth  radius_mm  run-out_um  normal_dev_um  cuts  R_ef_mm   R_ef_error_%{}",
-        if cutter.has_axial_dev() { "  axial_um" } else { "" }
+        if cutter.has_axial_dev() {
+            "  axial_um"
+        } else {
+            ""
+        }
     );
     for t in &a.teeth {
         let _ = writeln!(

@@ -466,20 +466,32 @@ impl ToolConfig {
     /// Keys given that the shape does not use are rejected.
     fn unused(&self, text: &str, used: &[&str]) -> Result<(), ToolConfigError> {
         let spans: [(&str, Option<Range<usize>>); 7] = [
-            ("corner_radius_mm", self.corner_radius_mm.as_ref().map(|v| v.span())),
+            (
+                "corner_radius_mm",
+                self.corner_radius_mm.as_ref().map(|v| v.span()),
+            ),
             ("apt", self.apt.as_ref().map(|v| v.span())),
             ("profile_mm", self.profile_mm.as_ref().map(|v| v.span())),
-            ("segment_radius_mm", self.segment_radius_mm.as_ref().map(|v| v.span())),
-            ("segment_height_mm", self.segment_height_mm.as_ref().map(|v| v.span())),
-            ("tip_radius_mm", self.tip_radius_mm.as_ref().map(|v| v.span())),
+            (
+                "segment_radius_mm",
+                self.segment_radius_mm.as_ref().map(|v| v.span()),
+            ),
+            (
+                "segment_height_mm",
+                self.segment_height_mm.as_ref().map(|v| v.span()),
+            ),
+            (
+                "tip_radius_mm",
+                self.tip_radius_mm.as_ref().map(|v| v.span()),
+            ),
             ("taper_deg", self.taper_deg.as_ref().map(|v| v.span())),
         ];
         let shape = self.shape.get_ref();
         for (key, span) in spans {
             let Some(span) = span else { continue };
             // Ball and flat ends ignore (but check) a corner radius, as they always did.
-            let tolerated = key == "corner_radius_mm"
-                && matches!(shape, ShapeName::Ball | ShapeName::Flat);
+            let tolerated =
+                key == "corner_radius_mm" && matches!(shape, ShapeName::Ball | ShapeName::Flat);
             if !used.contains(&key) && !tolerated {
                 return Err(invalid(
                     text,
@@ -609,7 +621,10 @@ impl ToolConfig {
                         text,
                         "apt",
                         p.span(),
-                        format!("needs the seven numbers d, r, e, f, a, b, h, found {}", v.len()),
+                        format!(
+                            "needs the seven numbers d, r, e, f, a, b, h, found {}",
+                            v.len()
+                        ),
                     ));
                 }
                 let arr = [v[0], v[1], v[2], v[3], v[4], v[5], v[6]];
@@ -651,7 +666,8 @@ impl ToolConfig {
                     &["segment_radius_mm", "segment_height_mm", "corner_radius_mm"],
                 )?;
                 let r = self.radius(text)?;
-                let (rs, span) = self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
                 let (zb, _) = self.required(text, "segment_height_mm", &self.segment_height_mm)?;
                 let (rc, _) = self.required(text, "corner_radius_mm", &self.corner_radius_mm)?;
                 let m = self.profile(text, meridian::barrel(r, rs, zb, rc), span)?;
@@ -660,7 +676,8 @@ impl ToolConfig {
             ShapeName::Lens => {
                 self.unused(text, &["segment_radius_mm", "corner_radius_mm"])?;
                 let r = self.radius(text)?;
-                let (rs, span) = self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
                 let (rc, _) = self.required(text, "corner_radius_mm", &self.corner_radius_mm)?;
                 let m = self.profile(text, meridian::lens(r, rs, rc), span)?;
                 Ok((Shape::Profile(m), r))
@@ -668,7 +685,8 @@ impl ToolConfig {
             ShapeName::Oval => {
                 self.unused(text, &["segment_radius_mm", "tip_radius_mm"])?;
                 let r = self.radius(text)?;
-                let (rs, span) = self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
                 let (rt, _) = self.required(text, "tip_radius_mm", &self.tip_radius_mm)?;
                 let m = self.profile(text, meridian::oval(r, rs, rt), span)?;
                 Ok((Shape::Profile(m), r))
@@ -676,7 +694,8 @@ impl ToolConfig {
             ShapeName::TaperBarrel => {
                 self.unused(text, &["segment_radius_mm", "tip_radius_mm", "taper_deg"])?;
                 let r = self.radius(text)?;
-                let (rs, span) = self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
                 let (rt, _) = self.required(text, "tip_radius_mm", &self.tip_radius_mm)?;
                 let (taper, _) = self.required(text, "taper_deg", &self.taper_deg)?;
                 let m = self.profile(text, meridian::taper_barrel(r, rs, rt, taper), span)?;
@@ -861,7 +880,8 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
             let c = ok(head);
             assert_eq!(c.shape.name(), name);
         }
-        let c = ok("shape = \"ball\"\nradius_mm = 5\n[runout]\ntooth_axial_deviation_um = [0, 9]\n");
+        let c =
+            ok("shape = \"ball\"\nradius_mm = 5\n[runout]\ntooth_axial_deviation_um = [0, 9]\n");
         assert_relative_eq!(c.tooth_axial_dev_mm(1), 0.009);
     }
 
@@ -878,10 +898,14 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
         ));
         assert_eq!(e.line(), 3);
         assert!(e.to_string().contains("largest radius"), "{e}");
-        let e = err(&format!("shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\n{tail}"));
+        let e = err(&format!(
+            "shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\n{tail}"
+        ));
         assert_eq!(e.line(), 1);
         assert!(e.to_string().contains("tip_radius_mm"), "{e}");
-        let e = err(&format!("shape = \"flat\"\nradius_mm = 5\nprofile_mm = [[0, 0], [5, 0]]\n{tail}"));
+        let e = err(&format!(
+            "shape = \"flat\"\nradius_mm = 5\nprofile_mm = [[0, 0], [5, 0]]\n{tail}"
+        ));
         assert_eq!(e.line(), 3);
         assert!(e.to_string().contains("not used"), "{e}");
     }

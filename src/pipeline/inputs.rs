@@ -166,7 +166,15 @@ pub fn resolve_cutter(
     };
     if let Some(p) = t.apt_profile() {
         // APT's seven parameters describe a shape of their own: angles back to degrees.
-        let deg = [p[0], p[1], p[2], p[3], p[4].to_degrees(), p[5].to_degrees(), p[6]];
+        let deg = [
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4].to_degrees(),
+            p[5].to_degrees(),
+            p[6],
+        ];
         let (m, warning) = crate::tool::meridian::apt(deg).map_err(|e| {
             miette::miette!(
                 "{}: the tool's APT parameters describe no cutter: {e}; give --tool tool.toml",

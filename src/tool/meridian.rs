@@ -17,9 +17,7 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::Arc;
 
-pub use super::shapes::{
-    apt, barrel, classic, lens, oval, polyline, round_insert, taper_barrel,
-};
+pub use super::shapes::{apt, barrel, classic, lens, oval, polyline, round_insert, taper_barrel};
 
 /// One piece of a meridian, (r, z) in mm.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -726,7 +724,11 @@ mod tests {
         assert_relative_eq!(t.height_at(2.0).unwrap(), 0.0);
         assert_relative_eq!(t.end_height(), 1.5);
         let p = t.support(30f64.to_radians().sin(), -30f64.to_radians().cos());
-        assert_relative_eq!(p[1], 1.5 * (1.0 - 30f64.to_radians().cos()), epsilon = 1e-12);
+        assert_relative_eq!(
+            p[1],
+            1.5 * (1.0 - 30f64.to_radians().cos()),
+            epsilon = 1e-12
+        );
         let pl = t.polyline(1e-4, 0.5);
         assert_relative_eq!(pl.last().unwrap()[1], 2.0, epsilon = 1e-12);
         assert_relative_eq!(pl.last().unwrap()[0], 5.0, epsilon = 1e-12);
@@ -765,7 +767,11 @@ mod tests {
         let a = 30.0f64;
         let (c, w) = apt([10.0, 0.0, 5.0, 5.0 * a.to_radians().tan(), a, 0.0, 20.0]).unwrap();
         assert!(w.is_none(), "{w:?}");
-        assert_relative_eq!(c.height_at(2.0).unwrap(), 2.0 * a.to_radians().tan(), epsilon = 1e-12);
+        assert_relative_eq!(
+            c.height_at(2.0).unwrap(),
+            2.0 * a.to_radians().tan(),
+            epsilon = 1e-12
+        );
         // Taper with a corner: the side widens upward.
         let (tp, _) = apt([10.0, 1.0, 4.0, 1.0, 0.0, 5.0, 20.0]).unwrap();
         assert!(tp.r_max() > 5.0);
@@ -781,8 +787,13 @@ mod tests {
         assert_relative_eq!(m.height_at(3.0).unwrap(), 1.0, epsilon = 1e-12);
         assert!(m.is_convex());
         // A concave chamfer is not convex.
-        let m = polyline(&[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [5.0, 2.0, -3.0], [5.0, 4.0, 0.0]])
-            .unwrap();
+        let m = polyline(&[
+            [0.0, 0.0, 0.0],
+            [3.0, 0.0, 0.0],
+            [5.0, 2.0, -3.0],
+            [5.0, 4.0, 0.0],
+        ])
+        .unwrap();
         assert!(!m.is_convex());
         assert!(polyline(&[[0.0, 1.0, 0.0], [2.0, 1.0, 0.0]]).is_err());
     }

@@ -466,4 +466,3 @@ pub fn taper_barrel(
     };
     Meridian::new(s, family)
 }
-

@@ -18,7 +18,8 @@ use crate::util::{crest, repo, stdout_json, tempdir};
 fn no_progress(_: usize, _: usize) {}
 
 fn tool(name: &str) -> Cutter {
-    crest::pipeline::load_tool(&repo("samples/tools").join(name)).unwrap_or_else(|e| panic!("{e:?}"))
+    crest::pipeline::load_tool(&repo("samples/tools").join(name))
+        .unwrap_or_else(|e| panic!("{e:?}"))
 }
 
 /// `Rs − √(Rs² − s²/4)`, mm.
@@ -58,7 +59,14 @@ fn synth_plane_with_a_barrel_steps_by_the_exact_envelope() {
         .args(["synth", "plane", "--tool"])
         .arg(repo("samples/tools/barrel-r8-rs250.toml"))
         .args(["--tilt-deg", "89", "--yaw-deg", "90", "--scallop-um", "2"])
-        .args(["--feed-mm-min", "2000", "--rpm", "10000", "--size-mm", "6,8"])
+        .args([
+            "--feed-mm-min",
+            "2000",
+            "--rpm",
+            "10000",
+            "--size-mm",
+            "6,8",
+        ])
         .args(["--point-step-mm", "1", "-o"])
         .arg(&out)
         .arg("--json")
@@ -140,19 +148,31 @@ fn round_insert_marks_match_the_closed_forms() {
         let a = analyse(&round_insert(0.0), 1.0, 0.2, fz, rule).unwrap();
         assert_eq!(a.zc, 2, "{rule:?}");
         assert_relative_eq!(a.fz_effective_mm, fz, epsilon = 1e-12);
-        assert_relative_eq!(a.crest_height_corrected_mm, fz * fz / (8.0 * ri), max_relative = 0.02);
+        assert_relative_eq!(
+            a.crest_height_corrected_mm,
+            fz * fz / (8.0 * ri),
+            max_relative = 0.02
+        );
         let a = analyse(&round_insert(20.0), 1.0, 0.2, fz, rule).unwrap();
         assert_eq!(a.zc, 1, "{rule:?}");
         assert!(!a.teeth[1].participates);
         assert_relative_eq!(a.fz_effective_mm, z * fz, epsilon = 1e-12);
         let one_per_rev = (z * fz) * (z * fz) / (8.0 * ri);
-        assert_relative_eq!(a.crest_height_corrected_mm, one_per_rev, max_relative = 0.02);
+        assert_relative_eq!(
+            a.crest_height_corrected_mm,
+            one_per_rev,
+            max_relative = 0.02
+        );
     }
     // A lift below the one-mark crest leaves both inserts cutting, the crest in between.
     let a = analyse(&round_insert(9.0), 1.0, 0.2, fz, Rule::Exact).unwrap();
     assert_eq!(a.zc_exact, 2);
     assert!(a.crest_height_exact_mm > 0.004 && a.crest_height_exact_mm < 0.016);
-    assert_relative_eq!(a.teeth[1].normal_deviation_mm, -0.009 * 1f64.to_radians().cos(), epsilon = 1e-12);
+    assert_relative_eq!(
+        a.teeth[1].normal_deviation_mm,
+        -0.009 * 1f64.to_radians().cos(),
+        epsilon = 1e-12
+    );
 }
 
 /// The heights (µm) along the feed through the ring's front, one pass at lead 1°.
@@ -236,26 +256,51 @@ fn every_shape_goes_through_crest_tool() {
             &crest()
                 .args(["tool", "--tool"])
                 .arg(repo("samples/tools").join(name))
-                .args(["--lead-deg", "10", "--ap-mm", "0.2", "--fz-mm", "0.1", "--rule", "exact", "--json"])
+                .args([
+                    "--lead-deg",
+                    "10",
+                    "--ap-mm",
+                    "0.2",
+                    "--fz-mm",
+                    "0.1",
+                    "--rule",
+                    "exact",
+                    "--json",
+                ])
                 .assert()
                 .success(),
         );
         let crest_um = v["crest_height_um"].as_f64().unwrap();
         assert!(crest_um.is_finite() && crest_um >= 0.0, "{name}: {v}");
         let r_ef = v["effective_radius_mm"].as_f64().unwrap();
-        assert!(r_ef > 0.0 && r_ef <= v["radius_mm"].as_f64().unwrap() + 1e-9, "{name}: {v}");
+        assert!(
+            r_ef > 0.0 && r_ef <= v["radius_mm"].as_f64().unwrap() + 1e-9,
+            "{name}: {v}"
+        );
     }
     // The lifted insert of case A2 is listed with its axial deviation.
     let v = stdout_json(
         &crest()
             .args(["tool", "--tool"])
             .arg(repo("samples/tools/round-insert-a2.toml"))
-            .args(["--lead-deg", "0", "--ap-mm", "0.4", "--fz-mm", "0.4", "--json"])
+            .args([
+                "--lead-deg",
+                "0",
+                "--ap-mm",
+                "0.4",
+                "--fz-mm",
+                "0.4",
+                "--json",
+            ])
             .assert()
             .success(),
     );
     assert_eq!(v["shape"], "round_insert");
-    assert_relative_eq!(v["teeth"][1]["axial_deviation_um"].as_f64().unwrap(), 9.0, epsilon = 1e-9);
+    assert_relative_eq!(
+        v["teeth"][1]["axial_deviation_um"].as_f64().unwrap(),
+        9.0,
+        epsilon = 1e-9
+    );
 }
 
 #[test]
@@ -320,9 +365,19 @@ fn profile_tools_simulate_with_the_ice_and_dome_models() {
         // The dome model stamps every tooth's body at every sample (0.05 mm apart here).
         let profile = crest::tool::feed_profile_for(&c, lead);
         let dome = crest::tool::nominal_crest_mm(&profile, 0.05) * 1e3;
-        for model in [Model::Dome, Model::Ice { dtheta_rad: 0.5f64.to_radians() }] {
-            let sim = simulate(&samples, &c, &Options::new(model, grid, 0.002), &no_progress)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
+        for model in [
+            Model::Dome,
+            Model::Ice {
+                dtheta_rad: 0.5f64.to_radians(),
+            },
+        ] {
+            let sim = simulate(
+                &samples,
+                &c,
+                &Options::new(model, grid, 0.002),
+                &no_progress,
+            )
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
             let m = &sim.map;
             assert_eq!(sim.nodes_cut, m.nx * m.ny, "{name}");
             let row: Vec<f64> = (0..m.nx).map(|i| m.get(i, m.ny / 2)).collect();
@@ -348,12 +403,30 @@ fn profile_tools_simulate_with_the_ice_and_dome_models() {
 fn tool_toml_rejects_what_a_shape_does_not_use() {
     let dir = tempdir();
     let bad = [
-        ("shape = \"barrel\"\nradius_mm = 8\nsegment_radius_mm = 250\ncorner_radius_mm = 1\nteeth = 2\nhelix_deg = 0\n", "segment_height_mm"),
-        ("shape = \"ball\"\nradius_mm = 5\ntaper_deg = 3\nteeth = 2\nhelix_deg = 0\n", "taper_deg"),
-        ("shape = \"apt\"\napt = [10, 1, 4, 1, 0]\nteeth = 2\nhelix_deg = 0\n", "apt"),
-        ("shape = \"profile\"\nprofile_mm = [[0, 1], [5, 1]]\nteeth = 2\nhelix_deg = 0\n", "z = 0"),
-        ("shape = \"round_insert\"\nradius_mm = 5\ncorner_radius_mm = 6\nteeth = 2\nhelix_deg = 0\n", "corner_radius_mm"),
-        ("shape = \"ball\"\nradius_mm = 5\nteeth = 2\nhelix_deg = 0\n[runout]\ntooth_axial_deviation_um = [1]\n", "tooth_axial_deviation_um"),
+        (
+            "shape = \"barrel\"\nradius_mm = 8\nsegment_radius_mm = 250\ncorner_radius_mm = 1\nteeth = 2\nhelix_deg = 0\n",
+            "segment_height_mm",
+        ),
+        (
+            "shape = \"ball\"\nradius_mm = 5\ntaper_deg = 3\nteeth = 2\nhelix_deg = 0\n",
+            "taper_deg",
+        ),
+        (
+            "shape = \"apt\"\napt = [10, 1, 4, 1, 0]\nteeth = 2\nhelix_deg = 0\n",
+            "apt",
+        ),
+        (
+            "shape = \"profile\"\nprofile_mm = [[0, 1], [5, 1]]\nteeth = 2\nhelix_deg = 0\n",
+            "z = 0",
+        ),
+        (
+            "shape = \"round_insert\"\nradius_mm = 5\ncorner_radius_mm = 6\nteeth = 2\nhelix_deg = 0\n",
+            "corner_radius_mm",
+        ),
+        (
+            "shape = \"ball\"\nradius_mm = 5\nteeth = 2\nhelix_deg = 0\n[runout]\ntooth_axial_deviation_um = [1]\n",
+            "tooth_axial_deviation_um",
+        ),
     ];
     for (i, (text, word)) in bad.iter().enumerate() {
         let t = crate::util::write(dir.path(), &format!("t{i}.toml"), text);
@@ -408,17 +481,32 @@ fn apt_files_of_each_family_read_and_simulate() {
             &crest()
                 .arg("simulate")
                 .arg(&file)
-                .args(["--teeth", "2", "--rpm", "10000", "--model", "dome", "--grid-um", "5"])
+                .args([
+                    "--teeth",
+                    "2",
+                    "--rpm",
+                    "10000",
+                    "--model",
+                    "dome",
+                    "--grid-um",
+                    "5",
+                ])
                 .args(["--window", "0.5,-0.6,1.5,0.6", "-o"])
                 .arg(&out)
                 .arg("--json")
                 .assert()
                 .success(),
         );
-        assert!(v["tool"].as_str().unwrap().contains("APT cutter"), "{name}: {v}");
+        assert!(
+            v["tool"].as_str().unwrap().contains("APT cutter"),
+            "{name}: {v}"
+        );
         let sz = v["heights_um"]["sz"].as_f64().unwrap();
         let want = a_deg.to_radians().tan() * (0.25 * step * step + 0.025f64.powi(2)).sqrt() * 1e3;
-        assert!((sz - want).abs() < 0.02 * want + 0.2, "{name}: Sz {sz} µm vs {want} µm");
+        assert!(
+            (sz - want).abs() < 0.02 * want + 0.2,
+            "{name}: Sz {sz} µm vs {want} µm"
+        );
     }
 }
 
@@ -439,5 +527,9 @@ fn tldata_with_seven_values_is_an_apt_cutter() {
     assert!(warnings.is_empty(), "{warnings:?}");
     assert!(what.contains("APT cutter"), "{what}");
     assert!(matches!(c.shape, Shape::Profile(_)));
-    assert_relative_eq!(c.profile_height(2.0).unwrap(), 2.0 * 30f64.to_radians().tan(), epsilon = 1e-6);
+    assert_relative_eq!(
+        c.profile_height(2.0).unwrap(),
+        2.0 * 30f64.to_radians().tan(),
+        epsilon = 1e-6
+    );
 }
