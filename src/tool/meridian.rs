@@ -474,7 +474,7 @@ impl Meridian {
         let end = last.end();
         let end_angle = last.tangent_angle(true);
         // The shank continues when the profile ends going up (not turning back inward).
-        let extends = end_angle >= -1e-9 && end_angle <= FRAC_PI_2 + 1e-9;
+        let extends = (-1e-9..=FRAC_PI_2 + 1e-9).contains(&end_angle);
         let end_height = match last {
             Segment::Line { a, b } if segments.len() > 1 && b[1] > a[1] => a[1],
             _ => end[1],

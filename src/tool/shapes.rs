@@ -75,7 +75,7 @@ pub fn apt(p: [f64; 7]) -> Result<(Meridian, Option<String>), ProfileError> {
             "the APT cutter needs d > 0 and r ≥ 0, found d = {d}, r = {r}"
         ));
     }
-    if !(0.0..90.0).contains(&a_deg) || !(-90.0 < b_deg && b_deg < 90.0) {
+    if !((0.0..90.0).contains(&a_deg) && -90.0 < b_deg && b_deg < 90.0) {
         return err(format!(
             "the APT cutter needs 0 ≤ a < 90° and −90° < b < 90°, found a = {a_deg}°, b = {b_deg}°"
         ));
