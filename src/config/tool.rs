@@ -852,7 +852,11 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
                 insert_radius_mm: 5.0
             }
         );
-        assert_relative_eq!(c.profile_height(2.5).unwrap(), 5.0 - 18.75f64.sqrt());
+        assert_relative_eq!(
+            c.profile_height(2.5).unwrap(),
+            5.0 - 18.75f64.sqrt(),
+            epsilon = 1e-12
+        );
         let c = ok("shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\n");
         assert_relative_eq!(c.radius_mm, 5.0, epsilon = 1e-12);
         assert_eq!(c.shape.name(), "apt");
@@ -880,9 +884,12 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
             let c = ok(head);
             assert_eq!(c.shape.name(), name);
         }
-        let c =
-            ok("shape = \"ball\"\nradius_mm = 5\n[runout]\ntooth_axial_deviation_um = [0, 9]\n");
-        assert_relative_eq!(c.tooth_axial_dev_mm(1), 0.009);
+        // The run-out table comes last: the tail's keys belong to the top level.
+        let c = load_tool_toml(&format!(
+            "shape = \"ball\"\nradius_mm = 5\n{tail}[runout]\ntooth_axial_deviation_um = [0, 9]\n"
+        ))
+        .unwrap();
+        assert_relative_eq!(c.tooth_axial_dev_mm(1), 0.009, epsilon = 1e-15);
     }
 
     #[test]
