@@ -24,3 +24,9 @@ sh reports/feed-paraboloid/regenerate.sh
 
 # Curvature (issue 15): convex against concave against plane, the N-buffer on design surfaces.
 sh reports/curvature/regenerate.sh
+
+# General cutters (issue 23): the profile of every family.
+sh reports/cutters/regenerate.sh
+# Side by side with surf-topo (issue 23): crest's maps always; the comparison only with
+# surf-topo's own maps in $SURFTOPO_MAPS (the user's step), skipped otherwise.
+sh reports/surf-topo/regenerate.sh

@@ -1,5 +1,6 @@
-//! `crest plot`: trochoids of the ICE elements, lateral run-out, height maps, profiles and the feed (or crest
-//! height) along a path, as SVG or PNG by the extension of `-o`.
+//! `crest plot`: the cutter's profile, trochoids of the ICE elements, lateral run-out, height
+//! maps, profiles and the feed (or crest height) along a path, as SVG or PNG by the extension
+//! of `-o`.
 
 use super::Outcome;
 use crest::plot::profile::{LineChart, Series};
@@ -18,6 +19,8 @@ pub struct Args {
 /// The plots.
 #[derive(Debug, clap::Subcommand)]
 pub enum What {
+    /// The cutter's profile (its meridian and mirror image) at equal scales.
+    Cutter(CutterArgs),
     /// Trochoidal paths of the cutting-edge elements along a pass and the crest heights
     /// between consecutive marks (as Marin et al. 2023, Fig 14a/b).
     Trochoid(TrochoidArgs),
@@ -44,6 +47,19 @@ pub struct Common {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Options of `crest plot cutter`.
+#[derive(Debug, clap::Args)]
+pub struct CutterArgs {
+    /// Cutter description (tool.toml).
+    #[arg(long, value_name = "TOOL.toml")]
+    pub tool: PathBuf,
+    /// How much of the side to draw above the end, mm (default: half the radius).
+    #[arg(long, value_name = "MM")]
+    pub side_mm: Option<f64>,
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// Options of `crest plot trochoid`.
@@ -195,12 +211,31 @@ fn done(common: &Common, kind: &str, extra: serde_json::Value) -> miette::Result
 /// Run `crest plot`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     match args.what {
+        What::Cutter(a) => run_cutter(a),
         What::Trochoid(a) => run_trochoid(a),
         What::Runout(a) => run_runout(a),
         What::Heightmap(a) => run_heightmap(a),
         What::Profile(a) => run_profile(a),
         What::Feed(a) => run_feed(a),
     }
+}
+
+fn run_cutter(a: CutterArgs) -> miette::Result<Outcome> {
+    check_format(&a.common.output)?;
+    let cutter = crest::pipeline::load_tool(&a.tool)?;
+    let side = a.side_mm.unwrap_or(0.5 * cutter.radius_mm);
+    crest::plot::cutter::plot_cutter(&cutter, a.common.title.as_deref(), side, &a.common.output)
+        .map_err(|e| miette!("{e}"))?;
+    done(
+        &a.common,
+        "cutter",
+        serde_json::json!({
+            "shape": cutter.shape.name(),
+            "description": cutter.describe(),
+            "radius_mm": cutter.radius_mm,
+            "end_height_mm": cutter.end_height_mm(),
+        }),
+    )
 }
 
 fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
@@ -287,7 +322,7 @@ fn run_runout(a: RunoutArgs) -> miette::Result<Outcome> {
         ));
     }
     let cutter = crest::pipeline::load_tool(&a.tool)?;
-    let top = cutter.corner_radius_mm();
+    let top = cutter.end_height_mm();
     if let Some(z) = a
         .heights_mm
         .iter()

@@ -49,15 +49,6 @@ impl From<RuleArg> for Rule {
     }
 }
 
-/// Name of a shape in output.
-pub fn shape_name(shape: Shape) -> &'static str {
-    match shape {
-        Shape::Ball => "ball",
-        Shape::Torus { .. } => "torus",
-        Shape::Flat => "flat",
-    }
-}
-
 /// Run `crest tool`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let cutter = crest::pipeline::load_tool(&args.tool)?;
@@ -75,6 +66,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                     "radius_mm": t.radius_mm,
                     "local_radius_mm": t.local_radius_mm,
                     "runout_um": t.runout_mm * 1e3,
+                    "axial_deviation_um": t.axial_deviation_mm * 1e3,
                     "normal_deviation_um": t.normal_deviation_mm * 1e3,
                     "participates": t.participates,
                     "participates_paper": t.participates_paper,
@@ -87,7 +79,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             .collect();
         let out = serde_json::json!({
             "tool": args.tool.display().to_string(),
-            "shape": shape_name(cutter.shape),
+            "shape": cutter.shape.name(),
+            "description": cutter.describe(),
             "radius_mm": r,
             "corner_radius_mm": cutter.corner_radius_mm(),
             "teeth_count": cutter.teeth(),
@@ -120,11 +113,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         s,
         "tool {}: {} R {} mm{}, {} teeth, helix {:.3}°",
         args.tool.display(),
-        shape_name(cutter.shape),
+        cutter.shape.name(),
         r,
-        match cutter.shape {
+        match &cutter.shape {
             Shape::Torus { corner_radius_mm } => format!(" rc {corner_radius_mm} mm"),
-            _ => String::new(),
+            Shape::Ball | Shape::Flat => String::new(),
+            _ => format!(" ({})", cutter.describe()),
         },
         cutter.teeth(),
         cutter.helix_rad.to_degrees()
@@ -166,19 +160,29 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     );
     let _ = writeln!(
         s,
-        "tooth  radius_mm  run-out_um  normal_dev_um  cuts  R_ef_mm   R_ef_error_%"
+        "tooth  radius_mm  run-out_um  normal_dev_um  cuts  R_ef_mm   R_ef_error_%{}",
+        if cutter.has_axial_dev() {
+            "  axial_um"
+        } else {
+            ""
+        }
     );
     for t in &a.teeth {
         let _ = writeln!(
             s,
-            "{:>5}  {:>9.5}  {:>10.3}  {:>13.3}  {:>4}  {:>8.5}  {:>12.5}",
+            "{:>5}  {:>9.5}  {:>10.3}  {:>13.3}  {:>4}  {:>8.5}  {:>12.5}{}",
             t.index,
             t.radius_mm,
             t.runout_mm * 1e3,
             t.normal_deviation_mm * 1e3,
             if t.participates { "yes" } else { "no" },
             t.effective_radius_mm,
-            t.effective_radius_error_pct
+            t.effective_radius_error_pct,
+            if cutter.has_axial_dev() {
+                format!("  {:>8.3}", t.axial_deviation_mm * 1e3)
+            } else {
+                String::new()
+            }
         );
     }
     outln!("{}", s.trim_end_matches('\n'));

@@ -168,6 +168,7 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
                     .iter()
                     .map(|d| d * 1e-3)
                     .collect(),
+                ..Default::default()
             })
         }
     };

@@ -1,9 +1,11 @@
 //! `tool.toml`: the cutter configuration file, read into a [`Cutter`].
 //!
 //! ```toml
-//! shape = "ball"              # "ball" | "torus" | "flat"
-//! radius_mm = 5.0
-//! corner_radius_mm = 1.5      # torus only (ignored by ball and flat, but checked)
+//! shape = "ball"              # "ball" | "torus" | "flat" | "round_insert" | "apt" | "profile"
+//!                             # | "barrel" | "lens" | "oval" | "taper_barrel"
+//! radius_mm = 5.0             # the largest radius (optional for apt and profile)
+//! corner_radius_mm = 1.5      # torus; the insert radius of a round insert; barrel and lens
+//!                             # (ignored by ball and flat, but checked)
 //! teeth = 4
 //! helix_deg = 30.0            # 0 = straight edges
 //! tooth_pitch_deg = [0, 85, 180, 265]   # optional: uneven pitch, tooth 1 first and 0
@@ -13,15 +15,32 @@
 //! axis_tilt_deg = 0.0
 //! axis_tilt_phase_deg = 0.0
 //! tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
+//! tooth_axial_deviation_um = [0.0, 9.0, 0.0, 0.0]   # positive lifts the tooth
 //! ```
 //!
-//! Unknown keys, missing required keys (`shape`, `radius_mm`, `teeth`, `helix_deg`, and
-//! `corner_radius_mm` for a torus) and impossible values are rejected with the key's name
-//! and the 1-based line and column of the offending text. Only these config types derive
-//! serde; the `tool` stage itself stays free of it.
+//! The other shapes take their own keys (lengths mm, angles degrees):
+//!
+//! * `round_insert`: `radius_mm` (outer radius) and `corner_radius_mm` (the insert radius ri);
+//!   the insert circle's centre lies `radius_mm − corner_radius_mm` from the axis and its
+//!   whole lower half cuts, inner flank included;
+//! * `apt`: `apt = [d, r, e, f, a, b, h]`, APT's `CUTTER/` (see [`crate::tool::meridian::apt`]);
+//! * `profile`: `profile_mm = [[r, z], [r, z, ρ], …]` from the tip upward, a third number
+//!   making the piece from the previous point an arc of radius |ρ| (ρ > 0 convex, < 0
+//!   concave);
+//! * `barrel`: `radius_mm`, `segment_radius_mm`, `segment_height_mm` (height of the widest
+//!   point), `corner_radius_mm`;
+//! * `lens`: `radius_mm`, `segment_radius_mm` (centred on the axis), `corner_radius_mm`;
+//! * `oval`: `radius_mm`, `segment_radius_mm` (vertical at R), `tip_radius_mm`;
+//! * `taper_barrel`: `radius_mm`, `segment_radius_mm`, `tip_radius_mm`, `taper_deg` (the
+//!   angle between the axis and the profile where the segment leaves the tip radius).
+//!
+//! Unknown keys, keys the shape does not use, missing required keys (`shape`, `teeth`,
+//! `helix_deg` and those of the shape) and impossible values are rejected with the key's
+//! name and the 1-based line and column of the offending text. Only these config types
+//! derive serde; the `tool` stage itself stays free of it.
 
 use crate::parse::line_column;
-use crate::tool::{Cutter, Runout, Shape};
+use crate::tool::{Cutter, Meridian, Runout, Shape, meridian};
 use serde::Deserialize;
 use std::f64::consts::TAU;
 use std::ops::Range;
@@ -99,7 +118,7 @@ impl ToolConfigError {
 
 /// The `shape` key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum ShapeName {
     /// `"ball"`.
     Ball,
@@ -107,6 +126,38 @@ pub enum ShapeName {
     Torus,
     /// `"flat"`.
     Flat,
+    /// `"round_insert"`: round-insert face mill.
+    RoundInsert,
+    /// `"apt"`: APT's seven-parameter cutter.
+    Apt,
+    /// `"profile"`: any meridian polyline or arc list.
+    Profile,
+    /// `"barrel"`: circle segment on the periphery.
+    Barrel,
+    /// `"lens"`: circle segment across the end.
+    Lens,
+    /// `"oval"`: tip radius and a segment up to the vertical at R.
+    Oval,
+    /// `"taper_barrel"`: tip radius and a segment along a taper.
+    TaperBarrel,
+}
+
+impl ShapeName {
+    /// The name as written.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ShapeName::Ball => "ball",
+            ShapeName::Torus => "torus",
+            ShapeName::Flat => "flat",
+            ShapeName::RoundInsert => "round_insert",
+            ShapeName::Apt => "apt",
+            ShapeName::Profile => "profile",
+            ShapeName::Barrel => "barrel",
+            ShapeName::Lens => "lens",
+            ShapeName::Oval => "oval",
+            ShapeName::TaperBarrel => "taper_barrel",
+        }
+    }
 }
 
 /// The `tool.toml` document as written (units in the key names).
@@ -115,11 +166,30 @@ pub enum ShapeName {
 pub struct ToolConfig {
     /// End shape.
     pub shape: Spanned<ShapeName>,
-    /// Nominal radius R, mm.
-    pub radius_mm: Spanned<f64>,
-    /// Corner radius rc, mm (required for a torus).
+    /// Nominal (largest) radius R, mm (optional for `apt` and `profile`).
+    #[serde(default)]
+    pub radius_mm: Option<Spanned<f64>>,
+    /// Corner radius rc, mm (torus, barrel, lens); the insert radius of a round insert.
     #[serde(default)]
     pub corner_radius_mm: Option<Spanned<f64>>,
+    /// APT `CUTTER/d,r,e,f,a,b,h` (mm, degrees), for `shape = "apt"`.
+    #[serde(default)]
+    pub apt: Option<Spanned<Vec<f64>>>,
+    /// The meridian `[[r, z], [r, z, arc radius], …]` from the tip upward, mm.
+    #[serde(default)]
+    pub profile_mm: Option<Spanned<Vec<Vec<f64>>>>,
+    /// Segment radius Rs of a circle-segment tool, mm.
+    #[serde(default)]
+    pub segment_radius_mm: Option<Spanned<f64>>,
+    /// Height of a barrel's widest point above the tip, mm.
+    #[serde(default)]
+    pub segment_height_mm: Option<Spanned<f64>>,
+    /// Tip radius of an oval or taper barrel, mm.
+    #[serde(default)]
+    pub tip_radius_mm: Option<Spanned<f64>>,
+    /// Taper angle of a taper barrel, degrees.
+    #[serde(default)]
+    pub taper_deg: Option<Spanned<f64>>,
     /// Number of teeth Z.
     pub teeth: Spanned<i64>,
     /// Helix angle α, degrees.
@@ -152,6 +222,9 @@ pub struct RunoutConfig {
     /// δ_j, µm, one per tooth.
     #[serde(default)]
     pub tooth_radius_deviation_um: Option<Spanned<Vec<f64>>>,
+    /// ε_j, µm, one per tooth; positive lifts the tooth toward the shank.
+    #[serde(default)]
+    pub tooth_axial_deviation_um: Option<Spanned<Vec<f64>>>,
 }
 
 fn invalid(text: &str, key: &str, span: Range<usize>, message: String) -> ToolConfigError {
@@ -201,56 +274,20 @@ impl ToolConfig {
     /// Check the values and build the cutter. `text` is the document the config was parsed
     /// from (for line numbers).
     pub fn to_cutter(&self, text: &str) -> Result<Cutter, ToolConfigError> {
-        let radius = finite(text, "radius_mm", &self.radius_mm)?;
+        let (shape, radius) = self.shape_and_radius(text)?;
         let max_r = crate::math::limits::MAX_TOOL_RADIUS_MM;
         if radius <= 0.0 || radius > max_r {
+            let span = match &self.radius_mm {
+                Some(v) => v.span(),
+                None => self.shape.span(),
+            };
             return Err(invalid(
                 text,
                 "radius_mm",
-                self.radius_mm.span(),
+                span,
                 format!("must lie in (0, {max_r}] mm, found {radius}"),
             ));
         }
-        let corner = match &self.corner_radius_mm {
-            Some(c) => {
-                let rc = finite(text, "corner_radius_mm", c)?;
-                if rc < 0.0 {
-                    return Err(invalid(
-                        text,
-                        "corner_radius_mm",
-                        c.span(),
-                        format!("must not be negative, found {rc}"),
-                    ));
-                }
-                if rc > radius {
-                    return Err(invalid(
-                        text,
-                        "corner_radius_mm",
-                        c.span(),
-                        format!("({rc} mm) must not exceed radius_mm ({radius} mm)"),
-                    ));
-                }
-                Some(rc)
-            }
-            None => None,
-        };
-        let shape = match self.shape.get_ref() {
-            ShapeName::Ball => Shape::Ball,
-            ShapeName::Flat => Shape::Flat,
-            ShapeName::Torus => match corner {
-                Some(rc) => Shape::Torus {
-                    corner_radius_mm: rc,
-                },
-                None => {
-                    return Err(invalid(
-                        text,
-                        "corner_radius_mm",
-                        self.shape.span(),
-                        "is required when shape = \"torus\"".to_string(),
-                    ));
-                }
-            },
-        };
         let teeth = *self.teeth.get_ref();
         if !(1..=MAX_TEETH).contains(&teeth) {
             return Err(invalid(
@@ -320,40 +357,33 @@ impl ToolConfig {
                     ));
                 }
             }
-            let devs = match &r.tooth_radius_deviation_um {
-                Some(d) => {
-                    let key = "runout.tooth_radius_deviation_um";
-                    if d.get_ref().len() != teeth {
-                        return Err(invalid(
-                            text,
-                            key,
-                            d.span(),
-                            format!("has {} values but teeth = {teeth}", d.get_ref().len()),
-                        ));
-                    }
-                    if let Some(bad) = d.get_ref().iter().find(|v| !v.is_finite()) {
-                        return Err(invalid(
-                            text,
-                            key,
-                            d.span(),
-                            format!("must be finite, found {bad}"),
-                        ));
-                    }
-                    // A deviation may shorten a tooth, not turn it inside out.
-                    if let Some(bad) = d.get_ref().iter().find(|v| radius + **v * 1e-3 <= 0.0) {
-                        return Err(invalid(
-                            text,
-                            key,
-                            d.span(),
-                            format!(
-                                "value {bad} µm makes a tooth radius negative (radius_mm = {radius})"
-                            ),
-                        ));
-                    }
-                    d.get_ref().iter().map(|v| v * 1e-3).collect()
-                }
-                None => Vec::new(),
-            };
+            let devs = per_tooth(
+                text,
+                "runout.tooth_radius_deviation_um",
+                &r.tooth_radius_deviation_um,
+                teeth,
+            )?;
+            // A deviation may shorten a tooth, not turn it inside out.
+            if let (Some(d), Some(bad)) = (
+                &r.tooth_radius_deviation_um,
+                devs.iter().find(|v| radius + **v <= 0.0),
+            ) {
+                return Err(invalid(
+                    text,
+                    "runout.tooth_radius_deviation_um",
+                    d.span(),
+                    format!(
+                        "value {} µm makes a tooth radius negative (radius_mm = {radius})",
+                        bad * 1e3
+                    ),
+                ));
+            }
+            let axial = per_tooth(
+                text,
+                "runout.tooth_axial_deviation_um",
+                &r.tooth_axial_deviation_um,
+                teeth,
+            )?;
             cutter.runout = Runout {
                 offset_mm: offset_um * 1e-3,
                 offset_phase_rad: opt_finite(text, "runout.offset_phase_deg", &r.offset_phase_deg)?
@@ -368,9 +398,338 @@ impl ToolConfig {
                 .to_radians()
                 .rem_euclid(TAU),
                 tooth_radius_dev_mm: devs,
+                tooth_axial_dev_mm: axial,
             };
         }
         Ok(cutter)
+    }
+}
+
+/// A per-tooth list in µm as mm: one finite value per tooth (empty when absent).
+fn per_tooth(
+    text: &str,
+    key: &str,
+    v: &Option<Spanned<Vec<f64>>>,
+    teeth: usize,
+) -> Result<Vec<f64>, ToolConfigError> {
+    let Some(d) = v else {
+        return Ok(Vec::new());
+    };
+    if d.get_ref().len() != teeth {
+        return Err(invalid(
+            text,
+            key,
+            d.span(),
+            format!("has {} values but teeth = {teeth}", d.get_ref().len()),
+        ));
+    }
+    if let Some(bad) = d.get_ref().iter().find(|v| !v.is_finite()) {
+        return Err(invalid(
+            text,
+            key,
+            d.span(),
+            format!("must be finite, found {bad}"),
+        ));
+    }
+    Ok(d.get_ref().iter().map(|v| v * 1e-3).collect())
+}
+
+impl ToolConfig {
+    /// A positive, finite length or angle the shape requires.
+    fn required(
+        &self,
+        text: &str,
+        key: &str,
+        v: &Option<Spanned<f64>>,
+    ) -> Result<(f64, Range<usize>), ToolConfigError> {
+        let shape = self.shape.get_ref().as_str();
+        let Some(v) = v else {
+            return Err(invalid(
+                text,
+                key,
+                self.shape.span(),
+                format!("is required when shape = \"{shape}\""),
+            ));
+        };
+        let x = finite(text, key, v)?;
+        if x <= 0.0 {
+            return Err(invalid(
+                text,
+                key,
+                v.span(),
+                format!("must be positive, found {x}"),
+            ));
+        }
+        Ok((x, v.span()))
+    }
+
+    /// Keys given that the shape does not use are rejected.
+    fn unused(&self, text: &str, used: &[&str]) -> Result<(), ToolConfigError> {
+        let spans: [(&str, Option<Range<usize>>); 7] = [
+            (
+                "corner_radius_mm",
+                self.corner_radius_mm.as_ref().map(|v| v.span()),
+            ),
+            ("apt", self.apt.as_ref().map(|v| v.span())),
+            ("profile_mm", self.profile_mm.as_ref().map(|v| v.span())),
+            (
+                "segment_radius_mm",
+                self.segment_radius_mm.as_ref().map(|v| v.span()),
+            ),
+            (
+                "segment_height_mm",
+                self.segment_height_mm.as_ref().map(|v| v.span()),
+            ),
+            (
+                "tip_radius_mm",
+                self.tip_radius_mm.as_ref().map(|v| v.span()),
+            ),
+            ("taper_deg", self.taper_deg.as_ref().map(|v| v.span())),
+        ];
+        let shape = self.shape.get_ref();
+        for (key, span) in spans {
+            let Some(span) = span else { continue };
+            // Ball and flat ends ignore (but check) a corner radius, as they always did.
+            let tolerated =
+                key == "corner_radius_mm" && matches!(shape, ShapeName::Ball | ShapeName::Flat);
+            if !used.contains(&key) && !tolerated {
+                return Err(invalid(
+                    text,
+                    key,
+                    span,
+                    format!("is not used by shape = \"{}\"", shape.as_str()),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The nominal radius: required, positive.
+    fn radius(&self, text: &str) -> Result<f64, ToolConfigError> {
+        self.required(text, "radius_mm", &self.radius_mm)
+            .map(|(r, _)| r)
+    }
+
+    /// A profile's meridian, or the builder's complaint at the shape key.
+    fn profile(
+        &self,
+        text: &str,
+        built: Result<Meridian, meridian::ProfileError>,
+        span: Range<usize>,
+    ) -> Result<Meridian, ToolConfigError> {
+        built.map_err(|e| {
+            invalid(
+                text,
+                self.shape.get_ref().as_str(),
+                span,
+                format!("describes no cutter: {e}"),
+            )
+        })
+    }
+
+    /// The shape and the nominal radius R.
+    fn shape_and_radius(&self, text: &str) -> Result<(Shape, f64), ToolConfigError> {
+        let corner = match &self.corner_radius_mm {
+            Some(c) => {
+                let rc = finite(text, "corner_radius_mm", c)?;
+                if rc < 0.0 {
+                    return Err(invalid(
+                        text,
+                        "corner_radius_mm",
+                        c.span(),
+                        format!("must not be negative, found {rc}"),
+                    ));
+                }
+                Some((rc, c.span()))
+            }
+            None => None,
+        };
+        let corner_within = |radius: f64| -> Result<(), ToolConfigError> {
+            if let Some((rc, span)) = &corner {
+                if *rc > radius {
+                    return Err(invalid(
+                        text,
+                        "corner_radius_mm",
+                        span.clone(),
+                        format!("({rc} mm) must not exceed radius_mm ({radius} mm)"),
+                    ));
+                }
+            }
+            Ok(())
+        };
+        let name = *self.shape.get_ref();
+        let shape_span = self.shape.span();
+        let classic = |s: Shape| -> Result<(Shape, f64), ToolConfigError> {
+            let r = self.radius(text)?;
+            corner_within(r)?;
+            Ok((s, r))
+        };
+        match name {
+            ShapeName::Ball => {
+                self.unused(text, &[])?;
+                classic(Shape::Ball)
+            }
+            ShapeName::Flat => {
+                self.unused(text, &[])?;
+                classic(Shape::Flat)
+            }
+            ShapeName::Torus => {
+                self.unused(text, &["corner_radius_mm"])?;
+                let r = self.radius(text)?;
+                corner_within(r)?;
+                match corner {
+                    Some((rc, _)) => Ok((
+                        Shape::Torus {
+                            corner_radius_mm: rc,
+                        },
+                        r,
+                    )),
+                    None => Err(invalid(
+                        text,
+                        "corner_radius_mm",
+                        shape_span,
+                        "is required when shape = \"torus\"".to_string(),
+                    )),
+                }
+            }
+            ShapeName::RoundInsert => {
+                self.unused(text, &["corner_radius_mm"])?;
+                let r = self.radius(text)?;
+                corner_within(r)?;
+                let (ri, _) = self.required(text, "corner_radius_mm", &self.corner_radius_mm)?;
+                Ok((
+                    Shape::RoundInsert {
+                        insert_radius_mm: ri,
+                    },
+                    r,
+                ))
+            }
+            ShapeName::Apt => {
+                self.unused(text, &["apt"])?;
+                let Some(p) = &self.apt else {
+                    return Err(invalid(
+                        text,
+                        "apt",
+                        shape_span,
+                        "is required when shape = \"apt\" (apt = [d, r, e, f, a, b, h])"
+                            .to_string(),
+                    ));
+                };
+                let v = p.get_ref();
+                if v.len() != 7 {
+                    return Err(invalid(
+                        text,
+                        "apt",
+                        p.span(),
+                        format!(
+                            "needs the seven numbers d, r, e, f, a, b, h, found {}",
+                            v.len()
+                        ),
+                    ));
+                }
+                let arr = [v[0], v[1], v[2], v[3], v[4], v[5], v[6]];
+                let m = self.profile(text, meridian::apt(arr).map(|(m, _)| m), p.span())?;
+                self.matching_radius(text, Shape::Profile(m))
+            }
+            ShapeName::Profile => {
+                self.unused(text, &["profile_mm"])?;
+                let Some(p) = &self.profile_mm else {
+                    return Err(invalid(
+                        text,
+                        "profile_mm",
+                        shape_span,
+                        "is required when shape = \"profile\"".to_string(),
+                    ));
+                };
+                let mut pts = Vec::with_capacity(p.get_ref().len());
+                for (i, q) in p.get_ref().iter().enumerate() {
+                    let ok = (q.len() == 2 || q.len() == 3) && q.iter().all(|v| v.is_finite());
+                    if !ok {
+                        return Err(invalid(
+                            text,
+                            "profile_mm",
+                            p.span(),
+                            format!(
+                                "point {} must be [r, z] or [r, z, arc radius] of finite numbers",
+                                i + 1
+                            ),
+                        ));
+                    }
+                    pts.push([q[0], q[1], q.get(2).copied().unwrap_or(0.0)]);
+                }
+                let m = self.profile(text, meridian::polyline(&pts), p.span())?;
+                self.matching_radius(text, Shape::Profile(m))
+            }
+            ShapeName::Barrel => {
+                self.unused(
+                    text,
+                    &["segment_radius_mm", "segment_height_mm", "corner_radius_mm"],
+                )?;
+                let r = self.radius(text)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (zb, _) = self.required(text, "segment_height_mm", &self.segment_height_mm)?;
+                let (rc, _) = self.required(text, "corner_radius_mm", &self.corner_radius_mm)?;
+                let m = self.profile(text, meridian::barrel(r, rs, zb, rc), span)?;
+                Ok((Shape::Profile(m), r))
+            }
+            ShapeName::Lens => {
+                self.unused(text, &["segment_radius_mm", "corner_radius_mm"])?;
+                let r = self.radius(text)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rc, _) = self.required(text, "corner_radius_mm", &self.corner_radius_mm)?;
+                let m = self.profile(text, meridian::lens(r, rs, rc), span)?;
+                Ok((Shape::Profile(m), r))
+            }
+            ShapeName::Oval => {
+                self.unused(text, &["segment_radius_mm", "tip_radius_mm"])?;
+                let r = self.radius(text)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rt, _) = self.required(text, "tip_radius_mm", &self.tip_radius_mm)?;
+                let m = self.profile(text, meridian::oval(r, rs, rt), span)?;
+                Ok((Shape::Profile(m), r))
+            }
+            ShapeName::TaperBarrel => {
+                self.unused(text, &["segment_radius_mm", "tip_radius_mm", "taper_deg"])?;
+                let r = self.radius(text)?;
+                let (rs, span) =
+                    self.required(text, "segment_radius_mm", &self.segment_radius_mm)?;
+                let (rt, _) = self.required(text, "tip_radius_mm", &self.tip_radius_mm)?;
+                let (taper, _) = self.required(text, "taper_deg", &self.taper_deg)?;
+                let m = self.profile(text, meridian::taper_barrel(r, rs, rt, taper), span)?;
+                Ok((Shape::Profile(m), r))
+            }
+        }
+    }
+
+    /// For `apt` and `profile`: R is the profile's largest radius; a `radius_mm` given
+    /// must agree.
+    fn matching_radius(&self, text: &str, shape: Shape) -> Result<(Shape, f64), ToolConfigError> {
+        let Shape::Profile(m) = &shape else {
+            return Err(invalid(
+                text,
+                "shape",
+                self.shape.span(),
+                "is not a profile".to_string(),
+            ));
+        };
+        let r = m.r_max();
+        if let Some(v) = &self.radius_mm {
+            let given = finite(text, "radius_mm", v)?;
+            if (given - r).abs() > 1e-6 {
+                return Err(invalid(
+                    text,
+                    "radius_mm",
+                    v.span(),
+                    format!(
+                        "({given} mm) disagrees with the profile's largest radius ({r} mm); leave it out"
+                    ),
+                ));
+            }
+        }
+        Ok((shape, r))
     }
 }
 
@@ -478,6 +837,84 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
 
         let e = err("shape = \"torus\"\nradius_mm = 5\nteeth = 4\nhelix_deg = 0\n");
         assert!(e.to_string().contains("corner_radius_mm"), "{e}");
+    }
+
+    #[test]
+    fn every_shape_loads() {
+        let tail = "teeth = 2\nhelix_deg = 0\n";
+        let ok = |head: &str| {
+            load_tool_toml(&format!("{head}{tail}")).unwrap_or_else(|e| panic!("{head}: {e}"))
+        };
+        let c = ok("shape = \"round_insert\"\nradius_mm = 10\ncorner_radius_mm = 5\n");
+        assert_eq!(
+            c.shape,
+            Shape::RoundInsert {
+                insert_radius_mm: 5.0
+            }
+        );
+        assert_relative_eq!(
+            c.profile_height(2.5).unwrap(),
+            5.0 - 18.75f64.sqrt(),
+            epsilon = 1e-12
+        );
+        let c = ok("shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\n");
+        assert_relative_eq!(c.radius_mm, 5.0, epsilon = 1e-12);
+        assert_eq!(c.shape.name(), "apt");
+        let c = ok("shape = \"profile\"\nprofile_mm = [[0, 0], [3, 0], [5, 2, 2], [5, 8]]\n");
+        assert_relative_eq!(c.radius_mm, 5.0, epsilon = 1e-12);
+        assert_relative_eq!(c.end_height_mm(), 2.0, epsilon = 1e-12);
+        for (head, name) in [
+            (
+                "shape = \"barrel\"\nradius_mm = 8\nsegment_radius_mm = 250\nsegment_height_mm = 10\ncorner_radius_mm = 1\n",
+                "barrel",
+            ),
+            (
+                "shape = \"lens\"\nradius_mm = 5\nsegment_radius_mm = 50\ncorner_radius_mm = 1\n",
+                "lens",
+            ),
+            (
+                "shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\ntip_radius_mm = 2\n",
+                "oval",
+            ),
+            (
+                "shape = \"taper_barrel\"\nradius_mm = 3\nsegment_radius_mm = 250\ntip_radius_mm = 1\ntaper_deg = 10\n",
+                "taper_barrel",
+            ),
+        ] {
+            let c = ok(head);
+            assert_eq!(c.shape.name(), name);
+        }
+        // The run-out table comes last: the tail's keys belong to the top level.
+        let c = load_tool_toml(&format!(
+            "shape = \"ball\"\nradius_mm = 5\n{tail}[runout]\ntooth_axial_deviation_um = [0, 9]\n"
+        ))
+        .unwrap();
+        assert_relative_eq!(c.tooth_axial_dev_mm(1), 0.009, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn shape_errors_point_at_the_key() {
+        let tail = "teeth = 2\nhelix_deg = 0\n";
+        let e = err(&format!(
+            "shape = \"lens\"\nradius_mm = 5\nsegment_radius_mm = 4\ncorner_radius_mm = 1\n{tail}"
+        ));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("describes no cutter"), "{e}");
+        let e = err(&format!(
+            "shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\nradius_mm = 4\n{tail}"
+        ));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("largest radius"), "{e}");
+        let e = err(&format!(
+            "shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\n{tail}"
+        ));
+        assert_eq!(e.line(), 1);
+        assert!(e.to_string().contains("tip_radius_mm"), "{e}");
+        let e = err(&format!(
+            "shape = \"flat\"\nradius_mm = 5\nprofile_mm = [[0, 0], [5, 0]]\n{tail}"
+        ));
+        assert_eq!(e.line(), 3);
+        assert!(e.to_string().contains("not used"), "{e}");
     }
 
     #[test]

@@ -13,7 +13,12 @@
 //!   (model.md §7; for a ball rd = 0 and O is the centre). The offset points of the
 //!   neighbouring postures (other passes included) are fitted with a local quadric, whose
 //!   normal gives n; for a torus or flat end w depends on n, so this is iterated from n = a.
-//!   Then `CC = O − rc n`.
+//!   Then `CC = O − rc n`. A round insert is a torus here (its insert circle is the
+//!   corner). For a profile the contact itself is fitted: `CC = tip + z_s a + r_s w(n)`
+//!   with (r_s, z_s) the meridian's point whose outward normal is −n (its support point).
+//!
+//! [`touch`] knows the cores of the ball, torus, flat end and round insert only; for a
+//! profile [`touch_supported`] says no and the caller must not ask.
 
 use super::Part;
 use crate::math::{Point3, Vec3, normalize_or_none};
@@ -46,7 +51,13 @@ fn basis(a: &Vec3) -> (Vec3, Vec3) {
     (e1, a.cross(&e1))
 }
 
-/// Where `cutter` at tip `tip`, unit axis `axis`, touches `part`.
+/// Whether [`touch`] knows the cutter's core (every shape but a profile).
+pub fn touch_supported(cutter: &Cutter) -> bool {
+    !matches!(cutter.shape, crate::tool::Shape::Profile(_))
+}
+
+/// Where `cutter` at tip `tip`, unit axis `axis`, touches `part` (a profile is treated as
+/// its corner radius about its end: see [`touch_supported`]).
 pub fn touch(part: &Part, cutter: &Cutter, tip: &Point3, axis: &Vec3) -> Touch {
     let r = cutter.radius_mm;
     let rc = cutter.corner_radius_mm();
@@ -154,13 +165,31 @@ pub fn derive(
     poses: &[(Point3, Vec3)],
     cell_mm: f64,
 ) -> Vec<Option<(Point3, Vec3)>> {
-    let rc = cutter.corner_radius_mm();
+    let meridian = match &cutter.shape {
+        crate::tool::Shape::Profile(m) => Some(m),
+        _ => None,
+    };
+    // A profile fits its contact points (offset 0); the others their offset surface.
+    let rc = if meridian.is_some() {
+        0.0
+    } else {
+        cutter.corner_radius_mm()
+    };
     let rd = cutter.radius_mm - rc;
     let mut normals: Vec<Option<Vec3>> = poses.iter().map(|(_, a)| Some(*a)).collect();
     let iterations = if rd <= 1e-12 { 1 } else { 4 };
     let offset = |i: usize, n: &Vec3| {
         let (tip, a) = &poses[i];
-        tip + a * rc + radial(n, a) * rd
+        match meridian {
+            Some(m) => {
+                let w = radial(n, a);
+                let m_a = -n.dot(a);
+                let m_r = (-n - a * m_a).norm();
+                let p = m.support(m_r, m_a);
+                tip + a * p[1] + w * p[0]
+            }
+            None => tip + a * rc + radial(n, a) * rd,
+        }
     };
     for _ in 0..iterations {
         let pts: Vec<Option<Point3>> = (0..poses.len())

@@ -87,6 +87,13 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
             let f = read_part(part_path)?;
             warnings.extend(f.warnings);
             let part = f.part;
+            if !crate::part::contact::touch_supported(&cutter) {
+                return Err(miette::miette!(
+                    "{}: contact points from a part need a ball, torus, flat or round-insert cutter; the {} has no closed-form core (leave out --part to derive the contacts from the path)",
+                    part_path.display(),
+                    cutter.describe()
+                ));
+            }
             check_orientation(&part, &program, &cutter, part_path)?;
             for path in &mut program.paths {
                 let cut: Vec<bool> = (0..path.postures.len()).map(|i| is_cut(path, i)).collect();

@@ -159,6 +159,36 @@ pub fn resolve_cutter(
             "--helix-deg must lie within ±89°, got {helix}"
         ));
     }
+    let helix_note = if helix_deg.is_none() {
+        " (assumed; --helix-deg to change)"
+    } else {
+        ""
+    };
+    if let Some(p) = t.apt_profile() {
+        // APT's seven parameters describe a shape of their own: angles back to degrees.
+        let deg = [
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4].to_degrees(),
+            p[5].to_degrees(),
+            p[6],
+        ];
+        let (m, warning) = crate::tool::meridian::apt(deg).map_err(|e| {
+            miette::miette!(
+                "{}: the tool's APT parameters describe no cutter: {e}; give --tool tool.toml",
+                file.display()
+            )
+        })?;
+        let cutter = Cutter::from_meridian(m, teeth, helix.to_radians());
+        let what = format!(
+            "{} from {}'s CUTTER/TLDATA, {teeth} teeth, helix {helix}°{helix_note}",
+            cutter.describe(),
+            file.display()
+        );
+        return Ok((cutter, what, warning.into_iter().collect()));
+    }
     let rc = t.corner_radius_mm.min(r);
     let (shape, name) = if (rc - r).abs() <= 1e-6 * r {
         (Shape::Ball, "ball end")
@@ -174,15 +204,10 @@ pub fn resolve_cutter(
     };
     let cutter = Cutter::new(shape, r, teeth, helix.to_radians());
     let what = format!(
-        "{name} D {} mm, corner radius {} mm from {}'s TLDATA, {teeth} teeth, helix {helix}°{}",
+        "{name} D {} mm, corner radius {} mm from {}'s TLDATA, {teeth} teeth, helix {helix}°{helix_note}",
         t.diameter_mm,
         rc,
         file.display(),
-        if helix_deg.is_none() {
-            " (assumed; --helix-deg to change)"
-        } else {
-            ""
-        }
     );
     Ok((cutter, what, Vec::new()))
 }

@@ -1,5 +1,5 @@
 //! Charts with plotters, as SVG or PNG, with text rendered from an embedded font (no
-//! system fonts needed): trochoids, run-out, height maps, profiles, feed, design effects
+//! system fonts needed): cutter profiles, trochoids, run-out, height maps, profiles, feed, design effects
 //! and regressions. Drawing only: what goes in a chart is computed by the earlier stages.
 
 use std::path::Path;
@@ -78,6 +78,7 @@ impl Format {
 }
 
 pub mod chart;
+pub mod cutter;
 pub mod effects;
 pub mod feed;
 pub mod heightmap;

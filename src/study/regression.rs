@@ -240,7 +240,7 @@ pub fn crest_model(
     side: Side,
     surface_radius_mm: Option<f64>,
 ) -> Result<CrestPrediction, String> {
-    use crate::tool::{FeedProfile, feed_profile, mark_positions_mm, normal_deviation_mm};
+    use crate::tool::{FeedProfile, feed_profile_for, mark_positions_mm, normal_deviation_mm};
     let a =
         crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule).map_err(|e| e.to_string())?;
     let r = cutter.radius_mm;
@@ -266,7 +266,7 @@ pub fn crest_model(
             radius_mm: arc_radius,
         }
     } else {
-        feed_profile(r, cutter.corner_radius_mm(), lead)
+        feed_profile_for(cutter, lead)
     };
     let fz_eff = a.fz_effective_mm;
     let (rz, ra, lc, crest_mm) = match rule {
@@ -671,6 +671,7 @@ fn describe_tool(c: &Cutter) -> String {
             format!("torus, corner radius {corner_radius_mm} mm")
         }
         crate::tool::Shape::Flat => "flat end".to_string(),
+        _ => c.describe(),
     };
     format!(
         "{shape}, R = {} mm, {} teeth, helix {}°",

@@ -296,7 +296,7 @@ pub struct LateralCurve {
 /// Six tool heights spread over the end, mm: where the corner's normal is 10°, 25°, …, 85°
 /// from the axis.
 pub fn default_marked_heights_mm(cutter: &Cutter) -> Vec<f64> {
-    let c = cutter.corner_radius_mm();
+    let c = cutter.end_height_mm();
     (0..6)
         .map(|i| c * (1.0 - (10.0 + 15.0 * i as f64).to_radians().cos()))
         .collect()
@@ -315,7 +315,7 @@ pub fn lateral_curves_for(
     leads_deg: &[f64],
     marks_mm: &[f64],
 ) -> Vec<LateralCurve> {
-    let top = cutter.corner_radius_mm().max(0.05 * cutter.radius_mm);
+    let top = cutter.end_height_mm().max(0.05 * cutter.radius_mm);
     let spread = |z: f64, lead: f64| normal_runout_spread_mm(cutter, z, lead.to_radians()) * 1e3;
     leads_deg
         .iter()

@@ -187,7 +187,8 @@ pub fn simulate_with(
         None => (Nominal::flat(nx, ny, stride, d, 0.0), false),
     };
     let side = opts.depth_mm.min(cutter.radius_mm);
-    let profile = Profile::new(cutter, opts.chord_tol_mm, side);
+    let profile = Profile::new(cutter, opts.chord_tol_mm, side)
+        .map_err(|e| SurfaceError::InvalidOption(format!("the cutter: {e}")))?;
     let s = Matrix3::from_diagonal(&Vec3::new(1.0 / d, 1.0 / d, 1.0));
     let g = s * Matrix3::from_rows(&[
         frame.u.transpose(),
@@ -465,6 +466,9 @@ impl Setup<'_> {
         let lim = thr + self.profile.runout_bound;
         let levels = &self.profile.levels;
         let f = |i: usize| p.b.z + levels[i].z * m22 - levels[i].r * amp;
+        if !self.profile.convex {
+            return scan_candidates(&f, levels.len(), lim);
+        }
         // The lowest circle: f is a linear function along the convex meridian, so it is
         // unimodal and its sublevel sets are intervals. Coarse scan, then refine.
         const S: usize = 8;
@@ -510,8 +514,8 @@ impl Setup<'_> {
     /// from there (the nominal's bound over the nodes within the tool's reach of its tip).
     fn threshold(&self, k: usize, band: f64) -> f64 {
         let p = self.pose(k, 0.0, false);
-        let top = self.profile.levels[self.profile.levels.len() - 1];
-        let reach = ((top.r * top.r + top.z * top.z).sqrt() + self.profile.runout_bound) / self.d;
+        let top = self.profile.reach[self.profile.reach.len() - 1];
+        let reach = (top + self.profile.runout_bound) / self.d;
         // Tips farther than the step to the next sample lie within its reach too.
         let step = if k + 1 < self.samples.len() {
             (self.samples[k + 1].position - self.samples[k].position).norm() / self.d
@@ -570,8 +574,7 @@ impl Setup<'_> {
         let Some(hi) = c0.map(|c| c.1).max(c1.map(|c| c.1)) else {
             return (strips, boxes);
         };
-        let l = self.profile.levels[hi];
-        let reach = ((l.r * l.r + l.z * l.z).sqrt() + self.profile.runout_bound + step) / self.d;
+        let reach = (self.profile.reach[hi] + self.profile.runout_bound + step) / self.d;
         let (xa, xb) = (pa.b.x.min(p1.b.x) - reach, pa.b.x.max(p1.b.x) + reach);
         let (ya, yb) = (pa.b.y.min(p1.b.y) - reach, pa.b.y.max(p1.b.y) + reach);
         if xb < 0.0 || ya > (self.ny - 1) as f64 || yb < 0.0 || xa > (self.nx - 1) as f64 {
@@ -646,8 +649,7 @@ impl Setup<'_> {
         let Some((_, hi)) = self.candidates(&base, thr) else {
             return (strips, boxes);
         };
-        let l = self.profile.levels[hi];
-        let reach = ((l.r * l.r + l.z * l.z).sqrt() + self.profile.runout_bound) / self.d;
+        let reach = (self.profile.reach[hi] + self.profile.runout_bound) / self.d;
         if base.b.x + reach < 0.0
             || base.b.y + reach < 0.0
             || base.b.x - reach > (self.nx - 1) as f64
@@ -913,6 +915,14 @@ impl Setup<'_> {
             }
         }
     }
+}
+
+/// [`Setup::candidates`] for levels along a meridian that is not convex: every level is
+/// tested, the range runs from the first to the last within `lim` (one more each side).
+fn scan_candidates(f: &dyn Fn(usize) -> f64, n: usize, lim: f64) -> Option<(usize, usize)> {
+    let lo = (0..n).find(|&i| f(i) <= lim)?;
+    let hi = (0..n).rev().find(|&i| f(i) <= lim)?;
+    Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
 }
 
 fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {

@@ -5,9 +5,13 @@
 //! `edge_point(j, z, θ) = Rot(θ) edge_point(j, z, 0)` with `Rot(θ)(x, y, z) =
 //! (x cos θ + y sin θ, −x sin θ + y cos θ, z)`, since d(θ + ψ) = Rot(θ) d(ψ). This turns
 //! every pose into one 3×3 matrix and makes each edge element cost a matrix-vector product.
+//!
+//! Ball, torus and flat ends are discretised by their closed forms; round inserts and
+//! profiles by their meridian polyline (which may start off the axis and, for a profile
+//! that is not convex, need a full scan of the levels).
 
 use crate::math::Vec3;
-use crate::tool::{Cutter, Shape, direction};
+use crate::tool::{Cutter, ProfileError, Shape, direction};
 
 /// One meridian sample of the nominal body: local radius `r` at height `z` (tool frame, mm).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,12 +30,20 @@ pub(crate) struct Profile {
     pub body: Vec<Vec<Vec3>>,
     /// Upper bound of how far run-out moves any element from the nominal circle, mm.
     pub runout_bound: f64,
+    /// `reach[i]`: the largest distance √(r² + z²) from the tip of levels 0..=i, mm.
+    pub reach: Vec<f64>,
+    /// Whether the levels follow a convex meridian (a linear function of (r, z) is then
+    /// unimodal along them).
+    pub convex: bool,
 }
 
 impl Profile {
     /// Discretise `cutter` with meridian chord error ≤ `chord_tol_mm`, the side modelled up to
     /// `side_mm` above the end of the corner.
-    pub fn new(cutter: &Cutter, chord_tol_mm: f64, side_mm: f64) -> Profile {
+    pub fn new(cutter: &Cutter, chord_tol_mm: f64, side_mm: f64) -> Result<Profile, ProfileError> {
+        if !cutter.shape.is_classic() {
+            return Profile::general(cutter, chord_tol_mm, side_mm);
+        }
         let r = cutter.radius_mm;
         let rc = cutter.corner_radius_mm();
         let rd = (r - rc).max(0.0);
@@ -76,6 +88,7 @@ impl Profile {
         let mut body = Vec::with_capacity(teeth);
         for j in 0..teeth {
             let dev = cutter.tooth_dev_mm(j);
+            let eps = cutter.tooth_axial_dev_mm(j);
             let rho0 = cutter.tooth_radius(j, 0.0) - cutter.profile_radius(0.0);
             let mut e = Vec::with_capacity(levels.len());
             let mut b = Vec::with_capacity(levels.len());
@@ -85,8 +98,12 @@ impl Profile {
                     // that the line meets the corner edge continuously.
                     let f = if rd > 0.0 { l.r / rd } else { 0.0 };
                     let dir = direction(cutter.tooth_angle(j, 0.0));
-                    e.push(cutter.axis_offset(0.0, 0.0) * f + dir * (l.r + dev * f));
-                    b.push(Vec3::new(0.0, (l.r + rho0 * f).max(0.0), 0.0));
+                    let mut p = cutter.axis_offset(0.0, 0.0) * f + dir * (l.r + dev * f);
+                    if eps != 0.0 {
+                        p.z += eps;
+                    }
+                    e.push(p);
+                    b.push(Vec3::new(0.0, (l.r + rho0 * f).max(0.0), eps));
                 } else {
                     e.push(cutter.edge_point(j, l.z, 0.0));
                     let rj = if matches!(cutter.shape, Shape::Ball) || l.z > 0.0 {
@@ -94,24 +111,85 @@ impl Profile {
                     } else {
                         l.r + rho0
                     };
-                    b.push(Vec3::new(0.0, rj.max(0.0), l.z));
+                    let z = if eps != 0.0 { l.z + eps } else { l.z };
+                    b.push(Vec3::new(0.0, rj.max(0.0), z));
                 }
             }
             edge.push(e);
             body.push(b);
         }
+        Ok(Profile::finish(cutter, levels, edge, body, true))
+    }
+
+    /// A round insert or a profile: the meridian polyline, each level's edge point and its
+    /// revolved body with the radial run-out of that height.
+    fn general(cutter: &Cutter, chord_tol_mm: f64, side_mm: f64) -> Result<Profile, ProfileError> {
+        let m = cutter.meridian()?;
+        let tol = chord_tol_mm.max(1e-7);
+        let levels: Vec<Level> = m
+            .polyline(tol, side_mm)
+            .into_iter()
+            .map(|p| Level { r: p[0], z: p[1] })
+            .collect();
+        let teeth = cutter.teeth();
+        let mut edge = Vec::with_capacity(teeth);
+        let mut body = Vec::with_capacity(teeth);
+        for j in 0..teeth {
+            let eps = cutter.tooth_axial_dev_mm(j);
+            edge.push(
+                levels
+                    .iter()
+                    .map(|l| cutter.edge_point_at(j, l.r, l.z, 0.0))
+                    .collect(),
+            );
+            body.push(
+                levels
+                    .iter()
+                    .map(|l| {
+                        let rj = l.r + cutter.radial_runout_mm(j, l.z);
+                        Vec3::new(0.0, rj.max(0.0), l.z + eps)
+                    })
+                    .collect(),
+            );
+        }
+        Ok(Profile::finish(cutter, levels, edge, body, m.is_convex()))
+    }
+
+    fn finish(
+        cutter: &Cutter,
+        levels: Vec<Level>,
+        edge: Vec<Vec<Vec3>>,
+        body: Vec<Vec<Vec3>>,
+        convex: bool,
+    ) -> Profile {
         let z_top = levels.last().map(|l| l.z).unwrap_or(0.0);
         let ro = &cutter.runout;
         let dev_max = ro
             .tooth_radius_dev_mm
             .iter()
             .fold(0.0f64, |m, d| m.max(d.abs()));
-        let runout_bound = ro.offset_mm.abs() + z_top * ro.tilt_rad.tan().abs() + dev_max + 1e-9;
+        let mut runout_bound =
+            ro.offset_mm.abs() + z_top * ro.tilt_rad.tan().abs() + dev_max + 1e-9;
+        let axial_max = ro
+            .tooth_axial_dev_mm
+            .iter()
+            .fold(0.0f64, |m, d| m.max(d.abs()));
+        if axial_max > 0.0 {
+            runout_bound += axial_max;
+        }
+        let mut reach = Vec::with_capacity(levels.len());
+        let mut top = 0.0f64;
+        for l in &levels {
+            top = top.max((l.r * l.r + l.z * l.z).sqrt());
+            reach.push(top);
+        }
         Profile {
             levels,
             edge,
             body,
             runout_bound,
+            reach,
+            convex,
         }
     }
 }
@@ -131,8 +209,9 @@ mod tests {
             tilt_rad: 0.001,
             tilt_phase_rad: 1.0,
             tooth_radius_dev_mm: vec![0.0, -0.01, 0.002, 0.0],
+            ..Default::default()
         };
-        let p = Profile::new(&c, 1e-4, 0.5);
+        let p = Profile::new(&c, 1e-4, 0.5).unwrap();
         let theta: f64 = 1.234;
         let (s, co) = theta.sin_cos();
         for j in 0..4 {
@@ -155,7 +234,7 @@ mod tests {
             1,
             0.0,
         );
-        let p = Profile::new(&c, 1e-5, 0.2);
+        let p = Profile::new(&c, 1e-5, 0.2).unwrap();
         for l in &p.levels {
             if l.r <= 5.0 - 1e-12 {
                 assert_relative_eq!(c.profile_height(l.r).unwrap(), l.z, epsilon = 1e-9);

@@ -10,11 +10,16 @@
 //! is traced by the support point for the outward normal m(φ) = (sin φ, −cos φ), φ from
 //! −90° (left) through 0 (down) to +90° (right); y grows monotonically with φ, so z(y) is
 //! found by bisection on φ. This covers the ball (Rd = 0), the torus and the flat end
-//! (rc = 0) with one code path.
+//! (rc = 0) with one code path, and the round insert (its insert circle is the corner).
+//!
+//! For a profile (circle-segment tools, APT cutters) the boundary point for the normal m is
+//! the projection of the body's support point: the meridian's point farthest along the
+//! axial and radial parts of m, placed at the radial direction of m. A barrel tilted across
+//! the feed shows its segment radius Rs here, and its scallop is `Rs − √(Rs² − s²/4)`.
 
 use super::SynthError;
 use crate::math::{Vec3, any_perpendicular};
-use crate::tool::Cutter;
+use crate::tool::{Cutter, Meridian, Shape};
 use std::f64::consts::FRAC_PI_2;
 
 /// Unit tool axis in (f, g, n) from tilt λ and yaw ψ by convention A of model.md §7:
@@ -29,6 +34,10 @@ pub fn axis_convention_a(tilt_rad: f64, yaw_rad: f64) -> Vec3 {
 /// `R_eff = rc + A²B²/H³`, with A = Rd, B = Rd |a·f|, γ = atan2(a·g, a·n) and
 /// `H = √(A² sin²γ + B² cos²γ)`. Infinite for a flat bottom lying on the plane.
 pub fn effective_radius_mm(cutter: &Cutter, axis_fgn: &Vec3) -> f64 {
+    if let Shape::Profile(_) = cutter.shape {
+        // No closed form: the curvature of the lower boundary at the bottom.
+        return CrossSection::new(cutter, axis_fgn).map_or(f64::NAN, |cs| cs.bottom_radius_mm());
+    }
     let rc = cutter.corner_radius_mm();
     let rd = cutter.radius_mm - rc;
     if rd <= 0.0 {
@@ -67,6 +76,8 @@ pub struct CrossSection {
     bottom: [f64; 2],
     /// y range of the lower boundary.
     y_range: [f64; 2],
+    /// A profile's meridian: support points replace the dilated ellipse.
+    meridian: Option<Meridian>,
 }
 
 impl CrossSection {
@@ -79,8 +90,27 @@ impl CrossSection {
                 "the tool axis must point out of the surface (tilt below 90°)".to_string(),
             ));
         }
-        let rc = cutter.corner_radius_mm();
-        let rd = cutter.radius_mm - rc;
+        let meridian = match &cutter.shape {
+            Shape::Profile(m) => {
+                if !m.is_convex() {
+                    return Err(SynthError::Invalid(
+                        "the swept cross-section needs a convex cutter profile".to_string(),
+                    ));
+                }
+                Some(m.clone())
+            }
+            _ => None,
+        };
+        let rc = if meridian.is_some() {
+            0.0
+        } else {
+            cutter.corner_radius_mm()
+        };
+        let rd = if meridian.is_some() {
+            0.0
+        } else {
+            cutter.radius_mm - rc
+        };
         if cutter.radius_mm.is_nan() || cutter.radius_mm <= 0.0 || rc < 0.0 || rd < 0.0 {
             return Err(SynthError::Invalid(format!(
                 "invalid cutter: radius {} mm, corner radius {} mm",
@@ -97,6 +127,7 @@ impl CrossSection {
             axis: a,
             bottom: [0.0, 0.0],
             y_range: [0.0, 0.0],
+            meridian,
         };
         cs.bottom = cs.point(0.0);
         cs.y_range = [cs.point(-FRAC_PI_2)[0], cs.point(FRAC_PI_2)[0]];
@@ -106,6 +137,20 @@ impl CrossSection {
     /// Boundary point (y, z) whose outward normal is m(φ) = (sin φ, −cos φ).
     fn point(&self, phi: f64) -> [f64; 2] {
         let (s, c) = phi.sin_cos();
+        if let Some(m) = &self.meridian {
+            let dir = Vec3::new(0.0, s, -c);
+            let m_a = dir.dot(&self.axis);
+            let radial = dir - self.axis * m_a;
+            let m_r = radial.norm();
+            let w = if m_r > 1e-15 {
+                radial / m_r
+            } else {
+                Vec3::zeros()
+            };
+            let p = m.support(m_r, m_a);
+            let q = self.axis * p[1] + w * p[0];
+            return [q.y, q.z];
+        }
         let dir = [s, -c];
         // Mᵀ m
         let mt = [
@@ -130,6 +175,20 @@ impl CrossSection {
     /// The lowest point (y, z) of the cross-section, relative to the tip.
     pub fn bottom(&self) -> [f64; 2] {
         self.bottom
+    }
+
+    /// Radius of curvature of the lower boundary at its lowest point (the mean of both
+    /// sides over 0.5 % of the cutter's width), mm; infinite where it is flat.
+    pub fn bottom_radius_mm(&self) -> f64 {
+        let d = 0.005 * (self.y_range[1] - self.y_range[0]);
+        let [y0, z0] = self.bottom;
+        let rise = |y: f64| self.lower(y).map_or(f64::NAN, |z| z - z0);
+        let h = 0.5 * (rise(y0 - d) + rise(y0 + d));
+        if h > 0.0 {
+            d * d / (2.0 * h)
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Lower boundary z(y) relative to the tip, or `None` outside the cutter's width.

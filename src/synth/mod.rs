@@ -221,12 +221,16 @@ pub struct Synthetic {
 /// A tool name such as `BALL_D10` or `TORUS_D10_R1.5`.
 pub fn tool_name(cutter: &Cutter) -> String {
     let d = fmt_num(2.0 * cutter.radius_mm);
-    match cutter.shape {
+    match &cutter.shape {
         Shape::Ball => format!("BALL_D{d}"),
         Shape::Torus { corner_radius_mm } => {
-            format!("TORUS_D{d}_R{}", fmt_num(corner_radius_mm))
+            format!("TORUS_D{d}_R{}", fmt_num(*corner_radius_mm))
         }
         Shape::Flat => format!("FLAT_D{d}"),
+        Shape::RoundInsert { insert_radius_mm } => {
+            format!("ROUND_D{d}_R{}", fmt_num(*insert_radius_mm))
+        }
+        Shape::Profile(m) => format!("{}_D{d}", m.family().name().to_ascii_uppercase()),
     }
 }
 
@@ -238,6 +242,14 @@ fn fmt_num(x: f64) -> String {
 /// The CL point (tool tip) of `cutter` with unit axis `axis` touching the CC point `cc`
 /// whose unit surface normal is `normal` (see the module docs).
 pub fn tool_tip(cutter: &Cutter, cc: &Point3, normal: &Vec3, axis: &Vec3) -> Point3 {
+    if let Shape::Profile(m) = &cutter.shape {
+        // The meridian's point whose outward normal is −n touches the CC point.
+        let m_a = -normal.dot(axis);
+        let radial = -normal - axis * m_a;
+        let w = crate::math::normalize_or_none(&radial, 1e-12).unwrap_or_else(Vec3::zeros);
+        let p = m.support(radial.norm(), m_a);
+        return cc - axis * p[1] - w * p[0];
+    }
     let rc = cutter.corner_radius_mm();
     let rd = cutter.radius_mm - rc;
     let radial = normal - axis * normal.dot(axis);
@@ -245,6 +257,37 @@ pub fn tool_tip(cutter: &Cutter, cc: &Point3, normal: &Vec3, axis: &Vec3) -> Poi
         .map(|r| -r)
         .unwrap_or_else(Vec3::zeros);
     cc + normal * rc - axis * rc - w * rd
+}
+
+/// The TLDATA of a synthetic path: diameter and corner radius of a ball, torus or flat end,
+/// all seven parameters of an APT cutter (written as NX's seven-value TLDATA/MILL); `None`
+/// for the shapes TLDATA cannot describe (round inserts, other profiles: give `--tool`).
+pub fn tool_data(cutter: &Cutter) -> Option<ToolData> {
+    let apt = match &cutter.shape {
+        Shape::Profile(m) => match m.family() {
+            crate::tool::Family::Apt(p) => Some([
+                p[0],
+                p[1],
+                p[2],
+                p[3],
+                p[4].to_radians(),
+                p[5].to_radians(),
+                p[6],
+            ]),
+            _ => return None,
+        },
+        Shape::RoundInsert { .. } => return None,
+        _ => None,
+    };
+    Some(ToolData {
+        kind: "MILL".to_string(),
+        diameter_mm: apt.map_or(2.0 * cutter.radius_mm, |p| p[0]),
+        corner_radius_mm: cutter.corner_radius_mm(),
+        length_mm: apt.map_or(75.0, |p| p[6]),
+        taper_rad: apt.map_or(0.0, |p| p[5]),
+        tip_rad: apt.map_or(0.0, |p| p[4]),
+        apt,
+    })
 }
 
 /// One point of a pass: CC point, normal, feed direction.
@@ -294,7 +337,8 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         )));
     }
     let rc = spec.cutter.corner_radius_mm();
-    if !(0.0..=spec.cutter.radius_mm).contains(&rc) {
+    let is_profile = matches!(spec.cutter.shape, Shape::Profile(_));
+    if !is_profile && !(0.0..=spec.cutter.radius_mm).contains(&rc) {
         return Err(SynthError::Invalid(format!(
             "the corner radius {rc} mm must lie in [0, R = {} mm]",
             spec.cutter.radius_mm
@@ -465,19 +509,10 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         postures.push(posture(retract, last.1, MotionKind::Rapid, None, f_last));
     }
 
-    let tool = ToolData {
-        kind: "MILL".to_string(),
-        diameter_mm: 2.0 * spec.cutter.radius_mm,
-        corner_radius_mm: rc,
-        length_mm: 75.0,
-        taper_rad: 0.0,
-        tip_rad: 0.0,
-        apt: None,
-    };
     let path = Toolpath {
         name: spec.name.clone(),
         tool_name: spec.tool_name.clone(),
-        tool: Some(tool),
+        tool: tool_data(&spec.cutter),
         msys: None,
         postures,
         ..Default::default()

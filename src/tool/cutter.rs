@@ -1,10 +1,11 @@
 //! The cutter body of revolution and its helical edges with run-out.
 
+use super::meridian::{self, Meridian, ProfileError};
 use crate::math::Vec3;
 use std::f64::consts::TAU;
 
 /// The shape of the end of the tool.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Shape {
     /// Ball end of radius R (002).
     Ball,
@@ -15,6 +16,35 @@ pub enum Shape {
     },
     /// Flat end.
     Flat,
+    /// Round-insert face mill: the insert circle of radius ri about (R − ri, ri) cuts with
+    /// its whole lower half, the inner flank included (unlike a torus, which has a flat end
+    /// inside its corner).
+    RoundInsert {
+        /// Insert radius ri, mm.
+        insert_radius_mm: f64,
+    },
+    /// Any other body of revolution, by its meridian: APT seven-parameter cutters,
+    /// `profile_mm` polylines and arc lists, the circle-segment families.
+    Profile(Meridian),
+}
+
+impl Shape {
+    /// The `shape` name of `tool.toml` (`ball`, `torus`, `flat`, `round_insert`, `apt`,
+    /// `profile`, `barrel`, `lens`, `oval`, `taper_barrel`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shape::Ball => "ball",
+            Shape::Torus { .. } => "torus",
+            Shape::Flat => "flat",
+            Shape::RoundInsert { .. } => "round_insert",
+            Shape::Profile(m) => m.family().name(),
+        }
+    }
+
+    /// Ball, torus or flat end: the shapes with closed forms everywhere.
+    pub fn is_classic(&self) -> bool {
+        matches!(self, Shape::Ball | Shape::Torus { .. } | Shape::Flat)
+    }
 }
 
 /// Run-out parameters of model.md §3.1, in mm and radians.
@@ -30,6 +60,9 @@ pub struct Runout {
     pub tilt_phase_rad: f64,
     /// δ_j: per-tooth radial deviation, mm (empty = all zero).
     pub tooth_radius_dev_mm: Vec<f64>,
+    /// ε_j: per-tooth axial deviation, mm; positive lifts the tooth toward the shank
+    /// (empty = all zero).
+    pub tooth_axial_dev_mm: Vec<f64>,
 }
 
 /// A milling cutter: body of revolution, teeth and run-out.
@@ -95,14 +128,28 @@ impl Cutter {
         }
     }
 
-    /// The same cutter with nominal radius `radius_mm` (a torus keeps its corner radius,
-    /// clamped to the new radius). Used for per-tooth radii (002 Table 3).
+    /// A cutter of the given meridian (radius = its largest radius) with `teeth` evenly
+    /// spaced teeth and no run-out.
+    pub fn from_meridian(meridian: Meridian, teeth: usize, helix_rad: f64) -> Cutter {
+        let r = meridian.r_max();
+        Cutter::new(Shape::Profile(meridian), r, teeth, helix_rad)
+    }
+
+    /// The same cutter with nominal radius `radius_mm` (a torus keeps its corner radius and
+    /// a round insert its insert radius, clamped to the new radius; a profile moves
+    /// outward). Used for per-tooth radii (002 Table 3).
     pub fn with_radius(&self, radius_mm: f64) -> Cutter {
-        let shape = match self.shape {
+        let shape = match &self.shape {
             Shape::Torus { corner_radius_mm } => Shape::Torus {
                 corner_radius_mm: corner_radius_mm.min(radius_mm),
             },
-            s => s,
+            Shape::RoundInsert { insert_radius_mm } => Shape::RoundInsert {
+                insert_radius_mm: insert_radius_mm.min(radius_mm),
+            },
+            Shape::Profile(m) => m
+                .shifted_radially(radius_mm - self.radius_mm)
+                .map_or_else(|_| self.shape.clone(), Shape::Profile),
+            s => s.clone(),
         };
         Cutter {
             shape,
@@ -139,18 +186,87 @@ impl Cutter {
         self.pitch_rad.len()
     }
 
-    /// Corner radius: R for a ball, rc for a torus, 0 for a flat end.
+    /// Corner radius: R for a ball, rc for a torus, 0 for a flat end, the insert radius of
+    /// a round insert; for a profile its corner or tip radius (APT r, a barrel's or lens's
+    /// corner, an oval's or taper barrel's tip; 0 for `profile_mm`).
     pub fn corner_radius_mm(&self) -> f64 {
-        match self.shape {
+        match &self.shape {
             Shape::Ball => self.radius_mm,
-            Shape::Torus { corner_radius_mm } => corner_radius_mm,
+            Shape::Torus { corner_radius_mm } => *corner_radius_mm,
             Shape::Flat => 0.0,
+            Shape::RoundInsert { insert_radius_mm } => *insert_radius_mm,
+            Shape::Profile(m) => match m.family() {
+                meridian::Family::Apt(p) => p[1],
+                meridian::Family::Barrel {
+                    corner_radius_mm, ..
+                }
+                | meridian::Family::Lens {
+                    corner_radius_mm, ..
+                } => *corner_radius_mm,
+                meridian::Family::Oval { tip_radius_mm, .. }
+                | meridian::Family::TaperBarrel { tip_radius_mm, .. } => *tip_radius_mm,
+                meridian::Family::Classic | meridian::Family::Polyline => 0.0,
+            },
         }
     }
 
-    /// Nominal local radius r(z) of the body at height `z_mm` above the tip (R above the end).
-    /// Negative heights give 0.
+    /// Height of the end above the tip, mm: where the body becomes its side (R for a ball,
+    /// rc for a torus, 0 for a flat end, ri for a round insert; for a profile where its last
+    /// straight side starts, else its top).
+    pub fn end_height_mm(&self) -> f64 {
+        match &self.shape {
+            Shape::Profile(m) => m.end_height(),
+            _ => self.corner_radius_mm(),
+        }
+    }
+
+    /// The smallest radius of the body's profile, mm (0 unless a round insert's inner flank
+    /// or a profile starts off the axis).
+    pub fn min_radius_mm(&self) -> f64 {
+        match &self.shape {
+            Shape::RoundInsert { insert_radius_mm } => {
+                (self.radius_mm - 2.0 * insert_radius_mm).max(0.0)
+            }
+            Shape::Profile(m) => m.r_min(),
+            _ => 0.0,
+        }
+    }
+
+    /// Radius of the flat end face at z = 0, mm (R − rc for a torus or flat end, 0 for a
+    /// ball or round insert; for a profile the length of a first horizontal line from the
+    /// axis).
+    pub fn flat_end_radius_mm(&self) -> f64 {
+        match &self.shape {
+            Shape::RoundInsert { .. } => 0.0,
+            Shape::Profile(m) => match m.segments().first() {
+                Some(meridian::Segment::Line { a, b })
+                    if a[0] <= 1e-12 && a[1].abs() <= 1e-12 && b[1].abs() <= 1e-12 =>
+                {
+                    b[0]
+                }
+                _ => 0.0,
+            },
+            _ => (self.radius_mm - self.corner_radius_mm()).max(0.0),
+        }
+    }
+
+    /// The meridian of the body (built for the classic shapes and round inserts).
+    pub fn meridian(&self) -> Result<Meridian, ProfileError> {
+        match &self.shape {
+            Shape::Profile(m) => Ok(m.clone()),
+            Shape::RoundInsert { insert_radius_mm } => {
+                meridian::round_insert(self.radius_mm, *insert_radius_mm)
+            }
+            _ => meridian::classic(self.radius_mm, self.corner_radius_mm()),
+        }
+    }
+
+    /// Nominal local radius r(z) of the body at height `z_mm` above the tip (R above the end;
+    /// the outer flank of a round insert). Negative heights give the radius at the tip.
     pub fn profile_radius(&self, z_mm: f64) -> f64 {
+        if let Shape::Profile(m) = &self.shape {
+            return m.radius_at(z_mm);
+        }
         if z_mm <= 0.0 {
             return if matches!(self.shape, Shape::Ball) {
                 0.0
@@ -172,9 +288,20 @@ impl Cutter {
         if !(0.0..=self.radius_mm).contains(&r_mm) {
             return None;
         }
+        if let Shape::Profile(m) = &self.shape {
+            return m.height_at(r_mm);
+        }
         let rc = self.corner_radius_mm();
         let flat_radius = self.radius_mm - rc;
         if r_mm <= flat_radius {
+            if matches!(self.shape, Shape::RoundInsert { .. }) {
+                // The inner flank of the insert circle.
+                let u = flat_radius - r_mm;
+                if u > rc {
+                    return None;
+                }
+                return Some(u * u / (rc + (rc * rc - u * u).max(0.0).sqrt()));
+            }
             return Some(0.0);
         }
         let u = r_mm - flat_radius;
@@ -201,6 +328,30 @@ impl Cutter {
             .unwrap_or(0.0)
     }
 
+    /// Per-tooth axial deviation ε_j, mm (positive: lifted toward the shank).
+    pub fn tooth_axial_dev_mm(&self, j: usize) -> f64 {
+        self.runout
+            .tooth_axial_dev_mm
+            .get(j)
+            .copied()
+            .unwrap_or(0.0)
+    }
+
+    /// Whether any tooth has an axial deviation.
+    pub fn has_axial_dev(&self) -> bool {
+        self.runout.tooth_axial_dev_mm.iter().any(|&e| e != 0.0)
+    }
+
+    /// Radial run-out ρ_j(z) of tooth `j` at height z without the profile (offset, tilt and
+    /// δ_j), mm: the same as [`Cutter::runout_mm`] for any local radius.
+    pub fn radial_runout_mm(&self, j: usize, z_mm: f64) -> f64 {
+        let psi = self.tooth_angle(j, z_mm);
+        let r = &self.runout;
+        r.offset_mm * (psi - r.offset_phase_rad).cos()
+            + z_mm * r.tilt_rad.tan() * (psi - r.tilt_phase_rad).cos()
+            + self.tooth_dev_mm(j)
+    }
+
     /// Offset of the tool axis from the spindle axis at height z, in the spindle-fixed frame
     /// (angle 0 = tooth 1 at the tip), as a vector in the plane normal to the axis.
     pub fn axis_offset(&self, z_mm: f64, theta: f64) -> Vec3 {
@@ -221,10 +372,76 @@ impl Cutter {
 
     /// ICE point of tooth `j` at height z for spindle angle θ, in the tool frame, using the
     /// unlinearised vector form `c(z) + (r(z) + δ_j) d(θ + ψ_j(z)) + z ẑ` (model.md §3.1).
+    /// The tooth's axial deviation ε_j lifts the point along the axis.
     pub fn edge_point(&self, j: usize, z_mm: f64, theta: f64) -> Vec3 {
+        self.edge_point_at(j, self.profile_radius(z_mm), z_mm, theta)
+    }
+
+    /// [`Cutter::edge_point`] at the profile point of local radius `r_mm` and height `z_mm`
+    /// (any point of the meridian: a round insert's inner flank, a profile's).
+    pub fn edge_point_at(&self, j: usize, r_mm: f64, z_mm: f64, theta: f64) -> Vec3 {
         let dir = direction(theta + self.tooth_angle(j, z_mm));
-        let radial = (self.profile_radius(z_mm) + self.tooth_dev_mm(j)) * dir;
-        self.axis_offset(z_mm, theta) + radial + Vec3::new(0.0, 0.0, z_mm)
+        let radial = (r_mm + self.tooth_dev_mm(j)) * dir;
+        let mut p = self.axis_offset(z_mm, theta) + radial + Vec3::new(0.0, 0.0, z_mm);
+        let eps = self.tooth_axial_dev_mm(j);
+        if eps != 0.0 {
+            p.z += eps;
+        }
+        p
+    }
+
+    /// A one-line description: `ball end R 5 mm`, `round insert R 10 mm, insert radius 5 mm`, …
+    pub fn describe(&self) -> String {
+        // At most six decimals: an APT cutter's R is derived and has many.
+        let r = format!("{:.6}", self.radius_mm)
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string();
+        match &self.shape {
+            Shape::Ball => format!("ball end R {r} mm"),
+            Shape::Torus { corner_radius_mm } => {
+                format!("bull nose R {r} mm, corner radius {corner_radius_mm} mm")
+            }
+            Shape::Flat => format!("flat end R {r} mm"),
+            Shape::RoundInsert { insert_radius_mm } => {
+                format!("round insert R {r} mm, insert radius {insert_radius_mm} mm")
+            }
+            Shape::Profile(m) => match m.family() {
+                meridian::Family::Apt(p) => format!(
+                    "APT cutter d {}, r {}, e {}, f {}, a {}°, b {}°, h {} (R {r} mm)",
+                    p[0], p[1], p[2], p[3], p[4], p[5], p[6]
+                ),
+                meridian::Family::Polyline | meridian::Family::Classic => {
+                    format!("profile of {} segments, R {r} mm", m.segments().len())
+                }
+                meridian::Family::Barrel {
+                    segment_radius_mm,
+                    segment_height_mm,
+                    corner_radius_mm,
+                } => format!(
+                    "barrel R {r} mm, segment radius {segment_radius_mm} mm at {segment_height_mm} mm, corner radius {corner_radius_mm} mm"
+                ),
+                meridian::Family::Lens {
+                    segment_radius_mm,
+                    corner_radius_mm,
+                } => format!(
+                    "lens R {r} mm, segment radius {segment_radius_mm} mm, corner radius {corner_radius_mm} mm"
+                ),
+                meridian::Family::Oval {
+                    segment_radius_mm,
+                    tip_radius_mm,
+                } => format!(
+                    "oval R {r} mm, segment radius {segment_radius_mm} mm, tip radius {tip_radius_mm} mm"
+                ),
+                meridian::Family::TaperBarrel {
+                    segment_radius_mm,
+                    tip_radius_mm,
+                    taper_deg,
+                } => format!(
+                    "taper barrel R {r} mm, segment radius {segment_radius_mm} mm, tip radius {tip_radius_mm} mm, taper {taper_deg}°"
+                ),
+            },
+        }
     }
 }
 

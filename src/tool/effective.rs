@@ -7,7 +7,8 @@
 //! `g(r) = h(r) cos β − r sin β` on the side that leans forward, so the engaged radii are
 //! `{r : g(r) ≤ min g + ap}`, an interval because g is convex. Its upper end is the largest
 //! radius that cuts, R_ef,max; for a ball it is `R sin(β + acos((R − ap)/R))`, capped at R
-//! once the equator engages.
+//! once the equator engages. A round insert's g starts at its inner flank; a profile that
+//! is not convex is scanned densely before the same refinement.
 
 use super::cutter::{Cutter, Shape};
 use std::f64::consts::FRAC_PI_2;
@@ -36,8 +37,13 @@ pub fn effective_radius(cutter: &Cutter, lead_rad: f64, ap_mm: f64) -> Effective
     }
     let (sb, cb) = b.sin_cos();
     let g = |x: f64| cutter.profile_height(x).unwrap_or(f64::INFINITY) * cb - x * sb;
-    // Minimum of the convex g on [0, R] by golden-section search.
-    let (mut lo, mut hi) = (0.0, r);
+    if let Shape::Profile(m) = &cutter.shape {
+        if !m.is_convex() {
+            return scanned(&g, cutter.min_radius_mm(), r, ap);
+        }
+    }
+    // Minimum of the convex g on [r_min, R] by golden-section search.
+    let (mut lo, mut hi) = (cutter.min_radius_mm(), r);
     let phi = 0.5 * (5f64.sqrt() - 1.0);
     for _ in 0..100 {
         let c = hi - phi * (hi - lo);
@@ -70,6 +76,50 @@ pub fn effective_radius(cutter: &Cutter, lead_rad: f64, ap_mm: f64) -> Effective
     };
     EffectiveRadius {
         max_mm,
+        contact_mm: r_low,
+    }
+}
+
+/// [`effective_radius`] for a g that need not be convex on [lo, hi]: the lowest of 4001
+/// samples refined by golden section, the largest engaged radius by bisection from the
+/// last engaged sample.
+fn scanned(g: &dyn Fn(f64) -> f64, lo: f64, hi: f64, ap: f64) -> EffectiveRadius {
+    const N: usize = 4000;
+    let x = |i: usize| lo + (hi - lo) * i as f64 / N as f64;
+    let best = (0..=N)
+        .min_by(|&a, &b| g(x(a)).total_cmp(&g(x(b))))
+        .unwrap_or(0);
+    let (mut a, mut b) = (x(best.saturating_sub(1)), x((best + 1).min(N)));
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..100 {
+        let c = b - phi * (b - a);
+        let d = a + phi * (b - a);
+        if g(c) <= g(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let m = 0.5 * (a + b);
+    let r_low = if g(m) <= g(x(best)) { m } else { x(best) };
+    let level = g(r_low) + ap;
+    let last = (0..=N).rev().find(|&i| g(x(i)) <= level).unwrap_or(best);
+    let max_mm = if last == N {
+        hi
+    } else {
+        let (mut p, mut q) = (x(last), x(last + 1));
+        for _ in 0..100 {
+            let mid = 0.5 * (p + q);
+            if g(mid) <= level {
+                p = mid;
+            } else {
+                q = mid;
+            }
+        }
+        0.5 * (p + q)
+    };
+    EffectiveRadius {
+        max_mm: max_mm.max(r_low),
         contact_mm: r_low,
     }
 }

@@ -25,9 +25,10 @@ pub struct IceElement {
 impl Cutter {
     /// Heights of `n` elements along the end profile, evenly spaced in the polar angle κ
     /// from the tip (κ = 0) to the top of the corner arc (κ = 90°): z = c(1 − cos κ), with c
-    /// the corner radius (R for a ball). A flat end gives `n` zeros.
+    /// the end height (the corner radius; R for a ball, the insert radius of a round insert,
+    /// the end of a profile). A flat end gives `n` zeros.
     pub fn ice_heights(&self, n: usize) -> Vec<f64> {
-        let c = self.corner_radius_mm();
+        let c = self.end_height_mm();
         (0..n)
             .map(|i| {
                 let k = if n > 1 {
@@ -57,9 +58,9 @@ impl Cutter {
     }
 
     /// End-face elements of tooth `j` at z = 0 for a torus or flat end: `n` radii from the
-    /// axis to the start of the corner arc (empty for a ball).
+    /// axis to the start of the corner arc (empty for a ball or a round insert).
     pub fn end_face_elements(&self, j: usize, n: usize) -> Vec<IceElement> {
-        let flat = self.radius_mm - self.corner_radius_mm();
+        let flat = self.flat_end_radius_mm();
         if flat <= 0.0 || n == 0 {
             return Vec::new();
         }
@@ -78,7 +79,8 @@ impl Cutter {
     pub fn ice_point(&self, e: &IceElement, theta: f64) -> Vec3 {
         let radial =
             (e.local_radius_mm + self.tooth_dev_mm(e.tooth)) * direction(theta + e.angle_rad);
-        self.axis_offset(e.z_mm, theta) + radial + Vec3::new(0.0, 0.0, e.z_mm)
+        let z = e.z_mm + self.tooth_axial_dev_mm(e.tooth);
+        self.axis_offset(e.z_mm, theta) + radial + Vec3::new(0.0, 0.0, z)
     }
 
     /// The edge of tooth `j` at spindle angle θ as a polyline through `heights_mm`.

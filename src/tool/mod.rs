@@ -1,5 +1,7 @@
-//! Cutters: ball-end, filleted (torus) and flat end mills; helical cutting edges of
-//! infinitesimal elements (ICE); run-out; participating teeth; effective radius.
+//! Cutters: ball-end, filleted (torus) and flat end mills, round-insert face mills and any
+//! profile (APT seven-parameter cutters, polylines and arc lists, the circle-segment
+//! families) by its meridian; helical cutting edges of infinitesimal elements (ICE);
+//! radial and axial run-out; participating teeth; effective radius.
 //!
 //! Geometry follows `model.md` §2, §3, §4, §6 and §7. The tool frame has its origin at the
 //! tool tip, `z` along the axis towards the spindle; a spindle angle θ gives the edge
@@ -25,14 +27,19 @@
 mod cutter;
 mod effective;
 mod ice;
+pub mod meridian;
 mod section;
+mod shapes;
 mod teeth;
 pub mod trochoid;
 
 pub use cutter::{Cutter, Runout, Shape, crest_height_mm, direction};
 pub use effective::{EffectiveRadius, cutting_speed_ratio, effective_radius};
 pub use ice::IceElement;
-pub use section::{Envelope, FeedProfile, envelope, feed_profile, nominal_crest_mm};
+pub use meridian::{Family, Meridian, ProfileError, Segment};
+pub use section::{
+    Envelope, FeedProfile, envelope, feed_profile, feed_profile_for, nominal_crest_mm,
+};
 pub use teeth::{
     Analysis, Rule, ToolError, ToothAnalysis, analyse, generating_height_mm, mark_positions_mm,
     normal_deviation_mm, normal_runout_spread_mm, paper_teeth,

@@ -13,13 +13,17 @@
 //! presetter radius means). The envelope is then computed in closed form from the pairwise
 //! intersections. For torus and flat ends the profile is the rotated section (two corner
 //! circles, the end face and the front wall), lowered by Δ_j, and the envelope is sampled and
-//! its peak refined by golden-section search.
+//! its peak refined by golden-section search. Round inserts and profiles use the exact
+//! section of their meridian's segments ([`super::meridian::Section`]) the same way.
 
+use super::Cutter;
+use super::meridian::Section;
 use std::f64::consts::FRAC_PI_2;
+use std::sync::Arc as Shared;
 
 /// The lower boundary of a cutter's meridian section tilted by the lead, in the plane
 /// (u along the feed, v along the surface normal), with its lowest point at the origin.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum FeedProfile {
     /// A circle of the given radius (ball end): the exact closed-form path.
     Circle {
@@ -35,6 +39,8 @@ pub enum FeedProfile {
         /// Lead β, rad, in [0, π/2].
         lead_rad: f64,
     },
+    /// Any other meridian (round inserts, profiles): its exact section.
+    Meridian(Shared<Section>),
 }
 
 /// Stable `r − √(r² − d²)` for |d| ≤ r; +∞ beyond.
@@ -51,6 +57,7 @@ impl FeedProfile {
     /// tool does not reach.
     pub fn height(&self, u: f64) -> f64 {
         match *self {
+            FeedProfile::Meridian(ref section) => section.height(u),
             FeedProfile::Circle { radius_mm } => sag(radius_mm, u),
             FeedProfile::Section {
                 flat_radius_mm: rd,
@@ -100,6 +107,20 @@ pub fn feed_profile(radius_mm: f64, corner_radius_mm: f64, lead_rad: f64) -> Fee
             lead_rad: lead_rad.abs().min(FRAC_PI_2),
         }
     }
+}
+
+/// The feed profile of any cutter at lead `lead_rad`: [`feed_profile`] for ball, torus and
+/// flat ends, the section of the meridian for round inserts and profiles.
+pub fn feed_profile_for(cutter: &Cutter, lead_rad: f64) -> FeedProfile {
+    if !cutter.shape.is_classic() {
+        if let Ok(m) = cutter.meridian() {
+            return FeedProfile::Meridian(Shared::new(Section::new(
+                &m,
+                lead_rad.abs().min(FRAC_PI_2),
+            )));
+        }
+    }
+    feed_profile(cutter.radius_mm, cutter.corner_radius_mm(), lead_rad)
 }
 
 /// The lower envelope of the marks of several teeth: who cuts, and the crest height.

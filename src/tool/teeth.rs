@@ -15,11 +15,14 @@
 //! Normal deviation Δ_j: the run-out ρ_j moves the cutting point along the surface normal by
 //! ρ_j sin κ_c (κ_c = the lead on a plane). For a ball, the per-tooth sphere-radius
 //! deviation δ_j acts fully (the presetter measures the ball radius), so
-//! Δ_j = (ρ_j − δ_j) sin κ_c + δ_j; for torus and flat ends δ_j is radial like the rest.
+//! Δ_j = (ρ_j − δ_j) sin κ_c + δ_j; for every other shape δ_j is radial like the rest. An
+//! axial deviation ε_j (positive: the tooth lifted toward the shank) takes ε_j cos κ_c off
+//! Δ_j; the paper rule takes it off the tooth's local radius (a tooth lifted by more than
+//! the crest height leaves no mark).
 
 use super::cutter::{Cutter, Shape};
 use super::effective::effective_radius;
-use super::section::{Envelope, envelope, feed_profile, nominal_crest_mm};
+use super::section::{Envelope, envelope, feed_profile_for, nominal_crest_mm};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// Which teeth cut: the paper's threshold or the exact one-dimensional envelope. Written
@@ -87,9 +90,14 @@ pub fn paper_teeth(local_radii_mm: &[f64], hc_mm: f64) -> Vec<bool> {
 }
 
 /// Generating height z_c of the lowest point on a plane at lead β: c(1 − cos β) with c the
-/// corner radius (R for a ball, 0 for a flat end), mm.
+/// corner radius (R for a ball, 0 for a flat end, ri for a round insert); for a profile the
+/// height of its point whose outward normal makes the angle β with the axis, mm.
 pub fn generating_height_mm(cutter: &Cutter, lead_rad: f64) -> f64 {
-    cutter.corner_radius_mm() * (1.0 - lead_rad.abs().min(FRAC_PI_2).cos())
+    let b = lead_rad.abs().min(FRAC_PI_2);
+    if let Shape::Profile(m) = &cutter.shape {
+        return m.support(b.sin(), -b.cos())[1];
+    }
+    cutter.corner_radius_mm() * (1.0 - b.cos())
 }
 
 /// Normal deviation Δ_j of tooth `j` at height z for the lead β (see the module doc), mm:
@@ -98,13 +106,15 @@ pub fn generating_height_mm(cutter: &Cutter, lead_rad: f64) -> f64 {
 pub fn normal_deviation_mm(cutter: &Cutter, j: usize, z_mm: f64, lead_rad: f64) -> f64 {
     let b = lead_rad.abs().min(FRAC_PI_2);
     let rho = cutter.runout_mm(j, z_mm);
-    match cutter.shape {
+    let d = match cutter.shape {
         Shape::Ball => {
             let delta = cutter.tooth_dev_mm(j);
             (rho - delta) * b.sin() + delta * (cutter.kappa_at(z_mm) - b).cos()
         }
         _ => rho * b.sin(),
-    }
+    };
+    let eps = cutter.tooth_axial_dev_mm(j);
+    if eps != 0.0 { d - eps * b.cos() } else { d }
 }
 
 /// Positions of the teeth's marks within one revolution's feed Z·fz, mm.
@@ -124,10 +134,13 @@ pub struct ToothAnalysis {
     pub index: usize,
     /// Tooth radius R + ρ_j(z_c), mm (the presetter radius when there is no offset or tilt).
     pub radius_mm: f64,
-    /// Local radius r_j(z_c) at the generating height, mm.
+    /// Local radius r_j(z_c) at the generating height, less the axial deviation ε_j (what
+    /// the paper rule compares), mm.
     pub local_radius_mm: f64,
     /// Radial run-out ρ_j(z_c), mm.
     pub runout_mm: f64,
+    /// Axial deviation ε_j, mm (positive: lifted toward the shank).
+    pub axial_deviation_mm: f64,
     /// Normal deviation Δ_j at the generating point, mm.
     pub normal_deviation_mm: f64,
     /// Cuts under the chosen rule.
@@ -202,11 +215,15 @@ pub fn analyse(
     let z_teeth = cutter.teeth();
     let nominal = effective_radius(cutter, lead, ap_mm);
     let zc_height = generating_height_mm(cutter, lead);
-    let profile = feed_profile(cutter.radius_mm, cutter.corner_radius_mm(), lead);
+    let profile = feed_profile_for(cutter, lead);
     let hc = nominal_crest_mm(&profile, fz_mm);
 
     let local: Vec<f64> = (0..z_teeth)
-        .map(|j| cutter.tooth_radius(j, zc_height))
+        .map(|j| {
+            let r = cutter.tooth_radius(j, zc_height);
+            let eps = cutter.tooth_axial_dev_mm(j);
+            if eps != 0.0 { r - eps } else { r }
+        })
         .collect();
     let paper = paper_teeth(&local, hc);
     let deviations: Vec<f64> = (0..z_teeth)
@@ -247,6 +264,7 @@ pub fn analyse(
                 radius_mm: radius,
                 local_radius_mm: local[j],
                 runout_mm: rho,
+                axial_deviation_mm: cutter.tooth_axial_dev_mm(j),
                 normal_deviation_mm: deviations[j],
                 participates: chosen[j],
                 participates_paper: paper[j],

@@ -75,7 +75,22 @@ pub struct ToolData {
     /// seven: diameter d, corner radius r, the corner centre's distance e from the axis and
     /// f above the tip, the end angle a and the side angle b (rad), the height h (lengths
     /// mm). Diameter, corner radius, length, tip and taper angles above are filled from it.
+    /// NX's seven-value `TLDATA/MILL,D,R1,L,B,A,X1,Y1` fills it as `[D, R1, X1, Y1, A, B, L]`.
     pub apt: Option<[f64; 7]>,
+}
+
+impl ToolData {
+    /// The APT parameters when they describe more than a ball, bull nose or flat end as
+    /// `CUTTER/d,r` writes them (no angles, the corner centre at (d/2 − r, r) or left at
+    /// zero): a cone, a taper, an offset corner.
+    pub fn apt_profile(&self) -> Option<[f64; 7]> {
+        let p = self.apt?;
+        let [d, r, e, f, a, b, _] = p;
+        let tol = 1e-6 * d.max(1.0);
+        let standard = (e - (0.5 * d - r)).abs() <= tol && (f - r).abs() <= tol;
+        let lazy = e == 0.0 && f == 0.0;
+        (!(a == 0.0 && b == 0.0 && (standard || lazy))).then_some(p)
+    }
 }
 
 /// How the tool reached a posture.

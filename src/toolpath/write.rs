@@ -316,6 +316,13 @@ impl ClsfWriter {
             }
             l.push(b',');
             push_fixed(l, t.tip_rad.to_degrees(), LENGTH_DECIMALS);
+            // NX's seven-parameter mill: the corner centre X1, Y1.
+            if let (Some(p), "MILL") = (t.apt_profile(), t.kind.as_str()) {
+                for v in [p[2], p[3]] {
+                    l.push(b',');
+                    push_fixed(l, v, LENGTH_DECIMALS);
+                }
+            }
             l.push(b'\n');
             out.write_all(l)?;
         }

@@ -30,6 +30,8 @@ impl Lowerer {
         let s = self.scale();
         let get = |k: usize| nums.get(k).copied().unwrap_or(0.0);
         let tool = match kind {
+            // NX's seven-parameter mill, `TLDATA/MILL,D,R1,L,B,A,X1,Y1`: the corner centre
+            // (X1 from the axis, Y1 above the tip) makes it APT's `CUTTER/D,R1,X1,Y1,A,B,L`.
             "MILL" => ToolData {
                 kind: kind.to_string(),
                 diameter_mm: get(0) * s,
@@ -37,7 +39,17 @@ impl Lowerer {
                 length_mm: get(2) * s,
                 taper_rad: get(3).to_radians(),
                 tip_rad: get(4).to_radians(),
-                apt: None,
+                apt: (nums.len() == 7).then(|| {
+                    [
+                        get(0) * s,
+                        get(1) * s,
+                        get(5) * s,
+                        get(6) * s,
+                        get(4).to_radians(),
+                        get(3).to_radians(),
+                        get(2) * s,
+                    ]
+                }),
             },
             "DRILL" => ToolData {
                 kind: kind.to_string(),
