@@ -194,3 +194,27 @@ fn every_source_file_opens_with_a_line_that_says_its_job() {
         .collect();
     assert!(bad.is_empty(), "files without a leading //! line: {bad:?}");
 }
+
+/// The configuration reference (`docs/config.md`) shows files that crest reads: its
+/// `tool.toml` and `process.toml` examples load as written, and its machine example has
+/// only keys the machine reader knows (it shows one axis of each kind, so the reader's
+/// complaint, if any, is about a missing axis, never an unknown key).
+#[test]
+fn config_reference_examples_load() {
+    let doc =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/config.md")).unwrap();
+    let blocks: Vec<&str> = doc
+        .split("```toml\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap())
+        .collect();
+    assert_eq!(blocks.len(), 3, "tool, process and machine examples");
+    let cutter = crest::config::load_tool_toml(blocks[0]).unwrap();
+    assert_eq!(cutter.teeth(), 4);
+    let process = crest::config::ProcessConfig::parse(blocks[1], "process.toml").unwrap();
+    assert_eq!(process.rpm, Some(15000.0));
+    if let Err(e) = crest::kinematics::Machine::from_toml_str(blocks[2]) {
+        let e = e.to_string();
+        assert!(!e.contains("unknown"), "{e}");
+    }
+}
