@@ -50,12 +50,13 @@ pub struct Args {
     /// Spacing: `fz` (every fz of arc length) or `dtheta` (every Δθ of spindle angle).
     #[arg(long, value_enum)]
     pub mode: ModeArg,
-    /// Nominal feed per tooth, mm.
+    /// Nominal feed per tooth, mm. Required by `--mode fz`; with `--mode dtheta` it only
+    /// derives the spindle speed from the feed (without it: `--rpm` or the file's SPINDL).
     #[arg(long)]
-    pub fz_mm: f64,
-    /// Number of teeth Z.
+    pub fz_mm: Option<f64>,
+    /// Number of teeth Z (required with --fz-mm).
     #[arg(long)]
-    pub teeth: usize,
+    pub teeth: Option<usize>,
     /// Spindle step Δθ for `--mode dtheta`, degrees (0.5° or less resolves the edges' sweep).
     #[arg(long, default_value_t = 0.5)]
     pub dtheta_deg: f64,
@@ -112,7 +113,23 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             dtheta_rad: args.dtheta_deg.to_radians(),
         },
     };
-    let mut opts = Options::new(mode, args.fz_mm, args.teeth)
+    // Feed per tooth and teeth: needed for the fz spacing; for Δθ only to derive the
+    // spindle speed from the feed, which otherwise comes from --rpm or the file's SPINDL.
+    let (fz_mm, teeth, spindle_from_path) = match (args.mode, args.fz_mm, args.teeth) {
+        (_, Some(f), Some(z)) => (f, z, false),
+        (ModeArg::Dtheta, None, None) => (1.0, 1, args.rpm.is_none()),
+        (ModeArg::Fz, _, _) => {
+            return Err(miette::miette!(
+                "--mode fz spaces the samples every feed per tooth: give --fz-mm and --teeth"
+            ));
+        }
+        (ModeArg::Dtheta, _, _) => {
+            return Err(miette::miette!(
+                "--fz-mm and --teeth go together (they derive the spindle speed from the feed); give both, or neither to take --rpm or the file's SPINDL"
+            ));
+        }
+    };
+    let mut opts = Options::new(mode, fz_mm, teeth)
         .with_axis_interpolation(match args.axis {
             AxisArg::Slerp => AxisInterpolation::Slerp,
             AxisArg::Nlerp => AxisInterpolation::Nlerp,
@@ -120,6 +137,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .with_spline(args.spline);
     opts.rpm = args.rpm;
     opts.feed_mm_min = args.feed_mm_min;
+    opts.spindle_from_path = spindle_from_path;
 
     let kind = detect(&args.file)?;
     let gcode = kind == InputKind::Gcode;
@@ -151,8 +169,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         read.clone(),
         args.path.map(|n| n.saturating_sub(1)),
     )?;
-    let samples =
-        crest::resample::estimate_samples(&extent, mode, args.fz_mm, args.teeth, args.rpm);
+    let rpm = args.rpm.or(if spindle_from_path {
+        extent.spindle_rpm
+    } else {
+        None
+    });
+    let samples = crest::resample::estimate_samples(&extent, mode, fz_mm, teeth, rpm);
     crest::pipeline::inputs::check_output_budget(
         &format!(
             "{}: resampling {:.1} mm of cutting moves into about {samples:.3e} samples",
@@ -561,12 +583,18 @@ fn report(
         let paths: Vec<_> = per_path
             .iter()
             .map(|p| {
+                let mut stats = serde_json::to_value(&p.stats).unwrap_or_default();
+                if args.teeth.is_none() {
+                    // Without the tooth count there is no feed per tooth to report.
+                    stats["fz_min_mm"] = serde_json::Value::Null;
+                    stats["fz_max_mm"] = serde_json::Value::Null;
+                }
                 serde_json::json!({
                     "index": p.index + 1,
                     "name": p.name,
                     "tool": p.tool,
                     "postures": p.postures,
-                    "stats": p.stats,
+                    "stats": stats,
                 })
             })
             .collect();

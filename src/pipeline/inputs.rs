@@ -251,6 +251,9 @@ pub fn path_extent(
             continue;
         }
         extent.cutting_mm += p.stats.cutting_length_mm;
+        if extent.spindle_rpm.is_none() {
+            extent.spindle_rpm = p.stats.spindles_rpm.iter().copied().find(|n| *n > 0.0);
+        }
         for &f in &p.stats.feeds_mm_min {
             if f > 0.0 {
                 extent.feed_range_mm_min = Some(match extent.feed_range_mm_min {

@@ -14,6 +14,8 @@ pub struct PathExtent {
     pub runs: usize,
     /// Slowest and fastest programmed feed, mm/min.
     pub feed_range_mm_min: Option<(f64, f64)>,
+    /// The first programmed spindle speed (SPINDL), rpm.
+    pub spindle_rpm: Option<f64>,
 }
 
 /// An upper estimate of the samples a resampling of `extent` makes in `mode` with feed per
@@ -53,6 +55,7 @@ mod tests {
             cutting_mm: 100.0,
             runs: 5,
             feed_range_mm_min: Some((1000.0, 2000.0)),
+            spindle_rpm: None,
         };
         assert_eq!(
             estimate_samples(&e, Mode::FeedPerTooth, 0.05, 4, None),

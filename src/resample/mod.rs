@@ -141,6 +141,9 @@ pub struct Options {
     pub axis_interpolation: AxisInterpolation,
     /// Interpolate positions on a cubic spline through the postures instead of lines/arcs.
     pub spline: bool,
+    /// Take the spindle speed from the path's SPINDL (after [`Options::rpm`]) and never
+    /// derive it from the feed: for a Δθ resampling whose feed per tooth is not known.
+    pub spindle_from_path: bool,
 }
 
 impl Default for Options {
@@ -156,6 +159,7 @@ impl Default for Options {
             posture_feed_mm_min: None,
             axis_interpolation: AxisInterpolation::Slerp,
             spline: false,
+            spindle_from_path: false,
         }
     }
 }
@@ -300,6 +304,12 @@ pub enum ResampleError {
          (Options::feed_mm_min, --feed-mm-min) or a spindle speed (Options::rpm, --rpm)"
     )]
     MissingFeedAndSpindle,
+    /// The spindle speed must come from the path, which has no SPINDL.
+    #[error(
+        "no spindle speed: the path has no SPINDL; give --rpm (or --fz-mm and --teeth to \
+         derive it from the feed)"
+    )]
+    MissingSpindle,
     /// The per-posture feeds do not match the postures.
     #[error("{got} posture feeds for {expected} postures")]
     PostureFeedLength {

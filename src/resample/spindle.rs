@@ -84,6 +84,13 @@ impl SpindleScan {
         if !self.any_run {
             return Ok(None);
         }
+        if opts.spindle_from_path {
+            return match self.first_spindle {
+                Some(rpm) if rpm.is_finite() && rpm > 0.0 => Ok(Some((rpm, SpindleSource::Path))),
+                Some(rpm) => Err(ResampleError::InvalidSpindle(rpm)),
+                None => Err(ResampleError::MissingSpindle),
+            };
+        }
         let v_ref = opts
             .feed_mm_min
             .or(self.max_fedrat)

@@ -124,6 +124,7 @@ struct OpenRun {
 pub struct Resampler {
     params: Params,
     opts_rpm: Option<f64>,
+    spindle_from_path: bool,
     teeth: usize,
     spindle: Option<(f64, SpindleSource)>,
     clock: Option<Clock>,
@@ -153,6 +154,7 @@ impl Resampler {
                 posture_feeds: opts.posture_feed_mm_min.is_some(),
             },
             opts_rpm: opts.rpm,
+            spindle_from_path: opts.spindle_from_path,
             teeth: opts.teeth,
             spindle: opts.rpm.map(|rpm| (rpm, SpindleSource::Option)),
             clock: None,
@@ -297,6 +299,7 @@ impl Resampler {
                     feed_mm_min: self.params.feed_mm_min,
                     teeth: self.teeth,
                     fz_mm: self.params.fz_mm,
+                    spindle_from_path: self.spindle_from_path,
                     ..Options::default()
                 };
                 let s = self

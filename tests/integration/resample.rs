@@ -874,3 +874,50 @@ fn slower_engage_first_and_empty_tool_paths() {
         .code(2);
     assert!(!out.exists());
 }
+
+/// `--mode dtheta` needs no feed per tooth when the file has its spindle speed: the same
+/// samples as with the fz and teeth that give that speed (n = V / (Z fz)), every 90° the
+/// tool advances V / n / 4; `--mode fz` without them is a usage error.
+#[test]
+fn dtheta_takes_the_spindle_from_the_file() {
+    let file = external("nx_zlevel_core_spindl.cls"); // SPINDL 1000 rpm, FEDRAT 250 mm/min
+    let (json, rows) = run(&file, &["--mode", "dtheta", "--dtheta-deg", "90"]);
+    assert!(json["fz_mm"].is_null() && json["teeth"].is_null());
+    assert_eq!(json["paths"][0]["stats"]["spindle_rpm"], 1000.0);
+    let (_, same) = run(
+        &file,
+        &[
+            "--mode",
+            "dtheta",
+            "--dtheta-deg",
+            "90",
+            "--fz-mm",
+            "0.125",
+            "--teeth",
+            "2",
+        ],
+    );
+    assert!(rows.len() > 10);
+    assert_eq!(rows, same);
+    let s = col("s_mm");
+    let steps: Vec<f64> = rows
+        .windows(2)
+        .filter_map(|w| Some(w[1][s]? - w[0][s]?))
+        .filter(|d| *d > 1e-9)
+        .collect();
+    let full = steps.iter().filter(|d| (*d - 0.0625).abs() < 1e-9).count();
+    assert!(
+        full * 10 > steps.len() * 9,
+        "{full} of {} steps are 0.0625 mm",
+        steps.len()
+    );
+    let dir = tempdir();
+    crest()
+        .arg("resample")
+        .arg(&file)
+        .args(["--mode", "fz", "-o"])
+        .arg(dir.path().join("o.csv"))
+        .assert()
+        .code(2)
+        .stderr(predicates::str::contains("--mode fz spaces the samples"));
+}
