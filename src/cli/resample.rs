@@ -698,7 +698,13 @@ fn format_sample(out: &mut Vec<u8>, s: &Sample) {
         out.push(b',');
     }
     num(out, s.s_mm, LEN);
-    num(out, s.t_s, UNIT);
+    // No feed known (feed-per-tooth spacing of a path without feed or spindle speed): the
+    // time and the feed are left empty.
+    if s.t_s.is_nan() {
+        out.push(b',');
+    } else {
+        num(out, s.t_s, UNIT);
+    }
     num(out, s.theta_rad.to_degrees(), LEN);
     num(out, p.x, LEN);
     num(out, p.y, LEN);
@@ -725,7 +731,9 @@ fn format_sample(out: &mut Vec<u8>, s: &Sample) {
     num(out, f.x, UNIT);
     num(out, f.y, UNIT);
     num(out, f.z, UNIT);
-    push_decimals(out, s.feed_mm_min, 3);
+    if !s.feed_mm_min.is_nan() {
+        push_decimals(out, s.feed_mm_min, 3);
+    }
     out.push(b'\n');
 }
 

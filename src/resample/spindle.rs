@@ -14,6 +14,10 @@ pub enum SpindleSource {
     DerivedFromFeed,
     /// The path's SPINDL (the path has no feed at all).
     Path,
+    /// None known (no feed, no spindle speed) for a feed-per-tooth spacing, which needs no
+    /// clock: a nominal 1 rpm makes θ follow the arc length (θ = 2π s / (Z fz)); the
+    /// samples carry no time and no feed.
+    Nominal,
 }
 
 /// The spindle-speed rule of the module docs, fed one posture at a time: n = `--rpm`,
@@ -102,6 +106,9 @@ impl SpindleScan {
         match self.first_spindle {
             Some(rpm) if rpm.is_finite() && rpm > 0.0 => Ok(Some((rpm, SpindleSource::Path))),
             Some(rpm) => Err(ResampleError::InvalidSpindle(rpm)),
+            None if opts.mode == super::Mode::FeedPerTooth => {
+                Ok(Some((1.0, SpindleSource::Nominal)))
+            }
             None => Err(ResampleError::MissingFeedAndSpindle),
         }
     }

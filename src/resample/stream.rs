@@ -291,7 +291,7 @@ impl Resampler {
         if let Some(c) = self.clock {
             return Ok(c);
         }
-        let (rpm, _) = match self.spindle {
+        let (rpm, source) = match self.spindle {
             Some(s) => s,
             None => {
                 let opts = Options {
@@ -299,6 +299,7 @@ impl Resampler {
                     feed_mm_min: self.params.feed_mm_min,
                     teeth: self.teeth,
                     fz_mm: self.params.fz_mm,
+                    mode: self.params.mode,
                     spindle_from_path: self.spindle_from_path,
                     ..Options::default()
                 };
@@ -315,6 +316,7 @@ impl Resampler {
             rpm,
             teeth: self.teeth as f64,
             fz_mm: self.params.fz_mm,
+            timeless: source == SpindleSource::Nominal,
         };
         self.clock = Some(clock);
         Ok(clock)
@@ -359,6 +361,10 @@ impl Resampler {
         } else {
             stats.spindle_rpm = self.spindle.map(|s| s.0);
             stats.spindle_source = self.spindle.map(|s| s.1);
+        }
+        if self.clock.is_some_and(|c| c.timeless) {
+            stats.duration_s = f64::NAN;
+            stats.spindle_rpm = None;
         }
         Ok(stats)
     }
@@ -562,14 +568,27 @@ mod tests {
         for p in &mut path.postures {
             p.spindle_rpm = None;
         }
-        let err = resample(&path, &opts).unwrap_err();
+        // Feed per tooth needs no clock: θ follows the arc length, no time, no feed.
+        let samples = resample(&path, &opts).unwrap();
+        assert!(samples.len() > 2);
+        for s in &samples {
+            assert!(s.t_s.is_nan() && s.feed_mm_min.is_nan());
+            assert_relative_eq!(
+                s.theta_rad,
+                std::f64::consts::TAU * s.s_mm / (4.0 * 0.05),
+                epsilon = 1e-9
+            );
+        }
+        // A spindle step does.
+        let dtheta = Options::new(Mode::SpindleStep { dtheta_rad: 0.1 }, 0.05, 4);
+        let err = resample(&path, &dtheta).unwrap_err();
         assert_eq!(err, ResampleError::MissingFeedAndSpindle);
         let msg = err.to_string();
         assert!(
             msg.contains("--feed-mm-min") && msg.contains("--rpm"),
             "{msg}"
         );
-        assert!(resample(&path, &opts.clone().with_feed_mm_min(600.0)).is_ok());
+        assert!(resample(&path, &dtheta.clone().with_feed_mm_min(600.0)).is_ok());
     }
 
     #[test]

@@ -33,6 +33,10 @@ pub(super) struct Clock {
     pub(super) rpm: f64,
     pub(super) teeth: f64,
     pub(super) fz_mm: f64,
+    /// No feed and no spindle speed are known (feed-per-tooth spacing only): the clock
+    /// runs at a nominal 1 rpm so that θ follows the arc length (θ = 2π s / (Z fz)),
+    /// and the samples carry no time and no feed (NaN).
+    pub(super) timeless: bool,
 }
 
 /// One cutting move ready for sampling.
@@ -357,17 +361,22 @@ impl RunWalker {
             None => (None, None),
         };
         let feed_dir = self.feed_direction(&tangent, &axis, normal.as_ref(), stats);
+        let timeless = self.clock.timeless;
         Sample {
             run: self.run_idx,
             s_mm: self.s_offset + s,
-            t_s: mv.t0 + tau,
+            t_s: if timeless { f64::NAN } else { mv.t0 + tau },
             theta_rad: theta,
             position,
             axis,
             contact,
             normal,
             feed_dir,
-            feed_mm_min: mv.feed_at(tau) * 60.0,
+            feed_mm_min: if timeless {
+                f64::NAN
+            } else {
+                mv.feed_at(tau) * 60.0
+            },
         }
     }
 

@@ -589,16 +589,16 @@ fn dtheta_mode_steps_the_spindle_angle() {
 }
 
 #[test]
-fn contact12_gives_contact_columns_and_needs_a_feed() {
+fn contact12_gives_contact_columns_and_time_needs_a_feed() {
     let file = repo("samples/clsf/ball_lead15_contact12.txt");
     let dir = tempdir();
     let out = dir.path().join("out.csv");
-    // contact12 has no feed and no spindle speed: the error names the options to add,
-    // and no output file is left behind.
+    // contact12 has no feed and no spindle speed: a spindle step needs a clock, and the
+    // error names the options to add; no output file is left behind.
     let assert = crest()
         .arg("resample")
         .arg(&file)
-        .args(["--mode", "fz", "--fz-mm", "0.05", "--teeth", "4", "-o"])
+        .args(["--mode", "dtheta", "--fz-mm", "0.05", "--teeth", "4", "-o"])
         .arg(&out)
         .assert()
         .code(2);
@@ -609,6 +609,10 @@ fn contact12_gives_contact_columns_and_needs_a_feed() {
     );
     assert!(!out.exists());
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // Feed per tooth and θ need no clock: time and feed are left empty.
+    let (json0, timeless) = run(&file, &["--mode", "fz", "--fz-mm", "0.05", "--teeth", "4"]);
+    assert_eq!(json0["paths"][0]["stats"]["spindle_source"], "nominal");
+    assert!(json0["paths"][0]["stats"]["spindle_rpm"].is_null());
 
     let (json, rows) = run(
         &file,
@@ -616,6 +620,17 @@ fn contact12_gives_contact_columns_and_needs_a_feed() {
             "--mode", "fz", "--fz-mm", "0.05", "--teeth", "4", "--rpm", "10000",
         ],
     );
+    assert_eq!(timeless.len(), rows.len());
+    for (a, b) in timeless.iter().zip(&rows) {
+        assert!(a[col("t_s")].is_none() && a[col("feed_mm_min")].is_none());
+        assert_eq!(a[col("s_mm")], b[col("s_mm")]);
+        assert_eq!(a[col("x")], b[col("x")]);
+        assert_abs_diff_eq!(
+            a[col("theta_deg")].unwrap(),
+            b[col("theta_deg")].unwrap(),
+            epsilon = 2e-6
+        );
+    }
     let stats = &json["paths"][0]["stats"];
     assert_eq!(stats["spindle_source"], "option");
     // V = Z fz n = 2000 mm/min, so t = s/V within a run.
