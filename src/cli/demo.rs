@@ -156,7 +156,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let heat = dir.join("heightmap.png");
     crest::plot::heightmap::plot_heightmap(
         map,
-        "Simulated surface (ICE model, 10 µm run-out)",
+        "Simulated surface (ICE model, 10 µm run-out); 0 = the nominal surface",
         &heat,
     )
     .map_err(|e| miette::miette!("{}: {e}", heat.display()))?;

@@ -86,7 +86,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if !chart.series.is_empty() {
         files.push((
             "effects.svg".to_string(),
-            line_chart_svg(&chart).map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
+            crest::plot::effects::bar_chart_svg(&chart)
+                .map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
         ));
         chart_names.push("effects.svg".to_string());
     }

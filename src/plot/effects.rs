@@ -1,13 +1,130 @@
-//! The designed experiment's figures: relative first-level effects per parameter (001 Fig
-//! 11) and the effect of one factor at each of its levels (001 Fig 12), as line charts.
+//! The designed experiment's figures: relative first-level effects per roughness
+//! parameter as grouped bars, one bar per factor (Lavernhe et al., Fig 11), and the effect
+//! of one factor at each of its levels as lines (their Fig 12).
 
+use super::{FONT, Format};
+use super::profile::{
+    Draw, DrawResult, PlotError, Series, finite_range, label_font, render_bytes,
+    series_color, tick_decimals, tick_font, tick_label, title_font,
+};
 use crate::study::design::{Design, Effects};
+use plotters::coord::Shift;
+use plotters::prelude::*;
 
-/// The chart of 001 Fig 11: relative first-level effect EF_i1 (Eq 8, %) per parameter (x =
-/// 1…n in [`Design::responses`] order), one series per factor with more than one level.
-pub fn effects_chart(design: &Design, effects: &[Effects]) -> super::profile::LineChart {
+/// Grouped bars: one group per category (a roughness parameter), one bar per series (a
+/// factor); `series[i].y[k]` is the bar of series i in category k.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BarChart {
+    /// Title.
+    pub title: String,
+    /// The categories along x, in order.
+    pub categories: Vec<String>,
+    /// x-axis label.
+    pub x_label: String,
+    /// y-axis label with unit.
+    pub y_label: String,
+    /// The bars of each series (x is the category index).
+    pub series: Vec<Series>,
+}
+
+impl Draw for BarChart {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let n = self.categories.len().max(1);
+        let ys = self
+            .series
+            .iter()
+            .flat_map(|s| s.y.iter())
+            .chain(std::iter::once(&0.0));
+        let (y0, y1) = finite_range(ys, 0.08).unwrap_or((-1.0, 1.0));
+        // Head room for the legend above the bars.
+        let legend = self.series.len() > 1;
+        let y1 = if legend {
+            y1 + (y1 - y0) * 0.06 * self.series.len() as f64
+        } else {
+            y1
+        };
+        let names = self.categories.clone();
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, title_font())
+            .margin(18)
+            .x_label_area_size(55)
+            .y_label_area_size(80)
+            .build_cartesian_2d((0..n as i32).into_segmented(), y0..y1)?;
+        let dy = tick_decimals(y1 - y0);
+        let fy = move |v: &f64| tick_label(*v, dy);
+        let fx = move |v: &SegmentValue<i32>| match v {
+            SegmentValue::CenterOf(k) => names.get(*k as usize).cloned().unwrap_or_default(),
+            _ => String::new(),
+        };
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(n + 1)
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .axis_desc_style(label_font())
+            .label_style(tick_font())
+            .max_light_lines(4)
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(210, 210, 210))
+            .draw()?;
+        // Bar widths in pixels: 80 % of a category, shared by the series.
+        let seg_px = chart.plotting_area().dim_in_pixel().0 as f64 / n as f64;
+        let m = self.series.len().max(1) as f64;
+        let bar = 0.8 * seg_px / m;
+        for (i, s) in self.series.iter().enumerate() {
+            let color = series_color(i);
+            let left = 0.1 * seg_px + i as f64 * bar;
+            let right = seg_px - left - bar;
+            let bars = s.y.iter().enumerate().filter(|(_, y)| y.is_finite()).map(|(k, &y)| {
+                let k = k as i32;
+                let mut r = Rectangle::new(
+                    [(SegmentValue::Exact(k), y), (SegmentValue::Exact(k + 1), 0.0)],
+                    color.filled(),
+                );
+                r.set_margin(0, 0, left.round() as u32, right.max(0.0).round() as u32);
+                r
+            });
+            chart
+                .draw_series(bars)?
+                .label(&s.label)
+                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], color.filled()));
+        }
+        // The zero line.
+        chart.draw_series(LineSeries::new(
+            [(SegmentValue::Exact(0), 0.0), (SegmentValue::Exact(n as i32), 0.0)],
+            BLACK.stroke_width(1),
+        ))?;
+        if legend {
+            chart
+                .configure_series_labels()
+                .label_font((FONT, 15).into_font())
+                .background_style(WHITE.mix(0.9))
+                .border_style(RGBColor(160, 160, 160))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()?;
+        }
+        Ok(())
+    }
+}
+
+/// A bar chart as SVG bytes, 1000 × 560 pixels.
+pub fn bar_chart_svg(chart: &BarChart) -> Result<Vec<u8>, PlotError> {
+    if !chart.series.iter().any(|s| s.y.iter().any(|y| y.is_finite())) {
+        return Err(PlotError::Empty(format!("no finite bar in '{}'", chart.title)));
+    }
+    render_bytes(Format::Svg, (1000, 560), chart)
+}
+
+/// Relative first-level effect EF_i1 (%) per roughness parameter (x = the parameters in
+/// [`Design::responses`] order), one bar per factor with more than one level: the change
+/// of the parameter when the factor is at its first level, relative to the mean of all
+/// runs.
+pub fn effects_chart(design: &Design, effects: &[Effects]) -> BarChart {
     let factors = design.factors();
-    let x: Vec<f64> = (1..=design.responses.len()).map(|k| k as f64).collect();
+    let x: Vec<f64> = (0..design.responses.len()).map(|k| k as f64).collect();
     let series = factors
         .iter()
         .enumerate()
@@ -17,23 +134,24 @@ pub fn effects_chart(design: &Design, effects: &[Effects]) -> super::profile::Li
                 .iter()
                 .map(|e| 100.0 * e.relative_first[i])
                 .collect();
-            super::profile::Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
+            Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
         })
         .collect();
-    let series: Vec<super::profile::Series> = series;
+    let series: Vec<Series> = series;
     let mut title = if design.title.is_empty() {
-        "Relative first-level effects (001 Eq 8)".to_string()
+        "Effect of each factor at its first level".to_string()
     } else {
-        format!("{}: relative first-level effects (Eq 8)", design.title)
+        format!("{}: effect of each factor at its first level", design.title)
     };
-    // A single line gets no legend: name it in the title.
+    // A single series gets no legend: name it in the title.
     if let [only] = series.as_slice() {
         title = format!("{title}, {}", only.label);
     }
-    super::profile::LineChart {
+    BarChart {
         title,
-        x_label: format!("parameter ({})", design.responses.join(", ")),
-        y_label: "EF_i1 [%]".into(),
+        categories: design.responses.clone(),
+        x_label: "roughness parameter".into(),
+        y_label: "change from the mean of all runs [%]".into(),
         series,
     }
 }
@@ -66,17 +184,17 @@ pub fn level_chart(
                         .collect()
                 })
                 .unwrap_or_default();
-            super::profile::Series::new(name.clone(), &f.levels, &y)
+            Series::new(name.clone(), &f.levels, &y)
         })
         .collect();
     Some(super::profile::LineChart {
         title: if design.title.is_empty() {
-            format!("Effect of {} (001 Eq 7 / M)", f.name)
+            format!("Effect of {} at each of its levels", f.name)
         } else {
-            format!("{}: effect of {} (Eq 7 / M)", design.title, f.name)
+            format!("{}: effect of {} at each of its levels", design.title, f.name)
         },
         x_label: f.name.clone(),
-        y_label: "EF_ij / M [%]".into(),
+        y_label: "change from the mean of all runs [%]".into(),
         series,
     })
 }

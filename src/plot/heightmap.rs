@@ -146,7 +146,7 @@ impl Draw for MapChart<'_> {
             .disable_mesh()
             .disable_x_axis()
             .y_label_formatter(&fz)
-            .y_desc("height [µm]")
+            .y_desc("height [µm], 0 = reference surface")
             .axis_desc_style(label_font())
             .label_style(tick_font())
             .draw()?;

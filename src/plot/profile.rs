@@ -218,6 +218,12 @@ impl Draw for LineChart {
             0.08,
         )
         .unwrap_or((0.0, 1.0));
+        // Head room for the legend (about 20 px a line of a 430 px plot) above the data.
+        let y1 = if self.series.len() > 1 {
+            y1 + (y1 - y0) * (0.05 * self.series.len() as f64).min(1.5)
+        } else {
+            y1
+        };
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, title_font())
             .margin(18)
@@ -242,13 +248,27 @@ impl Draw for LineChart {
         for (i, s) in self.series.iter().enumerate() {
             let color = series_color(i);
             let style = ShapeStyle::from(&color).stroke_width(2);
+            // Past the eight colours, the lines are dashed: no two series look alike.
+            let dashed = (i / 8) % 2 == 1;
             let mut first = true;
             for seg in s.segments() {
-                let drawn = chart.draw_series(LineSeries::new(seg, style))?;
+                let drawn = if dashed {
+                    chart.draw_series(DashedLineSeries::new(seg, 7, 4, style))?
+                } else {
+                    chart.draw_series(LineSeries::new(seg, style))?
+                };
                 if first {
-                    drawn
-                        .label(&s.label)
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+                    drawn.label(&s.label).legend(move |(x, y)| {
+                        if dashed {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (9, 0)], style)
+                                + PathElement::new(vec![(14, 0), (24, 0)], style)
+                        } else {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (24, 0)], style)
+                                + PathElement::new(vec![(0, 0), (0, 0)], style)
+                        }
+                    });
                     first = false;
                 }
             }

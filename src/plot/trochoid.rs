@@ -268,7 +268,10 @@ impl Figure<'_> {
             (1e-3, 1.0)
         };
         let mut chart = ChartBuilder::on(area)
-            .caption("crest between consecutive marks", label_font())
+            .caption(
+                "crest between consecutive marks of the edges at tool height z",
+                label_font(),
+            )
             .margin(10)
             .x_label_area_size(50)
             .y_label_area_size(70)
