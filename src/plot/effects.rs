@@ -2,11 +2,11 @@
 //! parameter as grouped bars, one bar per factor (Lavernhe et al., Fig 11), and the effect
 //! of one factor at each of its levels as lines (their Fig 12).
 
-use super::{FONT, Format};
 use super::profile::{
-    Draw, DrawResult, PlotError, Series, finite_range, label_font, render_bytes,
-    series_color, tick_decimals, tick_font, tick_label, title_font,
+    Draw, DrawResult, PlotError, Series, finite_range, label_font, render_bytes, series_color,
+    tick_decimals, tick_font, tick_label, title_font,
 };
+use super::{FONT, Format};
 use crate::study::design::{Design, Effects};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -49,7 +49,7 @@ impl Draw for BarChart {
             .margin(18)
             .x_label_area_size(55)
             .y_label_area_size(80)
-            .build_cartesian_2d((0..n as i32).into_segmented(), y0..y1)?;
+            .build_cartesian_2d((0..n as i32 - 1).into_segmented(), y0..y1)?;
         let dy = tick_decimals(y1 - y0);
         let fy = move |v: &f64| tick_label(*v, dy);
         let fx = move |v: &SegmentValue<i32>| match v {
@@ -78,23 +78,35 @@ impl Draw for BarChart {
             let color = series_color(i);
             let left = 0.1 * seg_px + i as f64 * bar;
             let right = seg_px - left - bar;
-            let bars = s.y.iter().enumerate().filter(|(_, y)| y.is_finite()).map(|(k, &y)| {
-                let k = k as i32;
-                let mut r = Rectangle::new(
-                    [(SegmentValue::Exact(k), y), (SegmentValue::Exact(k + 1), 0.0)],
-                    color.filled(),
-                );
-                r.set_margin(0, 0, left.round() as u32, right.max(0.0).round() as u32);
-                r
-            });
+            let bars =
+                s.y.iter()
+                    .enumerate()
+                    .filter(|(_, y)| y.is_finite())
+                    .map(|(k, &y)| {
+                        let k = k as i32;
+                        let mut r = Rectangle::new(
+                            [
+                                (SegmentValue::Exact(k), y),
+                                (SegmentValue::Exact(k + 1), 0.0),
+                            ],
+                            color.filled(),
+                        );
+                        r.set_margin(0, 0, left.round() as u32, right.max(0.0).round() as u32);
+                        r
+                    });
             chart
                 .draw_series(bars)?
                 .label(&s.label)
-                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], color.filled()));
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 6), (x + 18, y + 6)], color.filled())
+                });
         }
         // The zero line.
         chart.draw_series(LineSeries::new(
-            [(SegmentValue::Exact(0), 0.0), (SegmentValue::Exact(n as i32), 0.0)],
+            [
+                (SegmentValue::Exact(0), 0.0),
+                (SegmentValue::Exact(n as i32), 0.0),
+            ],
             BLACK.stroke_width(1),
         ))?;
         if legend {
@@ -112,8 +124,15 @@ impl Draw for BarChart {
 
 /// A bar chart as SVG bytes, 1000 × 560 pixels.
 pub fn bar_chart_svg(chart: &BarChart) -> Result<Vec<u8>, PlotError> {
-    if !chart.series.iter().any(|s| s.y.iter().any(|y| y.is_finite())) {
-        return Err(PlotError::Empty(format!("no finite bar in '{}'", chart.title)));
+    if !chart
+        .series
+        .iter()
+        .any(|s| s.y.iter().any(|y| y.is_finite()))
+    {
+        return Err(PlotError::Empty(format!(
+            "no finite bar in '{}'",
+            chart.title
+        )));
     }
     render_bytes(Format::Svg, (1000, 560), chart)
 }
@@ -191,7 +210,10 @@ pub fn level_chart(
         title: if design.title.is_empty() {
             format!("Effect of {} at each of its levels", f.name)
         } else {
-            format!("{}: effect of {} at each of its levels", design.title, f.name)
+            format!(
+                "{}: effect of {} at each of its levels",
+                design.title, f.name
+            )
         },
         x_label: f.name.clone(),
         y_label: "change from the mean of all runs [%]".into(),
