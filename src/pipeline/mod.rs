@@ -13,3 +13,4 @@ pub mod progress;
 pub mod report;
 pub mod runout;
 pub mod simulate;
+pub mod tasks;
