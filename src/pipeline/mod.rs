@@ -14,3 +14,4 @@ pub mod report;
 pub mod runout;
 pub mod simulate;
 pub mod tasks;
+pub mod tool;
