@@ -158,6 +158,24 @@ def simulate(
     exactly one of ``window`` (mm, WCS), ``patch_at``/``patch_near`` with ``patch_mm``, or
     ``map_mm`` (a part map; needs ``part``). Releases the GIL."""
 
+def resample(
+    file: StrPath,
+    *,
+    mode: str,
+    fz_mm: float,
+    teeth: int,
+    dtheta_deg: float = 0.5,
+    rpm: Optional[float] = None,
+    feed_mm_min: Optional[float] = None,
+    axis: str = "slerp",
+    spline: bool = False,
+    path: Optional[int] = None,
+) -> Dict[str, npt.NDArray[Any]]:
+    """Resample the cutting moves as ``crest resample`` (programmed feed): ``mode`` "fz" or
+    "dtheta". A dict of arrays with the CSV's columns (``s_mm``, ``t_s``, ``theta_deg``,
+    ``x``…``z``, ``i``…``k``, ``cx``…``cz``, ``nx``…``nz`` (NaN without contact data),
+    ``fx``…``fz``, ``feed_mm_min``) and ``path`` (0-based), at full precision."""
+
 def plan_feed(file: StrPath, machine: StrPath, *, level: str = "jerk", absolute: bool = False) -> List[Dict[str, Any]]:
     """Plan the feed the machine reaches, as ``crest feed``: one dict per tool path with
     ``name``, ``total_time_s``, ``programmed_time_s``, ``self_check_ok`` and per posture

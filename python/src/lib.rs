@@ -696,6 +696,154 @@ fn simulate(
 }
 
 // ------------------------------------------------------------------------------------------
+// Resampling
+// ------------------------------------------------------------------------------------------
+
+/// Resample the cutting moves of a tool-path file (as `crest resample`, programmed feed):
+/// `mode` "fz" (even feed per tooth) or "dtheta" (constant spindle step `dtheta_deg`).
+/// Returns a dict of numpy arrays, one entry per sample, with the columns of `crest
+/// resample`'s CSV (`s_mm`, `t_s`, `theta_deg`, `x`, `y`, `z`, `i`, `j`, `k`, `cx`, `cy`,
+/// `cz`, `nx`, `ny`, `nz` (NaN without contact data), `fx`, `fy`, `fz`, `feed_mm_min`) and
+/// `path` (0-based tool path index), at full precision. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (file, *, mode, fz_mm, teeth, dtheta_deg = 0.5, rpm = None, feed_mm_min = None, axis = "slerp", spline = false, path = None))]
+#[allow(clippy::too_many_arguments)]
+fn resample<'py>(
+    py: Python<'py>,
+    file: PathBuf,
+    mode: &str,
+    fz_mm: f64,
+    teeth: usize,
+    dtheta_deg: f64,
+    rpm: Option<f64>,
+    feed_mm_min: Option<f64>,
+    axis: &str,
+    spline: bool,
+    path: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    use crest::resample::{AxisInterpolation, Mode, Options};
+    let bad = |m: String| CrestError::new_err(m);
+    let mode = match mode {
+        "fz" => Mode::FeedPerTooth,
+        "dtheta" => Mode::SpindleStep {
+            dtheta_rad: dtheta_deg.to_radians(),
+        },
+        m => return Err(bad(format!("mode must be 'fz' or 'dtheta', got '{m}'"))),
+    };
+    let axis = match axis {
+        "slerp" => AxisInterpolation::Slerp,
+        "nlerp" => AxisInterpolation::Nlerp,
+        a => return Err(bad(format!("axis must be 'slerp' or 'nlerp', got '{a}'"))),
+    };
+    let mut opts = Options::new(mode, fz_mm, teeth)
+        .with_axis_interpolation(axis)
+        .with_spline(spline);
+    opts.rpm = rpm;
+    opts.feed_mm_min = feed_mm_min;
+    let cols = py
+        .allow_threads(|| -> miette::Result<Vec<Vec<f64>>> {
+            crest::resample::Resampler::new(&opts)
+                .map_err(|e| miette::miette!("{}: {e}", file.display()))?;
+            let program = crest::io::toolpath::read_program(&file)?;
+            let selected: Vec<usize> = match path {
+                Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
+                Some(n) => {
+                    return Err(miette::miette!(
+                        "{}: --path {n} is out of range: the file has {} tool path(s)",
+                        file.display(),
+                        program.paths.len()
+                    ));
+                }
+                None => (0..program.paths.len()).collect(),
+            };
+            let mut cols = vec![Vec::new(); 20];
+            for idx in selected {
+                let p = &program.paths[idx];
+                crest::resample::resample_with(p, &opts, |s| {
+                    let nan3 = [f64::NAN; 3];
+                    let c = s.contact.map_or(nan3, |c| [c.x, c.y, c.z]);
+                    let n = s.normal.map_or(nan3, |n| [n.x, n.y, n.z]);
+                    let row = [
+                        s.s_mm,
+                        s.t_s,
+                        s.theta_rad.to_degrees(),
+                        s.position.x,
+                        s.position.y,
+                        s.position.z,
+                        s.axis.x,
+                        s.axis.y,
+                        s.axis.z,
+                        c[0],
+                        c[1],
+                        c[2],
+                        n[0],
+                        n[1],
+                        n[2],
+                        s.feed_dir.x,
+                        s.feed_dir.y,
+                        s.feed_dir.z,
+                        s.feed_mm_min,
+                        idx as f64,
+                    ];
+                    for (col, v) in cols.iter_mut().zip(row) {
+                        col.push(v);
+                    }
+                })
+                .map_err(|e| {
+                    miette::miette!(
+                        "{}: tool path {}: {e}",
+                        file.display(),
+                        if p.name.is_empty() {
+                            "(unnamed)"
+                        } else {
+                            &p.name
+                        }
+                    )
+                })?;
+            }
+            Ok(cols)
+        })
+        .map_err(err)?;
+    let names = [
+        "s_mm",
+        "t_s",
+        "theta_deg",
+        "x",
+        "y",
+        "z",
+        "i",
+        "j",
+        "k",
+        "cx",
+        "cy",
+        "cz",
+        "nx",
+        "ny",
+        "nz",
+        "fx",
+        "fy",
+        "fz",
+        "feed_mm_min",
+    ];
+    let d = PyDict::new(py);
+    let mut cols = cols.into_iter();
+    for name in names {
+        d.set_item(
+            name,
+            Array1::from(cols.next().unwrap_or_default()).into_pyarray(py),
+        )?;
+    }
+    let path_col: Vec<i64> = cols
+        .next()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|v| v as i64)
+        .collect();
+    d.set_item("path", Array1::from(path_col).into_pyarray(py))?;
+    Ok(d)
+}
+
+// ------------------------------------------------------------------------------------------
 // Feed planning
 // ------------------------------------------------------------------------------------------
 
@@ -887,6 +1035,7 @@ fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics, m)?)?;
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(plan_feed, m)?)?;
+    m.add_function(wrap_pyfunction!(resample, m)?)?;
     m.add_function(wrap_pyfunction!(study_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(run_task, m)?)?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;

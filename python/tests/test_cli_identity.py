@@ -186,3 +186,26 @@ def test_feed_plan_is_the_cli_json(cli_json):
         assert p["feed_mm_min"].tolist() == feeds
         assert p["t_s"].tolist() == [r["t_s"] for r in q["postures"]]
         assert p["line"].tolist() == [r["line"] for r in q["postures"]]
+
+
+def test_resample_is_the_cli_csv(cli, tmp_path):
+    cls = ROOT / "samples" / "clsf" / "ball_lead15_contact.cls"
+    out = tmp_path / "r.csv"
+    args = ["--mode", "dtheta", "--fz-mm", "0.05", "--teeth", "4", "--dtheta-deg", "2"]
+    p = cli("resample", cls, *args, "-o", out)
+    assert p.returncode == 0, p.stderr
+    ours = crest.resample(cls, mode="dtheta", fz_mm=0.05, teeth=4, dtheta_deg=2.0)
+    lines = out.read_text().splitlines()
+    head = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    assert len(rows) == len(ours["s_mm"]) > 100
+    # The CSV prints lengths with 6 decimals, unit vectors and time with 9, feed with 3.
+    decimals = {"t_s": 9, "i": 9, "j": 9, "k": 9, "nx": 9, "ny": 9, "nz": 9,
+                "fx": 9, "fy": 9, "fz": 9, "feed_mm_min": 3}
+    for c, name in enumerate(head):
+        printed = np.array([float(r[c]) if r[c] else np.nan for r in rows])
+        half = 0.5 * 10.0 ** -decimals.get(name, 6)
+        diff = np.abs(ours[name] - printed)
+        assert np.all((diff <= half * (1 + 1e-9)) | (np.isnan(printed) & np.isnan(ours[name]))), name
+    with pytest.raises(crest.CrestError, match="out of range"):
+        crest.resample(cls, mode="fz", fz_mm=0.05, teeth=4, path=9)
