@@ -18,6 +18,7 @@ mod convert;
 mod demo;
 mod feed;
 mod inspect;
+mod merge;
 mod metrics;
 mod plot;
 mod progress;
@@ -68,6 +69,8 @@ enum Command {
     Synth(synth::Args),
     /// Run a designed experiment and its factor effects.
     Study(study::Args),
+    /// Assemble the shard files of `study --shard K/N` into the outputs of `study`.
+    Merge(merge::Args),
 }
 
 /// How a command ended when it did not fail.
@@ -166,6 +169,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Feed(a) => feed::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Study(a) => study::run(a),
+        Command::Merge(a) => merge::run(a),
     }
 }
 

@@ -2,7 +2,7 @@
 //! cutting parameters, 001 §4 and appendix) and its factor effects (001 Eqs 7-8).
 //!
 //! ```text
-//! crest study design.toml -o DIR [--json] [--threads N]
+//! crest study design.toml -o DIR [--json] [--threads N] [--shard K/N]
 //! ```
 //!
 //! Each run is simulated by `crest::study::run::simulate_run` (synthetic path →
@@ -12,13 +12,13 @@
 //! factor with more than two levels, `effects-<factor>.svg` (001 Fig 12) are written, each
 //! through `crest::io::write_atomic`. A progress bar is drawn on stderr when it is a
 //! terminal.
+//!
+//! With `--shard K/N` only runs K, K+N, … are simulated and their results written as JSON
+//! lines (`crest::pipeline::tasks::TaskResult`) to `DIR/shard-K-of-N.jsonl`; `crest merge`
+//! assembles the shards into the outputs above, byte for byte.
 
 use super::Outcome;
-use crest::io::tables::{write_effects_csv, write_runs_csv};
-use crest::pipeline::design::DesignRun;
-use crest::plot::effects::{effects_chart, level_chart};
-use crest::plot::profile::line_chart_svg;
-use crest::study::design::{Design, Effects, RunResult};
+use crest::pipeline::design::{DesignRun, effects_json, run_json};
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -37,6 +37,10 @@ pub struct Args {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Run only shard K of N (1 ≤ K ≤ N: runs K, K+N, K+2N, …) and write their results as
+    /// JSON lines to DIR/shard-K-of-N.jsonl; `crest merge` assembles the shards.
+    #[arg(long, value_name = "K/N", value_parser = crest::pipeline::tasks::parse_shard)]
+    pub shard: Option<(usize, usize)>,
 }
 
 /// Run `crest study`.
@@ -46,6 +50,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let (design, cutter) = crest::pipeline::design::load_design(&args.design)?;
     if args.threads == Some(0) {
         return Err(miette!("--threads must be at least 1"));
+    }
+    if let Some((k, n)) = args.shard {
+        return run_shard(&args, k, n, design.runs().len(), started);
     }
     let n_runs = design.runs().len();
 
@@ -63,61 +70,106 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    let done = done?;
+    // Every run succeeded: render the outputs, then write them.
+    write_outputs(&done, &file, &args.output, args.json, started)
+}
+
+/// `crest study --shard K/N`: the shard's runs, written as JSON lines.
+fn run_shard(
+    args: &Args,
+    k: usize,
+    n: usize,
+    total: usize,
+    started: Instant,
+) -> miette::Result<Outcome> {
+    use crest::pipeline::tasks;
+    let texts = crest::pipeline::design::load_design_texts(&args.design)?;
+    let mine = (0..total).filter(|i| i % n + 1 == k).count();
+    let bar = super::progress::bar(mine as u64, "study", "runs");
+    let tick = || {
+        if let Some(b) = &bar {
+            b.inc(1);
+        }
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .into_diagnostic()?;
+    let results = pool.install(|| tasks::run_shard(&texts, k, n, &tick));
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let results = results?;
+    let mut text = Vec::new();
+    for r in &results {
+        serde_json::to_writer(&mut text, r).into_diagnostic()?;
+        text.push(b'\n');
+    }
+    let name = format!("shard-{k}-of-{n}.jsonl");
+    crest::io::write_files(&args.output, &[(name.clone(), text)])
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write into {}", args.output.display()))?;
+    let path = args.output.join(&name);
+    let failed = results.iter().filter(|r| r.error.is_some()).count();
+    let elapsed = started.elapsed().as_secs_f64();
+    if args.json {
+        let j = serde_json::json!({
+            "design": texts.design_file,
+            "shard": [k, n],
+            "runs": results.iter().map(|r| r.run).collect::<Vec<_>>(),
+            "failed": failed,
+            "output": path.display().to_string(),
+            "time_s": num(elapsed),
+        });
+        outln!("{j}");
+    } else {
+        outln!(
+            "{}: shard {k}/{n}, {} of {total} runs ({failed} failed) in {elapsed:.1} s; wrote {}",
+            texts.design_file,
+            results.len(),
+            path.display()
+        );
+    }
+    Ok(Outcome::Ok)
+}
+
+/// Render and write the outputs of a finished design into `output` and print its summary
+/// (or, with `json`, its JSON object): `crest study` and `crest merge`.
+pub(crate) fn write_outputs(
+    done: &DesignRun,
+    file: &str,
+    output: &std::path::Path,
+    json: bool,
+    started: Instant,
+) -> miette::Result<Outcome> {
+    let files = crest::pipeline::design::render_outputs(done)?;
+    let chart_names: Vec<String> = files
+        .iter()
+        .map(|(n, _)| n.clone())
+        .filter(|n| n.ends_with(".svg"))
+        .collect();
+    crest::io::write_files(output, &files)
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write into {}", output.display()))?;
     let DesignRun {
         design,
         results,
         effects,
         ..
-    } = done?;
-
-    // Every run succeeded: render the outputs, then write them.
-    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
-    let mut table = |name: &str, f: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
-        let mut buf = Vec::new();
-        f(&mut buf).map_err(|e| miette!("cannot write {name}: {e}"))?;
-        files.push((name.to_string(), buf));
-        Ok::<(), miette::Report>(())
-    };
-    table("runs.csv", &|w| write_runs_csv(&design, &results, w))?;
-    table("effects.csv", &|w| write_effects_csv(&design, &effects, w))?;
-    crest::plot::init_fonts();
-    let mut chart_names = Vec::new();
-    let chart = effects_chart(&design, &effects);
-    if !chart.series.is_empty() {
-        files.push((
-            "effects.svg".to_string(),
-            crest::plot::effects::bar_chart_svg(&chart)
-                .map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
-        ));
-        chart_names.push("effects.svg".to_string());
-    }
-    for (i, f) in design.factors().iter().enumerate() {
-        if f.levels.len() <= 2 {
-            continue;
-        }
-        if let Some(c) = level_chart(&design, &effects, i) {
-            let name = format!("effects-{}.svg", f.name);
-            files.push((
-                name.clone(),
-                line_chart_svg(&c).map_err(|e| miette!("cannot draw {name}: {e}"))?,
-            ));
-            chart_names.push(name);
-        }
-    }
-    crest::io::write_files(&args.output, &files)
-        .into_diagnostic()
-        .wrap_err_with(|| format!("cannot write into {}", args.output.display()))?;
-    let runs_csv = args.output.join("runs.csv");
-    let effects_csv = args.output.join("effects.csv");
-    let charts: Vec<PathBuf> = chart_names.iter().map(|n| args.output.join(n)).collect();
+    } = done;
+    let n_runs = results.len();
+    let runs_csv = output.join("runs.csv");
+    let effects_csv = output.join("effects.csv");
+    let charts: Vec<PathBuf> = chart_names.iter().map(|n| output.join(n)).collect();
     let elapsed = started.elapsed().as_secs_f64();
 
-    if args.json {
+    if json {
         let j = serde_json::json!({
             "design": file,
             "title": design.title,
-            "runs": results.iter().map(|r| run_json(&design, r)).collect::<Vec<_>>(),
-            "effects": effects_json(&design, &effects),
+            "runs": results.iter().map(|r| run_json(design, r)).collect::<Vec<_>>(),
+            "effects": effects_json(design, effects),
             "outputs": {
                 "runs_csv": runs_csv.display().to_string(),
                 "effects_csv": effects_csv.display().to_string(),
@@ -134,7 +186,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             effects_csv.display(),
             charts.len()
         );
-        for (name, e) in design.responses.iter().zip(&effects) {
+        for (name, e) in design.responses.iter().zip(effects.iter()) {
             let rel: Vec<String> = design
                 .factors()
                 .iter()
@@ -149,58 +201,4 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 
 fn num(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
-}
-
-fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
-    let factors: serde_json::Map<String, serde_json::Value> = design
-        .factors()
-        .iter()
-        .zip(&r.point.values)
-        .map(|(f, v)| (f.name.clone(), num(*v)))
-        .collect();
-    let responses: serde_json::Map<String, serde_json::Value> = design
-        .responses
-        .iter()
-        .zip(&r.responses)
-        .map(|(k, v)| (k.clone(), num(*v)))
-        .collect();
-    serde_json::json!({
-        "run": r.point.run,
-        "factors": factors,
-        "tilt_deg": num(r.point.tilt_deg),
-        "yaw_deg": num(r.point.yaw_deg),
-        "feed_mm_min": num(r.point.feed_mm_min),
-        "fz_mm": num(r.fz_mm),
-        "stepover_mm": num(r.stepover_mm),
-        "responses": responses,
-        "error": r.error,
-    })
-}
-
-fn effects_json(design: &Design, effects: &[Effects]) -> Vec<serde_json::Value> {
-    let factors = design.factors();
-    design
-        .responses
-        .iter()
-        .zip(effects)
-        .map(|(name, e)| {
-            let per: Vec<serde_json::Value> = factors
-                .iter()
-                .enumerate()
-                .map(|(i, f)| {
-                    serde_json::json!({
-                        "factor": f.name,
-                        "levels": f.levels.iter().map(|v| num(*v)).collect::<Vec<_>>(),
-                        "effects": e.effects[i].iter().map(|v| num(*v)).collect::<Vec<_>>(),
-                        "relative_first": num(e.relative_first[i]),
-                    })
-                })
-                .collect();
-            serde_json::json!({
-                "response": name,
-                "mean": num(e.mean),
-                "factors": per,
-            })
-        })
-        .collect()
 }

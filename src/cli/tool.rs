@@ -57,53 +57,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .map_err(|e| miette::miette!("{e}"))?;
     let r = cutter.radius_mm;
     if args.json {
-        let teeth: Vec<serde_json::Value> = a
-            .teeth
-            .iter()
-            .map(|t| {
-                serde_json::json!({
-                    "index": t.index,
-                    "radius_mm": t.radius_mm,
-                    "local_radius_mm": t.local_radius_mm,
-                    "runout_um": t.runout_mm * 1e3,
-                    "axial_deviation_um": t.axial_deviation_mm * 1e3,
-                    "normal_deviation_um": t.normal_deviation_mm * 1e3,
-                    "participates": t.participates,
-                    "participates_paper": t.participates_paper,
-                    "participates_exact": t.participates_exact,
-                    "effective_radius_mm": t.effective_radius_mm,
-                    "cutting_speed_ratio": t.effective_radius_mm / r,
-                    "effective_radius_error_pct": t.effective_radius_error_pct,
-                })
-            })
-            .collect();
-        let out = serde_json::json!({
-            "tool": args.tool.display().to_string(),
-            "shape": cutter.shape.name(),
-            "description": cutter.describe(),
-            "radius_mm": r,
-            "corner_radius_mm": cutter.corner_radius_mm(),
-            "teeth_count": cutter.teeth(),
-            "helix_deg": cutter.helix_rad.to_degrees(),
-            "lead_deg": args.lead_deg,
-            "ap_mm": args.ap_mm,
-            "fz_mm": args.fz_mm,
-            "rule": rule.name(),
-            "effective_radius_mm": a.effective_radius_mm,
-            "cutting_speed_ratio": a.cutting_speed_ratio,
-            "cutting_speed_pct": 100.0 * a.cutting_speed_ratio,
-            "contact_radius_mm": a.contact_radius_mm,
-            "generating_height_mm": a.generating_height_mm,
-            "crest_height_um": a.crest_height_mm * 1e3,
-            "crest_height_corrected_um": a.crest_height_corrected_mm * 1e3,
-            "crest_height_exact_um": a.crest_height_exact_mm * 1e3,
-            "zc": a.zc,
-            "zc_paper": a.zc_paper,
-            "zc_exact": a.zc_exact,
-            "fz_effective_mm": a.fz_effective_mm,
-            "participating_teeth": a.teeth.iter().filter(|t| t.participates).map(|t| t.index).collect::<Vec<_>>(),
-            "teeth": teeth,
-        });
+        let out = crest::pipeline::tool::analysis_json(
+            &cutter,
+            &args.tool.display().to_string(),
+            (args.lead_deg, args.ap_mm, args.fz_mm),
+            rule,
+            &a,
+        );
         outln!("{out}");
         return Ok(Outcome::Ok);
     }

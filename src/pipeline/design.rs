@@ -1,5 +1,6 @@
 //! `crest study`: a designed-experiment file read from disk, its tool loaded (relative to the
-//! design file), every run simulated in parallel and the factor effects computed.
+//! design file), every run simulated in parallel, the factor effects computed and the
+//! outputs of `crest study` rendered.
 
 use crate::io::text::read_text;
 use crate::study::design::{Design, Effects, RunResult, design_effects, run_design};
@@ -13,8 +14,6 @@ use std::path::Path;
 pub struct DesignRun {
     /// The design.
     pub design: Design,
-    /// The tool.
-    pub cutter: Cutter,
     /// One result per run, in run order.
     pub results: Vec<RunResult>,
     /// Factor effects per response, in response order.
@@ -23,17 +22,55 @@ pub struct DesignRun {
 
 /// Read the design `path` and its tool (without running anything).
 pub fn load_design(path: &Path) -> miette::Result<(Design, Cutter)> {
-    let text = read_text(path, "design")?;
-    let file = path.display().to_string();
-    let design = crate::config::design::parse_design(&text, &file)?;
+    let t = load_design_texts(path)?;
+    let design = crate::config::design::parse_design(&t.design_toml, &t.design_file)?;
+    let cutter = tool_of(&t)?;
+    Ok((design, cutter))
+}
+
+/// The texts of a design file and of the tool file it names, with their names: everything a
+/// run needs, so a run can be evaluated where neither file is on disk
+/// ([`super::tasks`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignTexts {
+    /// The design file's name, as given (for messages).
+    pub design_file: String,
+    /// The design file's text.
+    pub design_toml: String,
+    /// The tool file's name (relative to the working directory when read).
+    pub tool_file: String,
+    /// The tool file's text.
+    pub tool_toml: String,
+}
+
+/// Read the design `path` and the tool file it names (relative to the design file).
+pub fn load_design_texts(path: &Path) -> miette::Result<DesignTexts> {
+    let design_toml = read_text(path, "design")?;
+    let design_file = path.display().to_string();
+    let design = crate::config::design::parse_design(&design_toml, &design_file)?;
     let tool_path = path.parent().unwrap_or(Path::new(".")).join(&design.tool);
-    let cutter = super::load_tool(&tool_path).wrap_err_with(|| {
+    let tool_file = tool_path.display().to_string();
+    let tool_toml = read_text(&tool_path, "tool file").wrap_err_with(|| {
         format!(
-            "{file}: cannot read tool file {} (the path is relative to the design file)",
-            tool_path.display()
+            "{design_file}: cannot read tool file {tool_file} (the path is relative to the design file)"
         )
     })?;
-    Ok((design, cutter))
+    Ok(DesignTexts {
+        design_file,
+        design_toml,
+        tool_file,
+        tool_toml,
+    })
+}
+
+/// The cutter of a design's tool text.
+pub fn tool_of(t: &DesignTexts) -> miette::Result<Cutter> {
+    super::tool_from_text(&t.tool_toml, &t.tool_file).wrap_err_with(|| {
+        format!(
+            "{}: cannot read tool file {} (the path is relative to the design file)",
+            t.design_file, t.tool_file
+        )
+    })
 }
 
 /// Run every run of `design` with `cutter` on the current rayon pool (`tick` once per
@@ -45,6 +82,12 @@ pub fn run(
     tick: &(dyn Fn() + Sync),
 ) -> miette::Result<DesignRun> {
     let results = run_design(&design, |p| simulate_run(&design, &cutter, p), tick);
+    finish(design, results, file)
+}
+
+/// A design's results (one per run, in run order) checked and completed with the effects:
+/// fails, naming every failed run, unless all succeeded.
+pub fn finish(design: Design, results: Vec<RunResult>, file: &str) -> miette::Result<DesignRun> {
     let failed: Vec<String> = results
         .iter()
         .filter_map(|r| {
@@ -64,8 +107,108 @@ pub fn run(
     let effects = design_effects(&design, &results);
     Ok(DesignRun {
         design,
-        cutter,
         results,
         effects,
     })
+}
+
+/// The files `crest study` writes for a finished design, rendered in memory, in writing
+/// order: `runs.csv`, `effects.csv`, `effects.svg` (when it has a series) and
+/// `effects-<factor>.svg` for each factor with more than two levels.
+pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>> {
+    use crate::io::tables::{write_effects_csv, write_runs_csv};
+    use crate::plot::effects::{effects_chart, level_chart};
+    use crate::plot::profile::line_chart_svg;
+    let (design, results, effects) = (&done.design, &done.results, &done.effects);
+    let mut files: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut table = |name: &str, f: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
+        let mut buf = Vec::new();
+        f(&mut buf).map_err(|e| miette!("cannot write {name}: {e}"))?;
+        files.push((name.to_string(), buf));
+        Ok::<(), miette::Report>(())
+    };
+    table("runs.csv", &|w| write_runs_csv(design, results, w))?;
+    table("effects.csv", &|w| write_effects_csv(design, effects, w))?;
+    crate::plot::init_fonts();
+    let chart = effects_chart(design, effects);
+    if !chart.series.is_empty() {
+        files.push((
+            "effects.svg".to_string(),
+            crate::plot::effects::bar_chart_svg(&chart)
+                .map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
+        ));
+    }
+    for (i, f) in design.factors().iter().enumerate() {
+        if f.levels.len() <= 2 {
+            continue;
+        }
+        if let Some(c) = level_chart(design, effects, i) {
+            let name = format!("effects-{}.svg", f.name);
+            let svg = line_chart_svg(&c).map_err(|e| miette!("cannot draw {name}: {e}"))?;
+            files.push((name, svg));
+        }
+    }
+    Ok(files)
+}
+
+fn num(v: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+/// One run as the JSON object of `crest study --json` (`run`, `factors`, `tilt_deg`,
+/// `yaw_deg`, `feed_mm_min`, `fz_mm`, `stepover_mm`, `responses`, `error`).
+pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
+    let factors: serde_json::Map<String, serde_json::Value> = design
+        .factors()
+        .iter()
+        .zip(&r.point.values)
+        .map(|(f, v)| (f.name.clone(), num(*v)))
+        .collect();
+    let responses: serde_json::Map<String, serde_json::Value> = design
+        .responses
+        .iter()
+        .zip(&r.responses)
+        .map(|(k, v)| (k.clone(), num(*v)))
+        .collect();
+    serde_json::json!({
+        "run": r.point.run,
+        "factors": factors,
+        "tilt_deg": num(r.point.tilt_deg),
+        "yaw_deg": num(r.point.yaw_deg),
+        "feed_mm_min": num(r.point.feed_mm_min),
+        "fz_mm": num(r.fz_mm),
+        "stepover_mm": num(r.stepover_mm),
+        "responses": responses,
+        "error": r.error,
+    })
+}
+
+/// The effects as the JSON array of `crest study --json`: per response its `mean` and, per
+/// factor, `levels`, `effects` and `relative_first`.
+pub fn effects_json(design: &Design, effects: &[Effects]) -> Vec<serde_json::Value> {
+    let factors = design.factors();
+    design
+        .responses
+        .iter()
+        .zip(effects)
+        .map(|(name, e)| {
+            let per: Vec<serde_json::Value> = factors
+                .iter()
+                .enumerate()
+                .map(|(i, f)| {
+                    serde_json::json!({
+                        "factor": f.name,
+                        "levels": f.levels.iter().map(|v| num(*v)).collect::<Vec<_>>(),
+                        "effects": e.effects[i].iter().map(|v| num(*v)).collect::<Vec<_>>(),
+                        "relative_first": num(e.relative_first[i]),
+                    })
+                })
+                .collect();
+            serde_json::json!({
+                "response": name,
+                "mean": num(e.mean),
+                "factors": per,
+            })
+        })
+        .collect()
 }

@@ -13,3 +13,5 @@ pub mod progress;
 pub mod report;
 pub mod runout;
 pub mod simulate;
+pub mod tasks;
+pub mod tool;

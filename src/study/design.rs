@@ -285,10 +285,19 @@ where
     F: Fn(&RunPoint) -> Result<RunOutput, String> + Sync,
     T: Fn() + Sync,
 {
+    run_points(design, design.runs(), eval, tick)
+}
+
+/// Evaluate the runs `points` of `design` (some of [`Design::runs`], e.g. one shard) with
+/// `eval` in parallel (rayon); results come back in the order of `points`.
+pub fn run_points<F, T>(design: &Design, points: Vec<RunPoint>, eval: F, tick: T) -> Vec<RunResult>
+where
+    F: Fn(&RunPoint) -> Result<RunOutput, String> + Sync,
+    T: Fn() + Sync,
+{
     use rayon::prelude::*;
     let n = design.responses.len();
-    design
-        .runs()
+    points
         .into_par_iter()
         .map(|point| {
             let out = eval(&point);

@@ -18,6 +18,7 @@ mod plot; // `crest plot`: every plot kind, titles and axis labels
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
+mod shard; // `crest study --shard K/N` in separate processes and `crest merge`: the single-process bytes
 mod study; // `crest study`: designed experiments through the whole pipeline, their effects
 mod surface; // z-map and N-buffer: closed forms, patches, R7 trials, properties, `crest simulate`
 mod synth; // `crest synth`: synthetic paths, exact stepovers, CLSF and contact12 outputs

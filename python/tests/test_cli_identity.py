@@ -1,0 +1,211 @@
+"""The package against the crest command line on the same inputs: the same numbers, bit for
+bit where the CLI prints full precision (--json), the same bytes where both write files, and
+the same error messages."""
+
+import json
+import math
+import pickle
+
+import numpy as np
+import pytest
+
+import crest
+from conftest import ROOT, tiny_design
+
+TRIAL3 = ROOT / "samples" / "synth" / "plane-trial3.cls"
+TORUS = ROOT / "samples" / "synth" / "torus-r5-rc1.5.toml"
+WINDOW = (0.0, 0.0, 0.27, 0.2)
+
+
+def norm(text: str) -> str:
+    """A message without white space and the frame of the CLI's diagnostics (which wraps
+    long lines, even inside a path)."""
+    return "".join(text.replace("│", " ").split())
+
+
+@pytest.fixture(scope="module")
+def window_map():
+    return crest.simulate(
+        TRIAL3, tool=TORUS, model="ice", dtheta_deg=2.0, grid_um=10.0, window=WINDOW
+    )
+
+
+def test_read_path_has_the_postures_of_inspect(cli_json):
+    paths = crest.read_path(TRIAL3)
+    j = cli_json("inspect", TRIAL3)
+    assert len(paths) == len(j["paths"])
+    for p, q in zip(paths, j["paths"]):
+        n = p["tip"].shape[0]
+        assert p["tip"].shape == (n, 3) and p["axis"].shape == (n, 3)
+        assert len(p["motion"]) == n and p["line"].shape == (n,)
+        assert np.allclose(np.linalg.norm(p["axis"], axis=1), 1.0, atol=1e-9)
+        assert p["name"] == q["name"]
+        assert n == q["postures"], (n, q)
+        with_contact = int(np.sum(~np.isnan(p["contact"][:, 0])))
+        assert with_contact == q["contact_postures"]
+        assert sum(m == "cut" for m in p["motion"]) == q["cutting_postures"]
+
+
+def test_window_writes_the_bytes_of_crest_simulate(cli, window_map, tmp_path):
+    assert (window_map.nx, window_map.ny) == (28, 21)
+    assert window_map.z_um.shape == (21, 28)
+    assert window_map.dx_um == 10.0 and window_map.origin_mm == (0.0, 0.0)
+    for ext, write in (
+        ("gsf", window_map.to_gsf),
+        ("sdf", window_map.to_sdf),
+        ("csv", window_map.to_csv),
+    ):
+        ours = tmp_path / f"py.{ext}"
+        theirs = tmp_path / f"cli.{ext}"
+        write(ours)
+        p = cli(
+            "simulate", TRIAL3, "--tool", TORUS, "--model", "ice", "--dtheta-deg", "2",
+            "--grid-um", "10", "--window", ",".join(map(str, WINDOW)), "-o", theirs,
+        )
+        assert p.returncode == 0, p.stderr
+        assert ours.read_bytes() == theirs.read_bytes(), ext
+
+
+def test_metrics_are_the_cli_json_to_the_bit(cli_json, window_map, tmp_path):
+    sdf = tmp_path / "w.sdf"
+    window_map.to_sdf(sdf)
+    j = cli_json("metrics", sdf, "--level", "plane")
+    ours = crest.metrics(sdf, level="plane")
+    assert {"Sa", "Sq", "Sz", "Ssk", "Sku"} <= set(ours)
+    assert set(ours) <= set(j)
+    for k, v in ours.items():
+        w = j[k]
+        if w is None:
+            assert math.isnan(v), k
+        else:
+            assert v == w, (k, v, w)  # bit for bit
+    # The same on the map in memory (the SDF keeps float64 heights).
+    again = window_map.metrics(level="plane")
+    read_back = crest.HeightMap.read(sdf)
+    assert np.array_equal(read_back.z_um, window_map.z_um, equal_nan=True)
+    for k in ours:
+        assert again[k] == ours[k] or (math.isnan(again[k]) and math.isnan(ours[k])), k
+
+
+def test_profile_metrics_match_the_cli(cli_json, window_map, tmp_path):
+    sdf = tmp_path / "w.sdf"
+    window_map.to_sdf(sdf)
+    j = cli_json("metrics", sdf, "--profile", "row:10", "--params", "Ra,Rz,Rq")
+    ours = crest.metrics(window_map, "Ra,Rz,Rq", profile="row:10")
+    assert ours == {k: j[k] for k in ("Ra", "Rz", "Rq")}
+
+
+def test_cutter_from_keywords_and_file_agree_and_errors_name_line_and_column(cli, tmp_path):
+    a = crest.Cutter.from_toml(TORUS)
+    b = crest.Cutter.from_text(a.toml, str(TORUS))
+    assert (a.radius_mm, a.teeth) == (b.radius_mm, b.teeth) == (5.0, 1)
+    c = crest.Cutter(shape="ball", radius_mm=5.0, teeth=4, helix_deg=30.0)
+    assert (c.radius_mm, c.teeth) == (5.0, 4)
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text('shape = "ball"\nradius_mm = -5.0\nteeth = 2\nhelix_deg = 0.0\n')
+    with pytest.raises(crest.CrestError) as e:
+        crest.Cutter.from_toml(bad)
+    first = str(e.value).splitlines()[0]
+    assert first.startswith(f"{bad}:2:"), first
+    p = cli("tool", "--tool", bad, "--lead-deg", "15", "--ap-mm", "0.4", "--fz-mm", "0.05")
+    assert p.returncode == 2
+    assert norm(first) in norm(p.stderr), (first, p.stderr)
+    with pytest.raises(crest.CrestError, match="<keyword arguments>:2:"):
+        crest.Cutter(shape="ball", radius_mm=-5.0, teeth=2, helix_deg=0.0)
+
+
+def test_simulate_errors_are_the_cli_messages(cli, tmp_path):
+    bad = tmp_path / "bad.cls"
+    bad.write_text("TOOL PATH/A,TOOL,B\nGOTO/1,2\n")
+    with pytest.raises(crest.CrestError) as e:
+        crest.simulate(bad, tool=TORUS, window=WINDOW, rpm=1000.0, feed_mm_min=100.0)
+    first = str(e.value).splitlines()[0]
+    p = cli("simulate", bad, "--tool", TORUS, "--window", "0,0,0.27,0.2", "--rpm", "1000",
+            "--feed-mm-min", "100", "-o", tmp_path / "x.csv")
+    assert p.returncode == 2
+    assert norm(first) in norm(p.stderr), (first, p.stderr)
+    assert f"{bad}:2:" in first or f"{bad}:2:" in str(e.value), str(e.value)
+
+
+def test_study_tasks_merge_to_the_bytes_of_crest_study(cli, tmp_path):
+    d = tiny_design(tmp_path)
+    out = tmp_path / "cli"
+    p = cli("study", d, "-o", out, "--json")
+    assert p.returncode == 0, p.stderr
+    cli_runs = json.loads(p.stdout)["runs"]
+
+    tasks = crest.study_tasks(str(d))
+    assert [t["run"] for t in tasks] == list(range(1, 7))
+    # Picklable in and out: plain dicts.
+    tasks = [pickle.loads(pickle.dumps(t)) for t in tasks]
+    results = [pickle.loads(pickle.dumps(crest.run_task(t))) for t in reversed(tasks)]
+    merged = crest.merge(results, output=tmp_path / "py")
+    assert merged["runs"] == cli_runs
+    for name in ("runs.csv", "effects.csv", "effects.svg", "effects-feed_mm_min.svg"):
+        assert merged["files"][name] == (out / name).read_bytes(), name
+        assert (tmp_path / "py" / name).read_bytes() == (out / name).read_bytes(), name
+
+    with pytest.raises(crest.CrestError, match="3 of 6 runs are missing: 2, 4, 6"):
+        crest.merge(results[1::2])
+
+
+def test_shard_files_merge_in_python(cli, tmp_path):
+    d = tiny_design(tmp_path)
+    for k in (1, 2):
+        p = cli("study", d, "--shard", f"{k}/2", "-o", tmp_path / "shards")
+        assert p.returncode == 0, p.stderr
+    lines = []
+    for k in (1, 2):
+        lines += (tmp_path / "shards" / f"shard-{k}-of-2.jsonl").read_text().splitlines()
+    merged = crest.merge(lines)
+    p = cli("study", d, "-o", tmp_path / "cli")
+    assert p.returncode == 0, p.stderr
+    assert merged["files"]["runs.csv"] == (tmp_path / "cli" / "runs.csv").read_bytes()
+
+
+def test_tool_analysis_is_the_cli_json(cli_json):
+    tool = ROOT / "samples" / "tools" / "ball-r5-z4-runout.toml"
+    for rule in ("exact", "paper"):
+        j = cli_json("tool", "--tool", tool, "--lead-deg", "15", "--ap-mm", "0.4",
+                     "--fz-mm", "0.05", "--rule", rule)
+        ours = crest.Cutter.from_toml(str(tool)).analyse(15.0, 0.4, 0.05, rule=rule)
+        assert ours == j  # every key, every float to the bit
+
+
+def test_feed_plan_is_the_cli_json(cli_json):
+    cls = ROOT.parent / "shared" / "samples-external" / "nx_circle_times_from.cls"
+    machine = ROOT / "samples" / "machines" / "table1_ac.toml"
+    j = cli_json("feed", cls, "--machine", machine)
+    ours = crest.plan_feed(cls, machine)
+    assert len(ours) == len(j["paths"])
+    assert sum(p["total_time_s"] for p in ours) == j["total_time_s"]
+    for p, q in zip(ours, j["paths"]):
+        assert p["name"] == q["name"]
+        feeds = [r["feed_mm_min"] for r in q["postures"]]
+        assert p["feed_mm_min"].tolist() == feeds
+        assert p["t_s"].tolist() == [r["t_s"] for r in q["postures"]]
+        assert p["line"].tolist() == [r["line"] for r in q["postures"]]
+
+
+def test_resample_is_the_cli_csv(cli, tmp_path):
+    cls = ROOT / "samples" / "clsf" / "ball_lead15_contact.cls"
+    out = tmp_path / "r.csv"
+    args = ["--mode", "dtheta", "--fz-mm", "0.05", "--teeth", "4", "--dtheta-deg", "2"]
+    p = cli("resample", cls, *args, "-o", out)
+    assert p.returncode == 0, p.stderr
+    ours = crest.resample(cls, mode="dtheta", fz_mm=0.05, teeth=4, dtheta_deg=2.0)
+    lines = out.read_text().splitlines()
+    head = lines[0].split(",")
+    rows = [line.split(",") for line in lines[1:]]
+    assert len(rows) == len(ours["s_mm"]) > 100
+    # The CSV prints lengths with 6 decimals, unit vectors and time with 9, feed with 3.
+    decimals = {"t_s": 9, "i": 9, "j": 9, "k": 9, "nx": 9, "ny": 9, "nz": 9,
+                "fx": 9, "fy": 9, "fz": 9, "feed_mm_min": 3}
+    for c, name in enumerate(head):
+        printed = np.array([float(r[c]) if r[c] else np.nan for r in rows])
+        half = 0.5 * 10.0 ** -decimals.get(name, 6)
+        diff = np.abs(ours[name] - printed)
+        assert np.all((diff <= half * (1 + 1e-9)) | (np.isnan(printed) & np.isnan(ours[name]))), name
+    with pytest.raises(crest.CrestError, match="out of range"):
+        crest.resample(cls, mode="fz", fz_mm=0.05, teeth=4, path=9)

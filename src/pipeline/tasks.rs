@@ -1,0 +1,292 @@
+//! Studies split into independent tasks, one run each, for batch schedulers and Dask:
+//! [`design_tasks`] gives the tasks of a designed experiment, [`run_task`] evaluates one
+//! (anywhere: a task carries the texts of its design and tool files), [`merge`] assembles
+//! the results into the [`DesignRun`] that `crest study` renders, bit for bit.
+//!
+//! Tasks and results are plain serde data (JSON objects): `crest study --shard K/N` writes
+//! one shard's results as JSON lines, `crest merge` reads them, and the Python package hands
+//! them to workers as dictionaries. Floats go through JSON as their shortest round-trip
+//! decimal (serde_json's `float_roundtrip` parses them back to the same bits); a missing
+//! value (NaN) is `null`.
+
+use super::design::{DesignRun, DesignTexts, finish, tool_of};
+use crate::study::design::{Design, RunResult};
+use miette::miette;
+use serde::{Deserialize, Serialize};
+
+/// The `kind` of a designed-experiment run.
+pub const DESIGN_RUN: &str = "design-run";
+
+/// One run of a designed experiment, with everything needed to evaluate it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Task {
+    /// What the task is: [`DESIGN_RUN`].
+    pub kind: String,
+    /// The design file's name (for messages).
+    pub design_file: String,
+    /// The design file's text.
+    pub design_toml: String,
+    /// The tool file's name (for messages).
+    pub tool_file: String,
+    /// The tool file's text.
+    pub tool_toml: String,
+    /// Run number, 1-based, in appendix order.
+    pub run: usize,
+    /// Number of runs of the design.
+    pub runs: usize,
+}
+
+/// The outcome of one task: the run's responses or why it failed, with its design (so that
+/// results merge without the files).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskResult {
+    /// What the task was: [`DESIGN_RUN`].
+    pub kind: String,
+    /// The design file's name.
+    pub design_file: String,
+    /// The design file's text.
+    pub design_toml: String,
+    /// Run number, 1-based.
+    pub run: usize,
+    /// Number of runs of the design.
+    pub runs: usize,
+    /// Responses in the design's order (`null` where not finite).
+    pub responses: Vec<Option<f64>>,
+    /// Feed per tooth, mm.
+    pub fz_mm: Option<f64>,
+    /// Pass interval, mm.
+    pub stepover_mm: Option<f64>,
+    /// Why the run failed, if it did.
+    pub error: Option<String>,
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+fn parse(t: &DesignTexts) -> miette::Result<Design> {
+    Ok(crate::config::design::parse_design(
+        &t.design_toml,
+        &t.design_file,
+    )?)
+}
+
+/// The tasks of a design (its texts as [`super::design::load_design_texts`] reads them), one
+/// per run in run order. The design and its tool are checked here, so a task fails only in
+/// its run.
+pub fn design_tasks(t: &DesignTexts) -> miette::Result<Vec<Task>> {
+    let design = parse(t)?;
+    tool_of(t)?;
+    let runs = design.runs().len();
+    Ok((1..=runs)
+        .map(|run| Task {
+            kind: DESIGN_RUN.to_string(),
+            design_file: t.design_file.clone(),
+            design_toml: t.design_toml.clone(),
+            tool_file: t.tool_file.clone(),
+            tool_toml: t.tool_toml.clone(),
+            run,
+            runs,
+        })
+        .collect())
+}
+
+/// Evaluate one task. A run that fails comes back with its `error` (as in `crest study`'s
+/// `runs.csv`); a task that is not valid (unknown kind, a design or tool that does not
+/// parse, a run number out of range) is an error.
+pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
+    if task.kind != DESIGN_RUN {
+        return Err(miette!(
+            "unknown task kind '{}' (expected '{DESIGN_RUN}')",
+            task.kind
+        ));
+    }
+    let texts = DesignTexts {
+        design_file: task.design_file.clone(),
+        design_toml: task.design_toml.clone(),
+        tool_file: task.tool_file.clone(),
+        tool_toml: task.tool_toml.clone(),
+    };
+    let design = parse(&texts)?;
+    let cutter = tool_of(&texts)?;
+    let points = design.runs();
+    if points.len() != task.runs || task.run == 0 || task.run > points.len() {
+        return Err(miette!(
+            "{}: task for run {} of {}, but the design has {} runs",
+            task.design_file,
+            task.run,
+            task.runs,
+            points.len()
+        ));
+    }
+    let point = &points[task.run - 1];
+    let n = design.responses.len();
+    let out = crate::study::run::simulate_run(&design, &cutter, point);
+    let (responses, fz_mm, stepover_mm, error) = match out {
+        Ok(mut o) => {
+            o.responses.resize(n, f64::NAN);
+            (o.responses, o.fz_mm, o.stepover_mm, None)
+        }
+        Err(e) => (vec![f64::NAN; n], f64::NAN, f64::NAN, Some(e)),
+    };
+    Ok(TaskResult {
+        kind: DESIGN_RUN.to_string(),
+        design_file: task.design_file.clone(),
+        design_toml: task.design_toml.clone(),
+        run: task.run,
+        runs: task.runs,
+        responses: responses.into_iter().map(finite).collect(),
+        fz_mm: finite(fz_mm),
+        stepover_mm: finite(stepover_mm),
+        error,
+    })
+}
+
+/// Evaluate shard `k` of `n` of a design in this process (the runs in parallel on the
+/// current rayon pool, `tick` once per finished run): the results of [`run_task`] on each of
+/// the shard's [`shard`] tasks, in run order.
+pub fn run_shard(
+    t: &DesignTexts,
+    k: usize,
+    n: usize,
+    tick: &(dyn Fn() + Sync),
+) -> miette::Result<Vec<TaskResult>> {
+    let design = parse(t)?;
+    let cutter = tool_of(t)?;
+    let all = design.runs();
+    let runs = all.len();
+    let points: Vec<_> = all
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| n > 0 && i % n + 1 == k)
+        .map(|(_, p)| p)
+        .collect();
+    let results = crate::study::design::run_points(
+        &design,
+        points,
+        |p| crate::study::run::simulate_run(&design, &cutter, p),
+        tick,
+    );
+    Ok(results
+        .into_iter()
+        .map(|r| TaskResult {
+            kind: DESIGN_RUN.to_string(),
+            design_file: t.design_file.clone(),
+            design_toml: t.design_toml.clone(),
+            run: r.point.run,
+            runs,
+            responses: r.responses.into_iter().map(finite).collect(),
+            fz_mm: finite(r.fz_mm),
+            stepover_mm: finite(r.stepover_mm),
+            error: r.error,
+        })
+        .collect())
+}
+
+/// The tasks of shard `k` of `n` (1-based): every n-th task from the k-th, so that shards
+/// of a design whose run cost grows along a factor get a fair share.
+pub fn shard(tasks: Vec<Task>, k: usize, n: usize) -> Vec<Task> {
+    tasks
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| n > 0 && i % n + 1 == k)
+        .map(|(_, t)| t)
+        .collect()
+}
+
+/// Parse `K/N` (1 ≤ K ≤ N).
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("'{s}' is not a shard K/N with 1 ≤ K ≤ N (e.g. 2/8)");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let k: usize = k.trim().parse().map_err(|_| bad())?;
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if k == 0 || k > n {
+        return Err(bad());
+    }
+    Ok((k, n))
+}
+
+/// Assemble the results of every task of one design (in any order) into the finished
+/// design `crest study` renders. Fails if the results are of different designs, if a run
+/// is missing or given twice, or (as `crest study`) if a run failed, naming every one.
+pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
+    let first = results
+        .first()
+        .ok_or_else(|| miette!("no task results to merge"))?;
+    if let Some(r) = results.iter().find(|r| r.kind != DESIGN_RUN) {
+        return Err(miette!(
+            "unknown task kind '{}' (expected '{DESIGN_RUN}')",
+            r.kind
+        ));
+    }
+    let (file, text, runs) = (
+        first.design_file.clone(),
+        first.design_toml.clone(),
+        first.runs,
+    );
+    if let Some(r) = results
+        .iter()
+        .find(|r| r.design_toml != text || r.runs != runs)
+    {
+        return Err(miette!(
+            "the results are of different designs: run {} of {} ({}) is not of the design of {file}",
+            r.run,
+            r.design_file,
+            r.runs
+        ));
+    }
+    let design = crate::config::design::parse_design(&text, &file)?;
+    let points = design.runs();
+    if points.len() != runs {
+        return Err(miette!(
+            "{file}: the results count {runs} runs, but the design has {}",
+            points.len()
+        ));
+    }
+    let mut slots: Vec<Option<TaskResult>> = vec![None; runs];
+    for r in results {
+        let run = r.run;
+        let slot = run
+            .checked_sub(1)
+            .and_then(|i| slots.get_mut(i))
+            .ok_or_else(|| miette!("{file}: run {run} is out of range 1..={runs}"))?;
+        if slot.is_some() {
+            return Err(miette!("{file}: run {run} is given twice"));
+        }
+        *slot = Some(r);
+    }
+    let missing: Vec<String> = slots
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.is_none())
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(miette!(
+            "{file}: {} of {runs} runs are missing: {}",
+            missing.len(),
+            missing.join(", ")
+        ));
+    }
+    let n = design.responses.len();
+    let results: Vec<RunResult> = slots
+        .into_iter()
+        .flatten()
+        .zip(points)
+        .map(|(r, point)| {
+            let mut responses: Vec<f64> =
+                r.responses.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
+            responses.resize(n, f64::NAN);
+            RunResult {
+                point,
+                responses,
+                fz_mm: r.fz_mm.unwrap_or(f64::NAN),
+                stepover_mm: r.stepover_mm.unwrap_or(f64::NAN),
+                error: r.error,
+            }
+        })
+        .collect();
+    finish(design, results, &file)
+}
