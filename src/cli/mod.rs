@@ -29,6 +29,7 @@ mod simulate;
 mod study;
 mod synth;
 mod tool;
+mod view;
 
 /// crest: predict the surface a 5-axis ball-end finishing path leaves, from NX CLSF.
 #[derive(Debug, Parser)]
@@ -68,6 +69,8 @@ enum Command {
     Synth(synth::Args),
     /// Run a designed experiment and its factor effects.
     Study(study::Args),
+    /// Write a height map or part map as a self-contained 3-D viewer page (HTML).
+    View(view::Args),
 }
 
 /// How a command ended when it did not fail.
@@ -166,6 +169,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Feed(a) => feed::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Study(a) => study::run(a),
+        Command::View(a) => view::run(a),
     }
 }
 
