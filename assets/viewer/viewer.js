@@ -186,6 +186,7 @@
     const every = D.stride > 1 ? `, every ${D.stride}th of ${D.points} drawn` : '';
     $('source').textContent = `${D.source} · part map, ${D.shown} points${every}; colour: height along the normal`;
     $('profile').style.display = 'none';
+    $('hint').textContent = 'drag: orbit · wheel: zoom · right- or shift-drag: pan';
   }
   let zmin = Infinity;
   let zmax = -Infinity;
@@ -241,6 +242,7 @@
   let cy = 0;
   let cz = 0;
   let size = 1;
+  let diag = 1;
   let exag0 = 1;
   let exag = 1;
   let object;
@@ -261,6 +263,7 @@
     cx = 0.5 * (xs[0] + xs[nx - 1]);
     cy = 0.5 * (ys[0] + ys[ny - 1]);
     size = Math.max(xs[nx - 1] - xs[0], ys[ny - 1] - ys[0], 1e-9);
+    diag = Math.hypot(xs[nx - 1] - xs[0], ys[ny - 1] - ys[0], 0.2 * size);
     exag0 = (0.2 * size) / zspan;
     positions = new Float32Array(nx * ny * 3);
     const colours = new Float32Array(nx * ny * 3);
@@ -307,6 +310,7 @@
     }
     [cx, cy, cz] = [0, 1, 2].map((i) => 0.5 * (lo[i] + hi[i]));
     size = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-9);
+    diag = Math.max(Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]), 1e-9);
     const amax = Math.max(Math.abs(zmin), Math.abs(zmax), 1e-9);
     exag0 = (0.01 * size) / (amax * 1e-3);
     positions = new Float32Array(n * 3);
@@ -355,7 +359,8 @@
   const target = new T.Vector3(0, 0, 0);
   let azimuth = -2.0;
   let polar = 0.95;
-  let radius = 1.9 * size;
+  // Far enough for the bounding box's diagonal to fit the view (field of view 35°).
+  let radius = 1.7 * diag;
   function placeCamera() {
     const s = Math.sin(polar);
     camera.position.set(
@@ -450,9 +455,8 @@
     $('profile-text').textContent =
       `Rz ${fmt(value)} µm over ${fmt(prof.len, 1)} µm (${prof.z.length} samples every ` +
       `${prof.step} µm, 5 sampling lengths, ${basis}).`;
-    $('profile-cmd').textContent = D.full_f64
-      ? `same as: crest metrics ${D.source} --profile ${line} --params Rz`
-      : '';
+    $('profile-cmd').textContent =
+      D.full_f64 && D.file ? `same as: crest metrics ${D.file} --profile ${line} --params Rz` : '';
     // Chart.
     const ch = $('chart');
     const ctx = ch.getContext('2d');

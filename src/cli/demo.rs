@@ -186,8 +186,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let info = crest::report::view::ViewInfo {
         title: "crest demo: simulated surface (ICE model, 10 µm run-out)".into(),
         source: "heightmap.gsf".into(),
+        file: Some("heightmap.gsf".into()),
     };
-    let html = crest::report::view::heightmap_page(map, &info)
+    // The heights as heightmap.gsf stores them (float32), so that a clicked profile's Rz is
+    // the one `crest metrics heightmap.gsf --profile line:…` prints.
+    let stored = crest::io::as_stored(map, crest::io::HeightMapFormat::Gsf)
+        .map_err(|e| miette::miette!("3-D view: {e}"))?;
+    let html = crest::report::view::heightmap_page(&stored, &info)
         .map_err(|e| miette::miette!("3-D view: {e}"))?;
     write_file(&view, |w| w.write_all(html.as_bytes()))?;
     wrote.push((

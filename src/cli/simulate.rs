@@ -285,9 +285,15 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                     .file_name()
                     .map_or_else(|| name.clone(), |n| n.to_string_lossy().into_owned()),
                 source: name.clone(),
+                file: Some(name.clone()),
             };
             let html = match &run.output {
-                Output::Grid(sim) => crest::report::view::heightmap_page(&sim.map, &info),
+                // The heights as the output file stores them (GSF: float32), so that a
+                // clicked profile's Rz is the one `crest metrics OUT --profile …` prints.
+                Output::Grid(sim) => crest::io::HeightMapFormat::from_path(&args.output)
+                    .ok_or_else(|| format!("{name}: unknown height-map extension"))
+                    .and_then(|f| crest::io::as_stored(&sim.map, f))
+                    .and_then(|m| crest::report::view::heightmap_page(&m, &info)),
                 Output::Map(m) => crest::report::view::part_map_page(&m.points, &info),
             };
             Some(html.map_err(|e| miette!("{name}: cannot make the 3-D view: {e}"))?)

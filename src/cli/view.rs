@@ -46,6 +46,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned())
         }),
         source: file.clone(),
+        file: Some(file.clone()),
     };
     let is_ply = args
         .file

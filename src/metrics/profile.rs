@@ -163,7 +163,7 @@ pub fn extract_profile(map: &HeightMap, spec: ProfileSpec) -> Result<Profile, Me
             let (ex, ey) = (x1_um - x0_um, y1_um - y0_um);
             let len = (ex * ex + ey * ey).sqrt();
             let step = map.dx_um.min(map.dy_um);
-            if !(len >= step) {
+            if len.is_nan() || len < step {
                 return Err(MetricsError::BadProfile(format!(
                     "the line from ({x0_um}, {y0_um}) to ({x1_um}, {y1_um}) µm is shorter than one step ({step} µm)"
                 )));

@@ -45,6 +45,9 @@ pub struct ViewInfo {
     pub title: String,
     /// Where the data came from (a file name, a command).
     pub source: String,
+    /// The file holding exactly the embedded heights, if any: the page shows the `crest
+    /// metrics FILE --profile line:…` command that reproduces a clicked profile's Rz.
+    pub file: Option<String>,
 }
 
 /// The block factor that brings `nx × ny` nodes to at most `max_nodes`.
@@ -114,6 +117,7 @@ pub fn heightmap_page(map: &HeightMap, info: &ViewInfo) -> Result<String, String
         "kind": "heightmap",
         "title": info.title,
         "source": info.source,
+        "file": info.file,
         "nx": map.nx,
         "ny": map.ny,
         "dx_um": map.dx_um,
@@ -198,6 +202,7 @@ pub fn regression_pages(
                 z.rz_um
             ),
             source: format!("{} case {}", reg.study_file, i + 1),
+            file: None,
         };
         let html = heightmap_page(&z.map, &info).map_err(|e| format!("case {}: {e}", i + 1))?;
         out.push((format!("view-{}.html", i + 1), html.into_bytes()));
@@ -284,7 +289,7 @@ fn base64(bytes: &[u8]) -> String {
             | u32::from(*c.get(2).unwrap_or(&0));
         for k in 0..4 {
             if k <= c.len() {
-                out.push(ABC[(n >> (18 - 6 * k) & 63) as usize] as char);
+                out.push(ABC[((n >> (18 - 6 * k)) & 63) as usize] as char);
             } else {
                 out.push('=');
             }
@@ -348,6 +353,7 @@ mod tests {
         let info = ViewInfo {
             title: "a </script> & b".into(),
             source: "test".into(),
+            file: None,
         };
         let html = heightmap_page(&m, &info).unwrap();
         assert!(html.contains("<title>a &lt;/script&gt; &amp; b</title>"));
