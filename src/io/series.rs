@@ -62,18 +62,18 @@ fn two_columns(text: &str, name: &str) -> Result<(Vec<f64>, Vec<f64>), SeriesErr
     Ok((xs, ys))
 }
 
+/// Planned feed (mm/min) by tool path name and source line.
+pub type PlannedFeed = HashMap<(String, u32), f64>;
+
 /// The planned feed of `crest feed -o POSES.csv`, by tool path name and source line
 /// (mm/min). `None` when the file is not such a table (no `path`, `line` and
 /// `feed_mm_min` columns in its header).
-pub fn read_planned_feed(path: &Path) -> Result<Option<HashMap<(String, u32), f64>>, SeriesError> {
+pub fn read_planned_feed(path: &Path) -> Result<Option<PlannedFeed>, SeriesError> {
     let text = read_text(path)?;
     planned_feed(&text, &path.display().to_string())
 }
 
-fn planned_feed(
-    text: &str,
-    name: &str,
-) -> Result<Option<HashMap<(String, u32), f64>>, SeriesError> {
+fn planned_feed(text: &str, name: &str) -> Result<Option<PlannedFeed>, SeriesError> {
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(false)

@@ -244,9 +244,9 @@ fn page(title: &str, data: &serde_json::Value) -> String {
          <canvas id=\"chart\" width=\"300\" height=\"150\"></canvas><p id=\"profile-cmd\"></p></div>\
          </aside></div>\n<pre id=\"crest-test\" hidden></pre>\n",
     );
-    let _ = write!(
+    let _ = writeln!(
         s,
-        "<script type=\"application/json\" id=\"crest-data\">{json}</script>\n"
+        "<script type=\"application/json\" id=\"crest-data\">{json}</script>"
     );
     // The error trap comes first so that any error of the library or the page is recorded.
     s.push_str(

@@ -652,7 +652,7 @@ fn sample_study_writes_csv_and_plots() {
     let paper = write(
         dir.path(),
         "paper.toml",
-        &sample
+        sample
             .replace("\nrule = \"exact\"", "\nrule = \"paper\"")
             .replace(
                 "\"../tools/ball-r5-z4-runout.toml\"",
