@@ -30,3 +30,6 @@ sh reports/cutters/regenerate.sh
 # Side by side with surf-topo (issue 23): crest's maps always; the comparison only with
 # surf-topo's own maps in $SURFTOPO_MAPS (the user's step), skipped otherwise.
 sh reports/surf-topo/regenerate.sh
+
+# The 3-D viewer (issue 21): a screenshot of the demo's view.html (needs chromium).
+sh reports/viewer/regenerate.sh

@@ -182,6 +182,23 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     crest::plot::trochoid::plot_trochoids(&cutter, &troch_opts, &troch)
         .map_err(|e| miette::miette!("{}: {e}", troch.display()))?;
     wrote.push((troch, "trochoids of ICE elements (002 Fig 14)".into()));
+    let view = dir.join("view.html");
+    let info = crest::report::view::ViewInfo {
+        title: "crest demo: simulated surface (ICE model, 10 µm run-out)".into(),
+        source: "heightmap.gsf".into(),
+        file: Some("heightmap.gsf".into()),
+    };
+    // The heights as heightmap.gsf stores them (float32), so that a clicked profile's Rz is
+    // the one `crest metrics heightmap.gsf --profile line:…` prints.
+    let stored = crest::io::as_stored(map, crest::io::HeightMapFormat::Gsf)
+        .map_err(|e| miette::miette!("3-D view: {e}"))?;
+    let html = crest::report::view::heightmap_page(&stored, &info)
+        .map_err(|e| miette::miette!("3-D view: {e}"))?;
+    write_file(&view, |w| w.write_all(html.as_bytes()))?;
+    wrote.push((
+        view,
+        "3-D viewer (open in a browser; click two points for a profile and its Rz)".into(),
+    ));
 
     // 7. Short report.
     let mut md = String::new();

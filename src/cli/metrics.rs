@@ -56,9 +56,10 @@ pub struct Args {
     /// End effects of the filters.
     #[arg(long, value_enum, default_value = "reflect")]
     pub ends: Ends,
-    /// Profile instead of areal parameters: `row:K`, `col:K` (0-based) or `angle:DEG`
-    /// (a line through the map centre, CCW from +x).
-    #[arg(long, value_parser = ProfileSpec::parse, value_name = "row:K|col:K|angle:DEG")]
+    /// Profile instead of areal parameters: `row:K`, `col:K` (0-based), `angle:DEG` (a line
+    /// through the map centre, CCW from +x) or `line:X0,Y0,X1,Y1` (the segment between two
+    /// points, µm from the node of column 0, row 0; what `crest view` picks by two clicks).
+    #[arg(long, value_parser = ProfileSpec::parse, value_name = "row:K|col:K|angle:DEG|line:X0,Y0,X1,Y1")]
     pub profile: Option<ProfileSpec>,
     /// Number of sampling lengths for Rp, Rv, Rz.
     #[arg(long, default_value_t = 5, value_name = "N")]
@@ -77,6 +78,12 @@ fn spec_label(s: ProfileSpec) -> String {
         ProfileSpec::Row(k) => format!("row:{k}"),
         ProfileSpec::Col(k) => format!("col:{k}"),
         ProfileSpec::Angle(a) => format!("angle:{a}"),
+        ProfileSpec::Line {
+            x0_um,
+            y0_um,
+            x1_um,
+            y1_um,
+        } => format!("line:{x0_um},{y0_um},{x1_um},{y1_um}"),
     }
 }
 

@@ -30,6 +30,7 @@ mod simulate;
 mod study;
 mod synth;
 mod tool;
+mod view;
 
 /// crest: predict the surface a 5-axis ball-end finishing path leaves, from NX CLSF.
 #[derive(Debug, Parser)]
@@ -71,6 +72,8 @@ enum Command {
     Study(study::Args),
     /// Assemble the shard files of `study --shard K/N` into the outputs of `study`.
     Merge(merge::Args),
+    /// Write a height map or part map as a self-contained 3-D viewer page (HTML).
+    View(view::Args),
 }
 
 /// How a command ended when it did not fail.
@@ -170,6 +173,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Synth(a) => synth::run(a),
         Command::Study(a) => study::run(a),
         Command::Merge(a) => merge::run(a),
+        Command::View(a) => view::run(a),
     }
 }
 

@@ -28,6 +28,11 @@ pub struct Args {
     /// Print one JSON object with every case on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Also write a 3-D viewer page of each case's simulated window, `DIR/view-N.html`
+    /// (N = the case's number; needs `model = "simulate"`, the crest model simulates no
+    /// surface).
+    #[arg(long)]
+    pub view: bool,
 }
 
 /// Run `crest report`.
@@ -46,7 +51,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         command,
     )?;
     // Render everything before writing anything.
-    let files = crest::report::regression::outputs(&reg).map_err(|e| miette!("{e}"))?;
+    let mut files = crest::report::regression::outputs(&reg).map_err(|e| miette!("{e}"))?;
+    if args.view {
+        let pages = crest::report::view::regression_pages(&reg).map_err(|e| miette!("{e}"))?;
+        if pages.is_empty() {
+            return Err(miette!(
+                "{}: --view needs model = \"simulate\" (the crest model simulates no surface)",
+                args.study.display()
+            ));
+        }
+        files.extend(pages);
+    }
     let json = if args.json {
         Some(serde_json::to_string(&reg).into_diagnostic()?)
     } else {

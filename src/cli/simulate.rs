@@ -150,6 +150,10 @@ pub struct Args {
     /// Output: a height map .csv (µm), .gsf or .sdf; a part map (--map-mm) .ply.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
+    /// Also write the result as a self-contained 3-D viewer page (HTML, as `crest view OUT
+    /// -o VIEW.html` would).
+    #[arg(long, value_name = "VIEW.html")]
+    pub view: Option<PathBuf>,
     /// Print one JSON object with the grid, counts, time and height statistics.
     #[arg(long)]
     pub json: bool,
@@ -271,6 +275,31 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     for w in &run.warnings {
         eprintln!("warning: {w}");
     }
+    // The page is rendered before the first output is written.
+    let page = match &args.view {
+        Some(_) => {
+            let name = args.output.display().to_string();
+            let info = crest::report::view::ViewInfo {
+                title: args
+                    .output
+                    .file_name()
+                    .map_or_else(|| name.clone(), |n| n.to_string_lossy().into_owned()),
+                source: name.clone(),
+                file: Some(name.clone()),
+            };
+            let html = match &run.output {
+                // The heights as the output file stores them (GSF: float32), so that a
+                // clicked profile's Rz is the one `crest metrics OUT --profile …` prints.
+                Output::Grid(sim) => crest::io::HeightMapFormat::from_path(&args.output)
+                    .ok_or_else(|| format!("{name}: unknown height-map extension"))
+                    .and_then(|f| crest::io::as_stored(&sim.map, f))
+                    .and_then(|m| crest::report::view::heightmap_page(&m, &info)),
+                Output::Map(m) => crest::report::view::part_map_page(&m.points, &info),
+            };
+            Some(html.map_err(|e| miette!("{name}: cannot make the 3-D view: {e}"))?)
+        }
+        None => None,
+    };
     let heights: Vec<f64> = match &run.output {
         Output::Grid(sim) => {
             crest::io::write_heightmap(&args.output, &sim.map)
@@ -287,6 +316,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             m.points.iter().map(|p| p.height_um).collect()
         }
     };
+    if let (Some(path), Some(html)) = (&args.view, &page) {
+        crest::io::write_atomic(path, |w| w.write_all(html.as_bytes()))
+            .into_diagnostic()
+            .wrap_err_with(|| format!("cannot write {}", path.display()))?;
+    }
     let elapsed = started.elapsed().as_secs_f64();
     let st = crest::metrics::height_stats(&heights);
     let fraction = run.nodes_cut as f64 / run.nodes.max(1) as f64;
@@ -354,6 +388,7 @@ fn summary(
     let (fmin, fmax, fmean) = run.sample_feed_mm_min;
     let mut j = serde_json::json!({
         "output": args.output.display().to_string(),
+        "view": args.view.as_ref().map(|p| p.display().to_string()),
         "model": ModelKind::from(args.model).name(),
         "dtheta_deg": matches!(args.model, ModelName::Ice).then_some(args.dtheta_deg),
         "nodes": run.nodes,

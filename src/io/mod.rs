@@ -300,6 +300,18 @@ pub fn write_heightmap_to(
     }
 }
 
+/// The map as a file of `format` stores it (written and parsed back in memory): what a later
+/// `crest metrics FILE` reads, e.g. float32 heights for GSF.
+pub fn as_stored(map: &HeightMap, format: HeightMapFormat) -> Result<HeightMap, String> {
+    let mut bytes = Vec::new();
+    write_heightmap_to(&mut bytes, format, map).map_err(|e| e.to_string())?;
+    let opts = ReadOptions {
+        dx_um: Some(map.dx_um),
+        dy_um: Some(map.dy_um),
+    };
+    parse_heightmap(&bytes, format, &opts).map_err(|e| e.to_string())
+}
+
 /// Parse one number of a text format; `NaN`, `nan`, `NA`, `N/A` and empty mean missing.
 pub(crate) fn parse_value(s: &str) -> Option<f64> {
     let t = s.trim();

@@ -1,9 +1,13 @@
 //! Profiles through a height map and their ISO 4287 / ISO 21920-2 parameters.
 //!
-//! A profile is a row (`row:K`, along x), a column (`col:K`, along y) or a straight line at
+//! A profile is a row (`row:K`, along x), a column (`col:K`, along y), a straight line at
 //! any angle through the centre of the map (`angle:DEG`, counter-clockwise from +x, y = row
-//! index ascending), sampled every `min(dx, dy)` with bilinear interpolation (a sample is
-//! missing when one of its four nodes is).
+//! index ascending) or the segment between two points (`line:X0,Y0,X1,Y1`, µm from the node
+//! of column 0, row 0: the profile `crest view` picks by two clicks), sampled every
+//! `min(dx, dy)` with bilinear interpolation (a sample is missing when one of its four nodes
+//! is; points outside the map are clamped to its border). A `line:` profile starts at the
+//! first point and has `floor(L / step + 1e-9) + 1` samples at `t = k · step` along it
+//! (`L = sqrt(Δx² + Δy²)`), so it ends within one step of the second point.
 //!
 //! Parameters over the evaluation length, heights relative to the mean line: Ra, Rq, Rsk,
 //! Rku, Rt (whole length), Rdq (forward differences), and Rp, Rv, Rz as the mean over
@@ -25,14 +29,26 @@ pub enum ProfileSpec {
     Col(usize),
     /// Line through the map centre at this angle, degrees CCW from +x.
     Angle(f64),
+    /// Segment from (x0, y0) to (x1, y1), µm from the node of column 0, row 0.
+    Line {
+        /// Start, x, µm.
+        x0_um: f64,
+        /// Start, y, µm.
+        y0_um: f64,
+        /// End, x, µm.
+        x1_um: f64,
+        /// End, y, µm.
+        y1_um: f64,
+    },
 }
 
 impl ProfileSpec {
-    /// Parse `row:K`, `col:K` or `angle:DEG`.
+    /// Parse `row:K`, `col:K`, `angle:DEG` or `line:X0,Y0,X1,Y1` (µm).
     pub fn parse(s: &str) -> Result<ProfileSpec, String> {
+        const EXPECTED: &str = "expected row:K, col:K, angle:DEG or line:X0,Y0,X1,Y1";
         let (kind, val) = s
             .split_once(':')
-            .ok_or_else(|| format!("expected row:K, col:K or angle:DEG, found {s:?}"))?;
+            .ok_or_else(|| format!("{EXPECTED}, found {s:?}"))?;
         match kind.trim().to_ascii_lowercase().as_str() {
             "row" => val
                 .trim()
@@ -51,7 +67,21 @@ impl ProfileSpec {
                 .filter(|a| a.is_finite())
                 .map(ProfileSpec::Angle)
                 .ok_or_else(|| format!("bad angle {val:?}")),
-            _ => Err(format!("expected row:K, col:K or angle:DEG, found {s:?}")),
+            "line" => {
+                let v: Vec<f64> = val
+                    .split(',')
+                    .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+                    .collect::<Option<_>>()
+                    .filter(|v: &Vec<f64>| v.len() == 4)
+                    .ok_or_else(|| format!("bad line {val:?} (expected X0,Y0,X1,Y1 in µm)"))?;
+                Ok(ProfileSpec::Line {
+                    x0_um: v[0],
+                    y0_um: v[1],
+                    x1_um: v[2],
+                    y1_um: v[3],
+                })
+            }
+            _ => Err(format!("{EXPECTED}, found {s:?}")),
         }
     }
 }
@@ -120,6 +150,34 @@ pub fn extract_profile(map: &HeightMap, spec: ProfileSpec) -> Result<Profile, Me
                     let x = (w / 2.0 + t * c) / map.dx_um;
                     let y = (h / 2.0 + t * s) / map.dy_um;
                     bilinear(map, x, y)
+                })
+                .collect();
+            Ok(Profile { z, step_um: step })
+        }
+        ProfileSpec::Line {
+            x0_um,
+            y0_um,
+            x1_um,
+            y1_um,
+        } => {
+            let (ex, ey) = (x1_um - x0_um, y1_um - y0_um);
+            let len = (ex * ex + ey * ey).sqrt();
+            let step = map.dx_um.min(map.dy_um);
+            if len.is_nan() || len < step {
+                return Err(MetricsError::BadProfile(format!(
+                    "the line from ({x0_um}, {y0_um}) to ({x1_um}, {y1_um}) µm is shorter than one step ({step} µm)"
+                )));
+            }
+            let (c, s) = (ex / len, ey / len);
+            let n = (len / step + 1e-9).floor() as usize + 1;
+            let z = (0..n)
+                .map(|k| {
+                    let t = k as f64 * step;
+                    bilinear(
+                        map,
+                        (x0_um + t * c) / map.dx_um,
+                        (y0_um + t * s) / map.dy_um,
+                    )
                 })
                 .collect();
             Ok(Profile { z, step_um: step })
@@ -304,6 +362,17 @@ mod tests {
             ProfileSpec::parse("angle:-30"),
             Ok(ProfileSpec::Angle(-30.0))
         );
+        assert_eq!(
+            ProfileSpec::parse("line:0,1.5,20,-3e1"),
+            Ok(ProfileSpec::Line {
+                x0_um: 0.0,
+                y0_um: 1.5,
+                x1_um: 20.0,
+                y1_um: -30.0
+            })
+        );
+        assert!(ProfileSpec::parse("line:0,1,2").is_err());
+        assert!(ProfileSpec::parse("line:0,1,2,nan").is_err());
         assert!(ProfileSpec::parse("diag:1").is_err());
         assert!(ProfileSpec::parse("row:-1").is_err());
     }
@@ -320,6 +389,26 @@ mod tests {
         assert_eq!(p.z.len(), 21);
         assert!((p.z[0] - 5.0).abs() < 1e-12 && (p.z[20] - 15.0).abs() < 1e-12);
         assert!(extract_profile(&m, ProfileSpec::Row(11)).is_err());
+    }
+
+    #[test]
+    fn line_profile_of_a_plane_is_linear_and_starts_at_the_first_point() {
+        let (nx, ny) = (21, 11);
+        let z = (0..nx * ny)
+            .map(|k| (k % nx) as f64 * 0.5 + (k / nx) as f64)
+            .collect();
+        let m = HeightMap::from_rows(nx, ny, 0.5, 1.0, z).unwrap();
+        // From (1, 2) to (9, 8) µm: length 10, 21 samples every 0.5 µm; height = x + y.
+        let spec = ProfileSpec::parse("line:1,2,9,8").unwrap();
+        let p = extract_profile(&m, spec).unwrap();
+        assert_eq!((p.z.len(), p.step_um), (21, 0.5));
+        for (k, v) in p.z.iter().enumerate() {
+            let t = k as f64 * 0.5;
+            let want = 1.0 + 0.8 * t + 2.0 + 0.6 * t;
+            assert!((v - want).abs() < 1e-12, "{k}: {v} against {want}");
+        }
+        let short = ProfileSpec::parse("line:1,1,1.2,1").unwrap();
+        assert!(extract_profile(&m, short).is_err());
     }
 
     #[test]

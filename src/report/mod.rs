@@ -1,4 +1,6 @@
-//! Reports: the regression report against a measured table as Markdown and HTML. Rendering
-//! only: the numbers come from [`crate::study`], the charts from [`crate::plot`].
+//! Reports: the regression report against a measured table as Markdown and HTML, and the
+//! 3-D viewer page of a height map or a part map. Rendering only: the numbers come from
+//! [`crate::study`] and [`crate::metrics`], the charts from [`crate::plot`].
 
 pub mod regression;
+pub mod view;

@@ -359,6 +359,9 @@ pub struct ZmapPrediction {
     pub pv_um: f64,
     /// Grid nodes computed.
     pub nodes: usize,
+    /// The simulated window (for the 3-D viewer; not printed).
+    #[serde(skip)]
+    pub map: crate::surface::HeightMap,
 }
 
 /// The `simulate` model: one straight pass along +x over the plane z = 0, the tool axis
@@ -428,6 +431,7 @@ pub fn simulate_case(
         ra_um: ra,
         pv_um: hi - lo,
         nodes: sim.nodes_cut,
+        map: map.clone(),
     })
 }
 

@@ -23,4 +23,5 @@ mod study; // `crest study`: designed experiments through the whole pipeline, th
 mod surface; // z-map and N-buffer: closed forms, patches, R7 trials, properties, `crest simulate`
 mod synth; // `crest synth`: synthetic paths, exact stepovers, CLSF and contact12 outputs
 mod tool; // cutters: model.md R1-R3, properties, `crest tool`, `crest runout`
-mod util; // helpers written once: commands, paths, files, JSON/CSV outputs, passes, generators
+mod util;
+mod viewer; // `crest view`: the 3-D viewer page in headless Chromium, `simulate --view` // helpers written once: commands, paths, files, JSON/CSV outputs, passes, generators
