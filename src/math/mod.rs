@@ -5,6 +5,8 @@
 
 use nalgebra as na;
 
+pub mod rng;
+
 /// A point in a Cartesian frame, mm.
 pub type Point3 = na::Point3<f64>;
 /// A vector in a Cartesian frame.
