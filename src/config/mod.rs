@@ -19,7 +19,7 @@ pub mod tool;
 pub use machine::MachineError;
 pub use process::ProcessConfig;
 pub use tool::{
-    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, load_tool_toml,
+    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, load_tool_min_chip, load_tool_toml,
     parse_tool_config,
 };
 
