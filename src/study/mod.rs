@@ -10,6 +10,7 @@
 pub mod brammertz;
 pub mod design;
 pub mod measured;
+pub mod montecarlo;
 pub mod regression;
 pub mod run;
 pub mod runout;
