@@ -83,18 +83,19 @@ impl EffectsFile {
         tool_min_chip_mm: Option<f64>,
     ) -> Result<crate::surface::Process, ConfigError> {
         let at = |v: &Spanned<f64>, m: String| ConfigError::at(file, text, v.span().start, m);
-        let get = |key: &str, v: &Option<Spanned<f64>>, lo: f64, hi: f64, open_lo: bool| {
-            match v {
-                None => Ok(None),
-                Some(s) => {
-                    let x = *s.get_ref();
-                    let ok = x.is_finite() && x <= hi && if open_lo { x > lo } else { x >= lo };
-                    if ok {
-                        Ok(Some(x))
-                    } else {
-                        let lo_s = if open_lo { ">" } else { "≥" };
-                        Err(at(s, format!("{key} must be {lo_s} {lo} and ≤ {hi}, got {x}")))
-                    }
+        let get = |key: &str, v: &Option<Spanned<f64>>, lo: f64, hi: f64, open_lo: bool| match v {
+            None => Ok(None),
+            Some(s) => {
+                let x = *s.get_ref();
+                let ok = x.is_finite() && x <= hi && if open_lo { x > lo } else { x >= lo };
+                if ok {
+                    Ok(Some(x))
+                } else {
+                    let lo_s = if open_lo { ">" } else { "≥" };
+                    Err(at(
+                        s,
+                        format!("{key} must be {lo_s} {lo} and ≤ {hi}, got {x}"),
+                    ))
                 }
             }
         };
@@ -252,7 +253,10 @@ mod tests {
         let err = ProcessConfig::parse("rpm = 1\nrecovery = 1.5\n", "p.toml")
             .unwrap_err()
             .to_string();
-        assert!(err.contains("p.toml:2:12") && err.contains("recovery"), "{err}");
+        assert!(
+            err.contains("p.toml:2:12") && err.contains("recovery"),
+            "{err}"
+        );
     }
 
     #[test]

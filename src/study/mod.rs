@@ -8,6 +8,7 @@
 //! order, so the results do not depend on the thread count.
 
 pub mod brammertz;
+pub mod calibrate;
 pub mod design;
 pub mod measured;
 pub mod montecarlo;

@@ -192,6 +192,85 @@ where
         .collect())
 }
 
+/// The bands of one case of a regression study.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseBands {
+    /// Lead angle, degrees.
+    pub lead_deg: f64,
+    /// Curvature side.
+    pub side: super::measured::Side,
+    /// Rz band, µm.
+    pub rz: Band,
+    /// Ra band, µm.
+    pub ra: Band,
+    /// The deterministic Rz and Ra, µm (nominal inputs, spindle phase 0).
+    pub deterministic_um: (f64, f64),
+}
+
+/// Monte Carlo bands of every case of `study`: per sample the run-out perturbed by the
+/// study's `[uncertainty]`, the spindle phase drawn (simulate model), and, with a
+/// calibration, the free parameters drawn from its covariance (times `parameter_scale`).
+pub fn case_bands(
+    study: &super::regression::Study,
+    cutter: &Cutter,
+    calibration: Option<(&super::calibrate::Calibration, &[super::calibrate::Free])>,
+    n: usize,
+    seed: u64,
+) -> Result<Vec<CaseBands>, String> {
+    use super::calibrate::apply;
+    use super::regression::predict_case;
+    let u = study.uncertainty;
+    let (process, base) = match calibration {
+        Some((cal, free)) => apply(free, &cal.values(), &study.process, cutter),
+        None => (study.process, cutter.clone()),
+    };
+    let det: Vec<(f64, f64)> = study
+        .cases
+        .iter()
+        .map(|c| predict_case(study, &base, c, &process, 0.0).map(|p| (p.rz_um, p.ra_um)))
+        .collect::<Result<_, _>>()?;
+    let b = bands(n, seed, |rng| {
+        let (p, c) = match calibration {
+            Some((cal, free)) => {
+                let x = draw_parameters(
+                    &cal.values(),
+                    &cal.covariance,
+                    u.parameter_scale,
+                    &cal.bounds,
+                    rng,
+                );
+                apply(free, &x, &study.process, cutter)
+            }
+            None => (study.process, cutter.clone()),
+        };
+        let c = perturb_cutter(&c, &u, rng);
+        let mut out = Vec::with_capacity(2 * study.cases.len());
+        for case in &study.cases {
+            let phase = if u.spindle_phase {
+                std::f64::consts::TAU * rng.uniform()
+            } else {
+                0.0
+            };
+            let pr = predict_case(study, &c, case, &p, phase)?;
+            out.push(pr.rz_um);
+            out.push(pr.ra_um);
+        }
+        Ok(out)
+    })?;
+    Ok(study
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| CaseBands {
+            lead_deg: c.lead_deg,
+            side: c.side,
+            rz: b[2 * i],
+            ra: b[2 * i + 1],
+            deterministic_um: det[i],
+        })
+        .collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

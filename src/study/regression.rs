@@ -740,6 +740,33 @@ pub struct Regression {
     pub cases: Vec<CaseResult>,
     /// Every case passes.
     pub pass: bool,
+    /// Process effects of the study (what the simulated columns include).
+    pub process: Process,
+    /// The calibration (`--free`); then a case passes on its leave-one-out prediction.
+    pub calibration: Option<super::calibrate::Calibration>,
+    /// Monte Carlo bands per case (`--monte-carlo`).
+    pub monte_carlo: Option<Vec<super::montecarlo::CaseBands>>,
+}
+
+/// Attach a calibration to `reg` and judge every case by its leave-one-out prediction alone
+/// (never by the in-sample fit): a case passes when each parameter's leave-one-out value is
+/// within the tolerance of the measured mean.
+pub fn judge_by_loo(reg: &mut Regression, cal: super::calibrate::Calibration) {
+    for c in &mut reg.cases {
+        let mut pass = true;
+        for k in &c.comparisons {
+            let loo = cal.cases.iter().find(|x| {
+                x.lead_deg == c.lead_deg && x.side == c.side && x.parameter == k.parameter
+            });
+            let ok = loo.is_some_and(|x| {
+                (100.0 * (x.loo_um - x.measured_um) / x.measured_um).abs() <= reg.tolerance_pct
+            });
+            pass &= ok;
+        }
+        c.pass = pass;
+    }
+    reg.pass = reg.cases.iter().all(|c| c.pass);
+    reg.calibration = Some(cal);
 }
 
 /// Inputs of [`regress`] besides the parsed files.
@@ -839,6 +866,9 @@ pub fn regress(
         version: env!("CARGO_PKG_VERSION").to_string(),
         cases,
         pass,
+        process: study.process,
+        calibration: None,
+        monte_carlo: None,
     })
 }
 

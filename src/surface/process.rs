@@ -21,7 +21,7 @@ use std::f64::consts::TAU;
 pub const TEXTURE_MODES: usize = 256;
 
 /// A seeded Gaussian random texture added to the surface.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Texture {
     /// Standard deviation of the heights, mm.
     pub sq_mm: f64,
@@ -32,7 +32,7 @@ pub struct Texture {
 }
 
 /// The process effects of a simulation (all off by default).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Process {
     /// Minimum uncut chip thickness h_min, mm (0 = every pass cuts: the geometric surface).
     pub min_chip_mm: f64,

@@ -9,8 +9,8 @@ mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malform
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
-mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo
 mod plot; // `crest plot`: every plot kind, titles and axis labels
+mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
