@@ -412,6 +412,32 @@ impl ToolConfig {
     }
 }
 
+/// The `tool.toml` document `text` with its `[runout]` table replaced by one holding only
+/// `tooth_radius_deviation_um = devs_um` (an identified run-out, ready to re-simulate).
+pub fn with_tooth_deviations(text: &str, devs_um: &[f64]) -> String {
+    let mut out = String::new();
+    let mut skip = false;
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with('[') {
+            skip = t.starts_with("[runout]");
+        }
+        if !skip {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    let list: Vec<String> = devs_um
+        .iter()
+        .map(|d| crate::math::trim_decimals(*d, 4))
+        .collect();
+    out.push_str(&format!(
+        "\n[runout]\ntooth_radius_deviation_um = [{}]\n",
+        list.join(", ")
+    ));
+    out
+}
+
 /// Read a `tool.toml` document into a [`Cutter`] (lengths mm, angles rad).
 ///
 /// ```

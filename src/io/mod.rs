@@ -21,6 +21,7 @@ mod xyz;
 
 pub mod measured;
 pub mod mesh;
+pub mod profile_csv;
 pub mod tables;
 pub mod text;
 pub mod toolpath;

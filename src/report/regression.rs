@@ -504,11 +504,10 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     s
 }
 
-/// Every file of a report, rendered in memory: `rz.svg` and `ra.svg` (for the parameters the
-/// table has), `report.html` and `report.md`, as `(file name, bytes)`.
 pub use super::calibration::{calibration_csv, calibration_json};
 
-/// Render every output of a report in memory: the plots, `report.html` and `report.md`.
+/// Every file of a report, rendered in memory: `rz.svg` and `ra.svg` (for the parameters the
+/// table has), `report.html` and `report.md`, as `(file name, bytes)`.
 pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, String> {
     let mut plots: Vec<(String, String, String)> = Vec::new(); // (file, caption, svg)
     for (param, file) in [("Rz", "rz.svg"), ("Ra", "ra.svg")] {

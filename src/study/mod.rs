@@ -10,6 +10,7 @@
 pub mod brammertz;
 pub mod calibrate;
 pub mod design;
+pub mod identify;
 pub mod measured;
 pub mod montecarlo;
 pub mod regression;
