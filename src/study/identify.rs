@@ -5,9 +5,9 @@
 //!
 //! Model: the profile is the lower envelope of the tool's feed profile (arcs of radius R for
 //! a ball end) centred every fz at x0 + m·fz, mark m made by tooth m mod Z and lowered by that
-//! tooth's depth d_j. For a trial x0 every d_j is read off the profile at its marks' centres
-//! (a tooth that cuts has its lowest point there; one that does not leaves a higher profile,
-//! so the value is a lower bound of its setback); x0 is chosen by the least residual.
+//! tooth's depth d_j. For a trial x0 every d_j is the least depth that keeps the tooth's arcs
+//! on or above the profile (for a tooth that cuts, its own depth; for one that leaves no mark,
+//! the bound of its setback); x0 is chosen by the least residual.
 
 use crate::tool::{Cutter, FeedProfile, feed_profile};
 use serde::Serialize;
@@ -113,19 +113,29 @@ pub fn identify(
     let m0 = (a / fz_mm).floor() as i64 - 2 * nt as i64 - 1;
     let m1 = (b / fz_mm).ceil() as i64 + 2 * nt as i64 + 1;
     let class = |m: i64| m.rem_euclid(nt as i64) as usize;
+    // d_j: the least depth that keeps every mark of tooth j on or above the profile (for a
+    // tooth that cuts, its own depth; for one that does not, the bound of its setback).
+    let reach = (nt as f64 + 1.0) * fz_mm;
     let depths = |x0: f64| -> Vec<f64> {
-        let mut d = vec![f64::INFINITY; nt];
+        let mut d = vec![f64::NEG_INFINITY; nt];
         for m in m0..=m1 {
             let c = x0 + m as f64 * fz_mm;
-            if c >= a && c <= b {
-                let j = class(m);
-                d[j] = d[j].min(interp(&xs, &zs, c));
+            if c < a || c > b {
+                continue;
+            }
+            let j = class(m);
+            let i0 = grid.partition_point(|x| *x < c - reach);
+            let i1 = grid.partition_point(|x| *x <= c + reach);
+            for i in i0..i1 {
+                let h = profile.height(grid[i] - c);
+                if h.is_finite() {
+                    d[j] = d[j].max(zg[i] - h);
+                }
             }
         }
         let top = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         d.iter().map(|v| if v.is_finite() { *v } else { top }).collect()
     };
-    let reach = (nt as f64 + 1.0) * fz_mm;
     let envelope = |x0: f64, d: &[f64], x: f64| -> (f64, usize) {
         let lo = ((x - reach - x0) / fz_mm).floor() as i64;
         let hi = ((x + reach - x0) / fz_mm).ceil() as i64;
@@ -169,34 +179,28 @@ pub fn identify(
     let x0 = 0.5 * (lo + hi);
     let d = depths(x0);
     let res = residual(x0, &d);
-    // Which classes cut: the envelope is theirs somewhere on the grid.
+    // A class cuts where its mark is the envelope, lower than every other mark by more than
+    // the fit's residual (and 1 nm).
+    let margin = (2.0 * res).max(1e-6);
     let mut cuts = vec![false; nt];
     for &x in &grid {
-        let (_, j) = envelope(x0, &d, x);
-        cuts[j] = true;
-    }
-    // A class whose mark bottom is not the envelope at its centre does not cut.
-    let tol = (res * 2.0).max(1e-6);
-    for (j, cut) in cuts.iter_mut().enumerate() {
-        if *cut {
-            let mut own = false;
-            for m in m0..=m1 {
-                if class(m) != j {
-                    continue;
+        let lo = ((x - reach - x0) / fz_mm).floor() as i64;
+        let hi = ((x + reach - x0) / fz_mm).ceil() as i64;
+        let (mut b1, mut b2, mut j1) = (f64::INFINITY, f64::INFINITY, 0);
+        for m in lo..=hi {
+            let v = profile.height(x - x0 - m as f64 * fz_mm) + d[class(m)];
+            if v < b1 {
+                if class(m) != j1 {
+                    b2 = b1;
                 }
-                let c = x0 + m as f64 * fz_mm;
-                if c < a || c > b {
-                    continue;
-                }
-                let mut others = f64::INFINITY;
-                for q in m - nt as i64..=m + nt as i64 {
-                    if q != m {
-                        others = others.min(profile.height(c - x0 - q as f64 * fz_mm) + d[class(q)]);
-                    }
-                }
-                own |= d[j] < others - tol.min(1e-4);
+                b1 = v;
+                j1 = class(m);
+            } else if v < b2 && class(m) != j1 {
+                b2 = v;
             }
-            *cut = own;
+        }
+        if b2 - b1 > margin {
+            cuts[j1] = true;
         }
     }
     // Tooth 1 = the deepest class; the others in cutting order after it.
