@@ -134,7 +134,10 @@ fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
             .iter()
             .map(|d| format!("{d:.3}"))
             .collect();
-        outln!("tooth deviations (µm, tooth 1 = deepest): {}", devs.join(" / "));
+        outln!(
+            "tooth deviations (µm, tooth 1 = deepest): {}",
+            devs.join(" / ")
+        );
         match (id.offset_um, id.phase_deg) {
             (Some(e), Some(p)) => outln!("offset {e:.3} µm at {p:.1}°"),
             _ => outln!("offset and phase: not identifiable from this profile"),

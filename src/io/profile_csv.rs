@@ -18,7 +18,10 @@ pub fn parse_profile_csv(text: &str, file: &str) -> miette::Result<(Vec<f64>, Ve
         if t.is_empty() || t.starts_with('#') {
             continue;
         }
-        let cols: Vec<&str> = t.split([',', ';', '\t', ' ']).filter(|c| !c.is_empty()).collect();
+        let cols: Vec<&str> = t
+            .split([',', ';', '\t', ' '])
+            .filter(|c| !c.is_empty())
+            .collect();
         let nums: Option<Vec<f64>> = cols.iter().take(2).map(|c| c.parse::<f64>().ok()).collect();
         match nums {
             Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => {
@@ -35,7 +38,9 @@ pub fn parse_profile_csv(text: &str, file: &str) -> miette::Result<(Vec<f64>, Ve
         }
     }
     if xs.len() < 2 {
-        return Err(miette::miette!("{file}: the profile has fewer than two points"));
+        return Err(miette::miette!(
+            "{file}: the profile has fewer than two points"
+        ));
     }
     Ok((xs, zs))
 }

@@ -134,7 +134,9 @@ pub fn identify(
             }
         }
         let top = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        d.iter().map(|v| if v.is_finite() { *v } else { top }).collect()
+        d.iter()
+            .map(|v| if v.is_finite() { *v } else { top })
+            .collect()
     };
     let envelope = |x0: f64, d: &[f64], x: f64| -> (f64, usize) {
         let lo = ((x - reach - x0) / fz_mm).floor() as i64;
@@ -204,9 +206,7 @@ pub fn identify(
         }
     }
     // Tooth 1 = the deepest class; the others in cutting order after it.
-    let j1 = (0..nt)
-        .min_by(|&p, &q| d[p].total_cmp(&d[q]))
-        .unwrap_or(0);
+    let j1 = (0..nt).min_by(|&p, &q| d[p].total_cmp(&d[q])).unwrap_or(0);
     let order: Vec<usize> = (0..nt).map(|k| (j1 + k) % nt).collect();
     let dev_um: Vec<f64> = order.iter().map(|&j| -(d[j] - d[j1]) * 1e3).collect();
     let cutting: Vec<usize> = order
@@ -222,8 +222,7 @@ pub fn identify(
         .find(|&k| {
             (0..nt).all(|i| {
                 let (p, q) = (order[i], order[(i + k) % nt]);
-                cuts[p] == cuts[q]
-                    && (!cuts[p] || ((d[p] - d[q]) * 1e3).abs() <= dtol)
+                cuts[p] == cuts[q] && (!cuts[p] || ((d[p] - d[q]) * 1e3).abs() <= dtol)
             })
         })
         .unwrap_or(nt);

@@ -81,7 +81,9 @@ fn runout_identification_recovers_period_teeth_and_rz() {
     use crest::math::rng::Rng;
     use crest::study::measured::Side;
     use crest::study::regression::crest_model;
-    use crest::tool::{Cutter, Rule, Shape, generating_height_mm, mark_positions_mm, normal_deviation_mm};
+    use crest::tool::{
+        Cutter, Rule, Shape, generating_height_mm, mark_positions_mm, normal_deviation_mm,
+    };
     let fz = 0.05;
     let mut rng = Rng::new(16);
     let mut seen = [false; 5];
@@ -101,7 +103,9 @@ fn runout_identification_recovers_period_teeth_and_rz() {
         cutter.runout.offset_phase_rad = phase_deg.to_radians();
         let lead = lead_deg.to_radians();
         let zc = generating_height_mm(&cutter, lead);
-        let dev: Vec<f64> = (0..4).map(|j| normal_deviation_mm(&cutter, j, zc, lead)).collect();
+        let dev: Vec<f64> = (0..4)
+            .map(|j| normal_deviation_mm(&cutter, j, zc, lead))
+            .collect();
         let pos = mark_positions_mm(&cutter, fz);
         let period = 4.0 * fz;
         let r = 5.0;
@@ -143,19 +147,29 @@ fn runout_identification_recovers_period_teeth_and_rz() {
         // Truth, relabelled: tooth 1 = the deepest (largest deviation), then cutting order.
         let j1 = (0..4).max_by(|&a, &b| dev[a].total_cmp(&dev[b])).unwrap();
         let order: Vec<usize> = (0..4).map(|k| (j1 + k) % 4).collect();
-        let want: Vec<usize> = (0..4).filter(|k| truth_cut[order[*k]]).map(|k| k + 1).collect();
-        assert_eq!(id.teeth_cutting, want, "e {e_um} φ {phase_deg} lead {lead_deg}: {id:?}");
+        let want: Vec<usize> = (0..4)
+            .filter(|k| truth_cut[order[*k]])
+            .map(|k| k + 1)
+            .collect();
+        assert_eq!(
+            id.teeth_cutting, want,
+            "e {e_um} φ {phase_deg} lead {lead_deg}: {id:?}"
+        );
         seen[want.len()] = true;
         let kmin = [1usize, 2, 4]
             .into_iter()
             .find(|&k| {
                 (0..4).all(|i| {
                     let (p, q) = (order[i], order[(i + k) % 4]);
-                    truth_cut[p] == truth_cut[q] && (!truth_cut[p] || (dev[p] - dev[q]).abs() < 1e-7)
+                    truth_cut[p] == truth_cut[q]
+                        && (!truth_cut[p] || (dev[p] - dev[q]).abs() < 1e-7)
                 })
             })
             .unwrap();
-        assert!((id.period_mm - kmin as f64 * fz).abs() < 1e-12, "{id:?} want {kmin}");
+        assert!(
+            (id.period_mm - kmin as f64 * fz).abs() < 1e-12,
+            "{id:?} want {kmin}"
+        );
         // Re-simulate with the identified deviations (tooth 1 = the deepest).
         let mut re = Cutter::new(Shape::Ball, 5.0, 4, 30f64.to_radians());
         re.runout.tooth_radius_dev_mm = id.tooth_deviation_um.iter().map(|d| d * 1e-3).collect();
