@@ -3,7 +3,8 @@
 //! The library is a pipeline of stages, one module each, in this order:
 //!
 //! ```text
-//!  .cls / contact12 ──parse──▶ records ──toolpath──▶ Toolpath ──resample──▶ Samples(s, θ, t, pose, frame)
+//!  .cls / APT / contact12 ──parse──▶ records ──toolpath──▶ Toolpath ──resample──▶ Samples(s, θ, t, pose, frame)
+//!  G-code ──parse──▶ blocks ──nc (machine FK)──▶ records ──toolpath──▶ Toolpath       │
 //!                                                     │                        │
 //!                                   machine.toml ──kinematics──▶ actual feed per pose
 //!                                                                              │
@@ -29,6 +30,7 @@ pub mod math;
 
 pub mod kinematics;
 pub mod metrics;
+pub mod nc;
 pub mod parse;
 pub mod part;
 pub mod resample;

@@ -1,12 +1,16 @@
-//! `crest convert`: CLSF → contact12 CSV, or contact12 → CLSF with contact data.
+//! `crest convert`: CLSF → contact12 CSV, contact12 → CLSF with contact data, and any of
+//! them (G-code included) → G-code through a machine's inverse kinematics.
 //!
 //! The input kind is detected by content; the output kind by the extension of `-o`
-//! (`.cls`, `.clsf`, `.cl`, `.apt` = CLSF, anything else = contact12 CSV). Conversion
+//! (`.cls`, `.clsf`, `.cl`, `.apt` = CLSF; `.nc`, `.mpf`, `.spf`, `.tap`, `.gcode`, `.ngc`,
+//! `.cnc` = G-code, which needs `--machine`; anything else = contact12 CSV). Conversion
 //! streams posture by posture (constant memory); the output goes to a temporary file that
 //! is renamed only when everything succeeded, so bad input leaves no output behind.
 
 use super::Outcome;
+use super::reading::{RtcpArg, read_options};
 use crest::io::toolpath::{detect, stream_from};
+use crest::nc::GcodeWriter;
 use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
 use std::fs::File;
 use std::io::{BufReader, Write};
@@ -27,6 +31,15 @@ pub struct Args {
     /// Apply MSYS: write coordinates in the absolute frame instead of the MCS.
     #[arg(long)]
     pub absolute: bool,
+    /// Machine description (`machine.toml`): reads G-code input through its forward
+    /// kinematics and writes G-code output through its inverse kinematics.
+    #[arg(long, value_name = "MACHINE.toml")]
+    pub machine: Option<PathBuf>,
+    /// Tool-centre-point control: for G-code input `auto` (as the program says), `on` or
+    /// `off`; for G-code output `on` writes the tool tip in the part frame under G43.4,
+    /// otherwise joint positions with inverse-time feed (G93).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: RtcpArg,
 }
 
 /// True when `path` names a CLSF output.
@@ -38,21 +51,87 @@ fn is_clsf_output(path: &Path) -> bool {
     })
 }
 
-/// Convert `input` to `output` (streaming).
-pub fn convert(input: &Path, output: &Path, all_moves: bool, absolute: bool) -> miette::Result<()> {
+/// True when `path` names a G-code output.
+fn is_gcode_output(path: &Path) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+        ["nc", "mpf", "spf", "tap", "gcode", "ngc", "cnc"]
+            .iter()
+            .any(|x| e.eq_ignore_ascii_case(x))
+    })
+}
+
+/// Convert `args.file` to `args.output` (streaming).
+/// What a conversion wrote: postures read, and data rows written to a contact12 CSV
+/// (`None` for CLSF and G-code outputs).
+pub struct Converted {
+    postures: usize,
+    rows: Option<usize>,
+}
+
+pub fn convert(args: &Args) -> miette::Result<Converted> {
+    let (input, output, all_moves, absolute) =
+        (&args.file, &args.output, args.all_moves, args.absolute);
     let kind = detect(input)?;
     let file =
         File::open(input).map_err(|e| miette::miette!("{}: cannot open: {e}", input.display()))?;
     let reader = BufReader::with_capacity(1 << 16, file);
-    let opts = LowerOptions {
+    let lower = LowerOptions {
         apply_msys: absolute,
         keep_postures: false,
         ..Default::default()
     };
+    let opts = read_options(kind, lower, args.machine.as_deref(), args.rtcp)?;
+    let to_gcode = is_gcode_output(output);
+    let machine = match (&opts.machine, &args.machine, to_gcode) {
+        (_, _, false) => None,
+        (Some(m), _, true) => Some(m.clone()),
+        (None, Some(m), true) => Some(crest::pipeline::load_machine(m)?),
+        (None, None, true) => {
+            return Err(miette::miette!(
+                "{}: G-code is written through the machine's inverse kinematics: give --machine MACHINE.toml",
+                output.display()
+            ));
+        }
+    };
+    let mut gcode = match &machine {
+        Some(m) => Some(GcodeWriter::new(m, args.rtcp == RtcpArg::On).map_err(|e| {
+            miette::miette!(
+                "{}: {e}",
+                args.machine
+                    .as_deref()
+                    .unwrap_or(Path::new("machine"))
+                    .display()
+            )
+        })?),
+        None => None,
+    };
+    let gcode_out = gcode.is_some();
     let mut failure: Option<miette::Report> = None;
+    let mut rows = 0usize;
+    let mut postures = 0usize;
     let to_clsf = is_clsf_output(output);
     let written = crest::io::write_atomic(output, |w| {
-        let result = if to_clsf {
+        let result = if let Some(gw) = gcode.as_mut() {
+            let mut open = false;
+            let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
+                if path.stats.postures == 1 {
+                    if open {
+                        gw.end_path(w)?;
+                    }
+                    gw.begin_path(path, w)?;
+                    open = true;
+                }
+                gw.posture(p, w)
+            };
+            let r = stream_from(input, kind, reader, opts, &mut sink);
+            if r.is_ok() {
+                if open {
+                    gw.end_path(w)?;
+                }
+                gw.finish(w)?;
+            }
+            r
+        } else if to_clsf {
             let mut cw = ClsfWriter::new();
             let mut open = false;
             let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
@@ -73,11 +152,21 @@ pub fn convert(input: &Path, output: &Path, all_moves: bool, absolute: bool) -> 
         } else {
             let mut cw = Contact12Writer::new(all_moves);
             cw.header(w)?;
-            let mut sink = |_: &Toolpath, p: &Posture| cw.posture(p, w);
+            let mut sink = |_: &Toolpath, p: &Posture| {
+                if all_moves
+                    || (p.contact.is_some() && p.motion == crest::toolpath::MotionKind::Cut)
+                {
+                    rows += 1;
+                }
+                cw.posture(p, w)
+            };
             stream_from(input, kind, reader, opts, &mut sink)
         };
         match result {
-            Ok(_) => Ok(()),
+            Ok(program) => {
+                postures = program.paths.iter().map(|p| p.stats.postures).sum();
+                Ok(())
+            }
             Err(e) => {
                 failure = Some(e);
                 Err(std::io::Error::other("conversion failed"))
@@ -85,14 +174,34 @@ pub fn convert(input: &Path, output: &Path, all_moves: bool, absolute: bool) -> 
         }
     });
     if let Some(e) = failure {
-        return Err(e);
+        return Err(crest::io::toolpath::name_output(e, output));
     }
-    written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))
+    written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))?;
+    let csv = !to_clsf && !gcode_out;
+    Ok(Converted {
+        postures,
+        rows: csv.then_some(rows),
+    })
 }
 
 /// Run `crest convert`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    convert(&args.file, &args.output, args.all_moves, args.absolute)?;
+    let c = convert(&args)?;
     let _ = std::io::stderr().flush();
+    if c.postures == 0 {
+        eprintln!(
+            "crest convert: {} has no motion: nothing was converted",
+            args.file.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
+    if c.rows == Some(0) {
+        eprintln!(
+            "crest convert: no cutting posture of {} has contact data, so {} holds only its header: give --all-moves to write every posture, or compute the contact data with `crest contact`",
+            args.file.display(),
+            args.output.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
     Ok(Outcome::Ok)
 }

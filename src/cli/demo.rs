@@ -47,10 +47,14 @@ pub struct Args {
 
 /// Run `crest demo`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let dir = &args.out;
-    std::fs::create_dir_all(dir)
+    // Everything is built in a staging folder beside the output folder (the demo reads back
+    // what it wrote, as a user's file would be read) and lands there whole at the end.
+    let out = &args.out;
+    let staging = crest::io::output::Staging::beside(out)
         .into_diagnostic()
-        .wrap_err_with(|| format!("cannot create {}", dir.display()))?;
+        .wrap_err_with(|| format!("cannot create a folder beside {}", out.display()))?;
+    let dir = staging.path().to_path_buf();
+    let dir = &dir;
     let mut wrote: Vec<(PathBuf, String)> = Vec::new();
 
     // 1. Tool and synthetic contact-data path.
@@ -184,8 +188,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let _ = writeln!(md, "# crest demo\n");
     let _ = writeln!(
         md,
-        "Regenerate: `cargo run --release -- demo -o {}`\n",
-        dir.display()
+        "Regenerate: `crest demo -o {}` (from the repository: `cargo run --release -- demo -o {}`)\n",
+        out.display(),
+        out.display()
     );
     let _ = writeln!(
         md,
@@ -234,6 +239,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let report = dir.join("report.md");
     write_file(&report, |w| w.write_all(md.as_bytes()))?;
     wrote.push((report, "this summary".into()));
+    staging
+        .land(out)
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write the demo into {}", out.display()))?;
 
     outln!("crest demo: the 002 case study on a plane, with 10 µm of run-out");
     outln!(
@@ -244,7 +253,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         rz_feed.rz
     );
     for (p, what) in &wrote {
-        outln!("  wrote {}: {what}", p.display());
+        let name = p.file_name().map(PathBuf::from).unwrap_or_default();
+        outln!("  wrote {}: {what}", out.join(name).display());
     }
     Ok(Outcome::Ok)
 }

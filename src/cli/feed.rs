@@ -13,14 +13,15 @@ use std::path::{Path, PathBuf};
 /// Options of `crest feed`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Tool-path file (CLSF or contact12).
+    /// Tool-path file (CLSF, contact12 or G-code).
     #[arg(value_name = "FILE")]
     pub file: PathBuf,
-    /// Machine description (`machine.toml`, kinematics.md §3.2).
+    /// Machine description (`machine.toml`: axis chain, velocity/acceleration/jerk limits,
+    /// interpolation cycle; see the README's configuration reference).
     #[arg(long, value_name = "MACHINE.TOML")]
     pub machine: PathBuf,
-    /// Planner: `jerk` (jerk-limited look-ahead interpolator, §6.3) or `acc`
-    /// (acceleration-limited, §6.1).
+    /// Planner: `jerk` (jerk-limited look-ahead interpolator at the cycle time) or `acc`
+    /// (acceleration-limited look-ahead).
     #[arg(long, value_enum, default_value_t = LevelArg::Jerk)]
     pub level: LevelArg,
     /// Print one JSON object on stdout (totals, per path and per posture).
@@ -33,6 +34,10 @@ pub struct Args {
     /// Write the per-posture table as CSV.
     #[arg(short = 'o', long = "output", value_name = "POSES.CSV")]
     pub output: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input: `auto` (as the program says), `on` or
+    /// `off` (the program is read through the kinematics of `--machine`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: super::reading::RtcpArg,
 }
 
 /// The `--level` values.
@@ -50,7 +55,8 @@ pub enum LevelArg {
 pub enum FeedSource {
     /// The programmed feed (FEDRAT, or `--feed-mm-min`).
     Programmed,
-    /// The feed the machine of `--machine` really reaches (`crest feed`, Level 2, Eq 6).
+    /// The feed the machine of `--machine` really reaches (`crest feed`: the jerk-limited
+    /// interpolator's tool-tip feed).
     Predicted,
 }
 
@@ -79,7 +85,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         apply_msys: args.absolute,
         ..Default::default()
     };
-    let program = crest::io::toolpath::read_program_with(&args.file, opts)?;
+    let read = crest::io::toolpath::ReadOptions {
+        lower: opts,
+        machine: Some(machine.clone()),
+        rtcp: args.rtcp.into(),
+    };
+    let program = crest::io::toolpath::read_program_with(&args.file, read)?;
     let level = match args.level {
         LevelArg::Jerk => Level::Jerk,
         LevelArg::Acc => Level::Acceleration,
@@ -95,7 +106,30 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 .strip_prefix(&format!("line {line}: "))
                 .unwrap_or(&msg)
                 .to_string();
-            miette::miette!("{file}:{line}:1: {msg} (tool path \"{}\")", path.name)
+            // A path in a tilted or flipped MCS meets the machine's travel limits the wrong
+            // way up: say so.
+            let hint = match (&path.msys, path.msys_applied) {
+                (Some(m), false) => {
+                    let (x, y) = (
+                        crest::math::Vec3::new(m[3], m[4], m[5]),
+                        crest::math::Vec3::new(m[6], m[7], m[8]),
+                    );
+                    let z = x.cross(&y);
+                    if msg.contains("travel limits") && (z - crest::math::Vec3::z()).norm() > 1e-6 {
+                        format!(
+                            "; the path is in the MCS of its MSYS, whose Z axis is ({:.3}, {:.3}, {:.3}) in the absolute frame: plan it in the absolute frame with --absolute",
+                            z.x, z.y, z.z
+                        )
+                    } else {
+                        String::new()
+                    }
+                }
+                _ => String::new(),
+            };
+            miette::miette!(
+                "{file}:{line}:1: {msg} (tool path \"{}\"){hint}",
+                path.name
+            )
         })?;
         plans.push((path, input, plan));
     }

@@ -1,11 +1,12 @@
-//! `crest inspect`: summarise the tool paths of a CLSF or contact12 file.
+//! `crest inspect`: summarise the tool paths of a CLSF (or APT), contact12 or G-code file.
 //!
 //! Per tool path: name, tool (from TLDATA), record counts (GOTO, RAPID, CIRCLE, NURBS),
 //! path and cutting lengths, feeds and spindle speeds seen, postures with contact data;
 //! then the warnings. Reading streams, so huge files summarise in constant memory.
 
 use super::Outcome;
-use crest::io::toolpath::{InputKind, detect, stream_program};
+use super::reading::{RtcpArg, read_options};
+use crest::io::toolpath::{detect, stream_program};
 use crest::toolpath::{LowerOptions, MotionKind, Posture, Toolpath};
 use serde::Serialize;
 use std::io::Write;
@@ -14,11 +15,18 @@ use std::path::PathBuf;
 /// Options of `crest inspect`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// CLSF or contact12 file (detected by content).
+    /// CLSF (or APT), contact12 or G-code file (detected by content).
     pub file: PathBuf,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Machine description (`machine.toml`): G-code is read through its kinematics.
+    #[arg(long, value_name = "MACHINE.toml")]
+    pub machine: Option<PathBuf>,
+    /// Tool-centre-point control of G-code: `auto` (as the program says), `on` (X Y Z
+    /// are the tool tip) or `off` (X Y Z are joint positions).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: RtcpArg,
 }
 
 /// TLDATA of a path, at the interface (mm, degrees).
@@ -38,6 +46,9 @@ pub struct ToolSummary {
     pub taper_deg: f64,
     /// Tip angle, degrees.
     pub tip_deg: f64,
+    /// The seven APT parameters of `CUTTER/d,r,e,f,a,b,h` (mm; a and b in degrees), when
+    /// the file gives them.
+    pub apt: Option<[f64; 7]>,
 }
 
 /// One tool path's summary.
@@ -77,6 +88,8 @@ pub struct PathSummary {
     pub msys: Option<[f64; 9]>,
     /// Unknown records kept raw.
     pub raw_records: usize,
+    /// `PPRINT`/`TPRINT` comments kept.
+    pub prints: usize,
 }
 
 /// A warning at the interface.
@@ -95,7 +108,7 @@ pub struct WarningSummary {
 pub struct InspectReport {
     /// File as given.
     pub file: String,
-    /// `clsf` or `contact12`.
+    /// `clsf`, `contact12` or `gcode`.
     pub format: &'static str,
     /// Tool paths in file order.
     pub paths: Vec<PathSummary>,
@@ -111,7 +124,11 @@ struct Counts {
 }
 
 /// Build the summary of a file (streams; keeps no postures).
-pub fn summarise(file: &std::path::Path) -> miette::Result<InspectReport> {
+pub fn summarise(
+    file: &std::path::Path,
+    machine: Option<&std::path::Path>,
+    rtcp: RtcpArg,
+) -> miette::Result<InspectReport> {
     let kind = detect(file)?;
     let mut counts: Vec<Counts> = Vec::new();
     let mut sink = |path: &Toolpath, p: &Posture| {
@@ -127,10 +144,11 @@ pub fn summarise(file: &std::path::Path) -> miette::Result<InspectReport> {
         }
         Ok(())
     };
-    let opts = LowerOptions {
+    let lower = LowerOptions {
         keep_postures: false,
         ..Default::default()
     };
+    let opts = read_options(kind, lower, machine, rtcp)?;
     let program = stream_program(file, opts, &mut sink)?;
     let mut k = 0;
     let paths = program
@@ -154,6 +172,12 @@ pub fn summarise(file: &std::path::Path) -> miette::Result<InspectReport> {
                     length_mm: d.length_mm,
                     taper_deg: d.taper_rad.to_degrees(),
                     tip_deg: d.tip_rad.to_degrees(),
+                    apt: d.apt.map(|a| {
+                        let mut v = a;
+                        v[4] = a[4].to_degrees();
+                        v[5] = a[5].to_degrees();
+                        v
+                    }),
                 }),
                 gotos: t.stats.gotos,
                 rapids: t.stats.rapids,
@@ -169,15 +193,13 @@ pub fn summarise(file: &std::path::Path) -> miette::Result<InspectReport> {
                 spindles_rpm: t.stats.spindles_rpm.iter().map(|v| round(*v, 4)).collect(),
                 msys: t.msys,
                 raw_records: t.raw_records.len(),
+                prints: t.prints.len(),
             }
         })
         .collect();
     Ok(InspectReport {
         file: file.display().to_string(),
-        format: match kind {
-            InputKind::Clsf => "clsf",
-            InputKind::Contact12 => "contact12",
-        },
+        format: kind.name(),
         paths,
         warnings: program
             .warnings
@@ -276,7 +298,7 @@ fn print_text(r: &InspectReport, out: &mut dyn Write) -> std::io::Result<()> {
 
 /// Run `crest inspect`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let report = summarise(&args.file)?;
+    let report = summarise(&args.file, args.machine.as_deref(), args.rtcp)?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let written = if args.json {
@@ -287,8 +309,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         print_text(&report, &mut out)
     };
     match written {
-        Ok(()) => Ok(Outcome::Ok),
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(Outcome::Ok),
-        Err(e) => Err(miette::miette!("writing to stdout failed: {e}")),
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => return Ok(Outcome::Ok),
+        Err(e) => return Err(miette::miette!("writing to stdout failed: {e}")),
     }
+    // Nothing to summarise is not a success: say why.
+    if report.paths.iter().all(|p| p.postures == 0) {
+        eprintln!(
+            "crest inspect: {} has no motion (no GOTO, CIRCLE or contact12 row): it does not look like a tool path (CLSF, APT, contact12 or G-code)",
+            args.file.display()
+        );
+        return Ok(Outcome::CheckFailed);
+    }
+    Ok(Outcome::Ok)
 }

@@ -43,7 +43,7 @@ pub struct Args {
     #[arg(long, value_name = "D")]
     pub dy_um: Option<f64>,
     /// Form removal before the parameters: `none`, `plane` or `poly:N` (least-squares
-    /// polynomial of total degree N; the 002 paper uses poly:5). Default `none`: heights
+    /// polynomial of total degree N; Marin et al. 2023 use poly:5). Default `none`: heights
     /// are only referred to their mean plane, nothing is re-levelled silently.
     #[arg(long, default_value = "none", value_parser = Level::parse, value_name = "none|plane|poly:N")]
     pub level: Level,

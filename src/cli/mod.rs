@@ -22,6 +22,7 @@ mod inspect;
 mod metrics;
 mod plot;
 mod progress;
+mod reading;
 mod report;
 mod resample;
 mod runout;
@@ -81,8 +82,23 @@ pub enum Outcome {
     CheckFailed,
 }
 
+/// On SIGINT or SIGTERM: remove the temporary files of outputs not yet in place, then exit
+/// with 128 + the signal's number, as a shell would report it.
+fn clean_up_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) {
+        std::thread::spawn(move || {
+            if let Some(sig) = signals.forever().next() {
+                crest::io::output::remove_temporaries();
+                std::process::exit(128 + sig);
+            }
+        });
+    }
+}
+
 /// Parse the process arguments, run the command, print errors, return the exit code.
 pub fn main() -> ExitCode {
+    clean_up_on_signals();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

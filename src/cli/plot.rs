@@ -18,10 +18,11 @@ pub struct Args {
 /// The plots.
 #[derive(Debug, clap::Subcommand)]
 pub enum What {
-    /// Trochoidal paths of ICE elements (002 Fig 14a/b) and crest heights between marks.
+    /// Trochoidal paths of the cutting-edge elements along a pass and the crest heights
+    /// between consecutive marks (as Marin et al. 2023, Fig 14a/b).
     Trochoid(TrochoidArgs),
     /// Lateral run-out along the surface normal against tool height, one curve per lead
-    /// (002 Fig 14c).
+    /// (as Marin et al. 2023, Fig 14c).
     Runout(RunoutArgs),
     /// A height map as a colour map (µm scale bar, axes in mm, missing points blank).
     Heightmap(HeightmapArgs),
@@ -151,7 +152,7 @@ pub struct FeedArgs {
     /// Actual feed to overlay: two columns, path length (mm) and feed (mm/min).
     #[arg(long, value_name = "CSV")]
     pub actual: Option<PathBuf>,
-    /// Plot the feed-mark crest height (002 Eq 14 with fz = F/(Z n)) instead of the feed;
+    /// Plot the feed-mark crest height (R − √(R² − fz²/4) with fz = F/(Z n)) instead of the feed;
     /// needs --tool.
     #[arg(long, requires = "tool")]
     pub crest: bool,
@@ -202,8 +203,32 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
 }
 
 fn run_trochoid(a: TrochoidArgs) -> miette::Result<Outcome> {
+    use crest::math::limits::{FZ_MM, within};
     check_format(&a.common.output)?;
     let cutter = crest::pipeline::load_tool(&a.tool)?;
+    // Plausible values only: a pass 1e305 mm long would never finish drawing.
+    within("--fz-mm", "mm", a.fz_mm, FZ_MM).map_err(|e| miette!("{e}"))?;
+    for &f in &a.crest_fz_mm {
+        within("--crest-fz-mm", "mm", f, FZ_MM).map_err(|e| miette!("{e}"))?;
+    }
+    within(
+        "--stepover-mm",
+        "mm",
+        a.stepover_mm,
+        (0.0, 10.0 * cutter.radius_mm),
+    )
+    .map_err(|e| miette!("{e}"))?;
+    for &z in &a.heights_mm {
+        within("--heights-mm", "mm", z, (0.0, 2.0 * cutter.radius_mm))
+            .map_err(|e| miette!("{e}"))?;
+    }
+    within("--revolutions", "", a.revolutions, (0.0, 1000.0)).map_err(|e| miette!("{e}"))?;
+    if a.passes > 1000 {
+        return Err(miette!("--passes must be at most 1000, got {}", a.passes));
+    }
+    for &l in &a.lead_deg {
+        within("--lead-deg", "°", l, (-89.0, 89.0)).map_err(|e| miette!("{e}"))?;
+    }
     let o = trochoid::TrochoidOptions {
         heights_mm: a.heights_mm.clone(),
         leads_rad: a.lead_deg.iter().map(|d| d.to_radians()).collect(),
@@ -342,6 +367,7 @@ fn run_heightmap(a: HeightmapArgs) -> miette::Result<Outcome> {
 
 /// Read a two-column numeric table (optional header; commas, semicolons, tabs or blanks).
 fn read_two_columns(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
+    crest::io::output::register_input(path);
     let text = std::fs::read_to_string(path)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot read {}", path.display()))?;
@@ -480,6 +506,19 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             .as_ref()
             .ok_or_else(|| miette!("--crest needs --tool"))?;
         let cutter = crest::pipeline::load_tool(tool)?;
+        if let Some(n) = a.rpm {
+            crest::math::limits::within("--rpm", "rpm", n, crest::math::limits::RPM)
+                .map_err(|e| miette!("{e}"))?;
+        }
+        if let Some(f) = a.feed_mm_min {
+            crest::math::limits::within(
+                "--feed-mm-min",
+                "mm/min",
+                f,
+                crest::math::limits::FEED_MM_MIN,
+            )
+            .map_err(|e| miette!("{e}"))?;
+        }
         let teeth = cutter.teeth() as f64;
         let r = cutter.corner_radius_mm();
         let crest: Vec<f64> = feed

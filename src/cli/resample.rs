@@ -1,4 +1,4 @@
-//! `crest resample`: resample the cutting moves of a CLSF or contact12 file to even feed per
+//! `crest resample`: resample the cutting moves of a CLSF, contact12 or G-code file to even feed per
 //! tooth (`--mode fz`) or a constant spindle step (`--mode dtheta`), written as CSV.
 //!
 //! The CSV is written while the path is resampled (one sample at a time, through
@@ -9,7 +9,8 @@
 //! cutting runs of a tool path, t and θ restart at every run.
 
 use super::Outcome;
-use crest::io::toolpath::{detect, stream_from};
+use super::reading::{feed_machine, read_options};
+use crest::io::toolpath::{InputKind, ReadOptions, detect, stream_from};
 use crest::resample::{
     AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan, SpindleSource,
     Stats, resample_with,
@@ -37,14 +38,14 @@ pub enum ModeArg {
 pub enum AxisArg {
     /// Spherical linear interpolation.
     Slerp,
-    /// Normalised linear interpolation (the model.md reference).
+    /// Normalised linear interpolation of the axis.
     Nlerp,
 }
 
 /// Options of `crest resample`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// CLSF or contact12 file.
+    /// CLSF, contact12 or G-code file (detected by content).
     pub file: PathBuf,
     /// Spacing: `fz` (every fz of arc length) or `dtheta` (every Δθ of spindle angle).
     #[arg(long, value_enum)]
@@ -55,7 +56,7 @@ pub struct Args {
     /// Number of teeth Z.
     #[arg(long)]
     pub teeth: usize,
-    /// Spindle step Δθ for `--mode dtheta`, degrees (model.md §5.3 suggests ≤ 0.5°).
+    /// Spindle step Δθ for `--mode dtheta`, degrees (0.5° or less resolves the edges' sweep).
     #[arg(long, default_value_t = 0.5)]
     pub dtheta_deg: f64,
     /// Spindle speed, rpm. Default: derived from fz and the programmed feed
@@ -67,14 +68,19 @@ pub struct Args {
     pub feed_mm_min: Option<f64>,
     /// Which feed drives the clock and the spacing: `programmed` (FEDRAT or
     /// `--feed-mm-min`) or `predicted` (the feed the machine of `--machine` really reaches,
-    /// `crest feed`, kinematics.md; linear in time between postures, model.md §5.3).
+    /// `crest feed`; linear in time between postures).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
     pub feed: Option<super::feed::FeedSource>,
-    /// Machine description (`machine.toml`) for `--feed predicted` (given alone, it implies
-    /// `--feed predicted`).
-    #[arg(long, value_name = "MACHINE.toml", conflicts_with = "feed_mm_min")]
+    /// Machine description (`machine.toml`) for `--feed predicted` (given alone with a
+    /// CLSF or contact12 file, it implies `--feed predicted`); G-code is read through its
+    /// kinematics (the feed is then predicted only with `--feed predicted`).
+    #[arg(long, value_name = "MACHINE.toml")]
     pub machine: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input: `auto` (as the program says), `on` or
+    /// `off`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: super::reading::RtcpArg,
     /// Tool-axis interpolation.
     #[arg(long, value_enum, default_value = "slerp")]
     pub axis: AxisArg,
@@ -87,6 +93,12 @@ pub struct Args {
     /// Output CSV.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
+    /// Refuse to start when the output is estimated beyond this many GB (see --force).
+    #[arg(long, value_name = "GB", default_value_t = 1.0)]
+    pub max_output_gb: f64,
+    /// Write however large the estimated output is.
+    #[arg(long)]
+    pub force: bool,
     /// Print one JSON object with the counts on stdout.
     #[arg(long)]
     pub json: bool,
@@ -109,16 +121,54 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     opts.rpm = args.rpm;
     opts.feed_mm_min = args.feed_mm_min;
 
-    // The predicted feed needs the whole path (feed planning): in memory. Otherwise the
-    // file is read, resampled and written posture by posture.
-    // The predicted feed needs the whole path (`--machine`, `--feed predicted`, and the
-    // invalid combinations, reported there as before): in memory.
-    let in_memory =
-        args.machine.is_some() || matches!(args.feed, Some(super::feed::FeedSource::Predicted));
+    let kind = detect(&args.file)?;
+    let gcode = kind == InputKind::Gcode;
+    if !gcode && args.machine.is_some() && args.feed_mm_min.is_some() {
+        return Err(miette::miette!(
+            "--machine (the predicted feed) cannot be used with --feed-mm-min"
+        ));
+    }
+    let read = read_options(
+        kind,
+        LowerOptions::default(),
+        args.machine.as_deref(),
+        args.rtcp,
+    )?;
+    // The predicted feed needs the whole path (`--feed predicted`, or `--machine` with a
+    // CLSF or contact12 file, and the invalid combinations, reported there as before): in
+    // memory. Otherwise the file is read, resampled and written posture by posture.
+    // Invalid options first, then the budget: estimate the samples (one pass over the file)
+    // before any work.
+    Resampler::new(&opts).map_err(|e| miette::miette!("{}: {e}", args.file.display()))?;
+    if !(args.max_output_gb.is_finite() && args.max_output_gb > 0.0) {
+        return Err(miette::miette!(
+            "--max-output-gb must be positive, got {}",
+            args.max_output_gb
+        ));
+    }
+    let extent = crest::pipeline::inputs::path_extent(
+        &args.file,
+        read.clone(),
+        args.path.map(|n| n.saturating_sub(1)),
+    )?;
+    let samples =
+        crest::resample::estimate_samples(&extent, mode, args.fz_mm, args.teeth, args.rpm);
+    crest::pipeline::inputs::check_output_budget(
+        &format!(
+            "{}: resampling {:.1} mm of cutting moves into about {samples:.3e} samples",
+            args.file.display(),
+            extent.cutting_mm
+        ),
+        samples * crest::pipeline::inputs::RESAMPLE_ROW_BYTES,
+        args.max_output_gb,
+        args.force,
+    )?;
+    let predicted = matches!(args.feed, Some(super::feed::FeedSource::Predicted));
+    let in_memory = predicted || (!gcode && args.machine.is_some());
     let (per_path, predicted) = if in_memory {
-        resample_in_memory(&args, &opts)?
+        resample_in_memory(&args, &opts, kind, &read)?
     } else {
-        (resample_streaming(&args, &opts)?, false)
+        (resample_streaming(&args, &opts, &read)?, false)
     };
     report(&args, &opts, &per_path, predicted)?;
     Ok(Outcome::Ok)
@@ -135,8 +185,13 @@ struct PathReport {
 
 /// Resample with the whole file in memory (needed for the predicted feed).
 /// Returns the reports and whether the feed was predicted.
-fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathReport>, bool)> {
-    let program = crest::io::toolpath::read_program(&args.file)?;
+fn resample_in_memory(
+    args: &Args,
+    opts: &Options,
+    kind: InputKind,
+    read: &ReadOptions,
+) -> miette::Result<(Vec<PathReport>, bool)> {
+    let program = crest::io::toolpath::read_program_with(&args.file, read.clone())?;
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -149,7 +204,7 @@ fn resample_in_memory(args: &Args, opts: &Options) -> miette::Result<(Vec<PathRe
         None => (0..program.paths.len()).collect(),
     };
 
-    let machine = super::feed::resolve_feed_source(args.feed, args.machine.as_deref())?;
+    let machine = feed_machine(kind, read, args.feed, args.machine.as_deref())?;
     let mut path_opts = Vec::with_capacity(selected.len());
     for &idx in &selected {
         let mut o = opts.clone();
@@ -236,21 +291,25 @@ struct Current {
 /// end. In the rare case they differ (a later cutting move faster than the first), or when
 /// `--path` has to skip tool paths without postures, the file is resampled again with what
 /// the first pass found; the output is replaced only when everything succeeded.
-fn resample_streaming(args: &Args, opts: &Options) -> miette::Result<Vec<PathReport>> {
+fn resample_streaming(
+    args: &Args,
+    opts: &Options,
+    read: &ReadOptions,
+) -> miette::Result<Vec<PathReport>> {
     // Invalid options are reported before anything is read.
     Resampler::new(opts).map_err(|e| miette::miette!("{}: {e}", args.file.display()))?;
     let first = Pass {
         target: args.path.map(|n| Some(n.saturating_sub(1))),
         spindles: None,
     };
-    match stream_pass(args, opts, &first)? {
+    match stream_pass(args, opts, read, &first)? {
         PassResult::Done(reports) => Ok(reports),
         PassResult::Again(target, spindles) => {
             let again = Pass {
                 target,
                 spindles: spindles.as_ref(),
             };
-            match stream_pass(args, opts, &again)? {
+            match stream_pass(args, opts, read, &again)? {
                 PassResult::Done(reports) => Ok(reports),
                 PassResult::Again(..) => Err(miette::miette!(
                     "{}: resampling did not settle (internal error)",
@@ -261,15 +320,23 @@ fn resample_streaming(args: &Args, opts: &Options) -> miette::Result<Vec<PathRep
     }
 }
 
-fn stream_pass(args: &Args, opts: &Options, pass: &Pass<'_>) -> miette::Result<PassResult> {
+fn stream_pass(
+    args: &Args,
+    opts: &Options,
+    read: &ReadOptions,
+    pass: &Pass<'_>,
+) -> miette::Result<PassResult> {
     let file = &args.file;
     let kind = detect(file)?;
     let input =
         File::open(file).map_err(|e| miette::miette!("{}: cannot open: {e}", file.display()))?;
     let reader = BufReader::with_capacity(1 << 16, input);
-    let lower = LowerOptions {
-        keep_postures: false,
-        ..Default::default()
+    let lower = ReadOptions {
+        lower: LowerOptions {
+            keep_postures: false,
+            ..read.lower.clone()
+        },
+        ..read.clone()
     };
     let lazy = pass.spindles.is_none() && opts.rpm.is_none();
     let selected = |ordinal: usize| match pass.target {
@@ -461,7 +528,7 @@ fn stream_pass(args: &Args, opts: &Options, pass: &Pass<'_>) -> miette::Result<P
         Ok(())
     });
     if let Some(e) = failure {
-        return Err(e);
+        return Err(crest::io::toolpath::name_output(e, &args.output));
     }
     match (written, outcome) {
         (Ok(()), Some(done @ PassResult::Done(_))) => Ok(done),

@@ -45,7 +45,7 @@ impl From<ModelName> for ModelKind {
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("grid").required(true).args(["window", "patch_at", "patch_near", "map_mm"])))]
 pub struct Args {
-    /// Tool-path file (NX CLSF or contact12).
+    /// Tool-path file (NX CLSF or APT, contact12, or G-code with `--machine`).
     pub file: PathBuf,
     /// Cutter description (tool.toml); default: the file's TLDATA with --teeth.
     #[arg(long, value_name = "TOOL.TOML")]
@@ -77,7 +77,7 @@ pub struct Args {
     #[arg(long, value_name = "F")]
     pub fz_mm: Option<f64>,
     /// Which feed moves the tool: `programmed` (FEDRAT, or `--feed-mm-min`) or `predicted`
-    /// (the feed the machine of `--machine` really reaches, `crest feed`, kinematics.md;
+    /// (the feed the machine of `--machine` really reaches, as `crest feed` plans it;
     /// the spindle speed stays fixed, so the feed per tooth follows the feed).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
@@ -86,15 +86,20 @@ pub struct Args {
     /// `--feed predicted`). With `--feed-mm-min V`, the machine is planned at V.
     #[arg(long, value_name = "MACHINE.TOML")]
     pub machine: Option<PathBuf>,
-    /// Surface model.
-    #[arg(long, value_enum)]
+    /// Tool-centre-point control of G-code input (read through the kinematics of
+    /// `--machine`; the feed is then predicted only with `--feed predicted`): `auto` (as
+    /// the program says), `on` or `off`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub rtcp: super::reading::RtcpArg,
+    /// Surface model (default: ice, the teeth's edges swept).
+    #[arg(long, value_enum, default_value = "ice")]
     pub model: ModelName,
     /// Spindle step of the ICE model, degrees.
     #[arg(long, value_name = "D", default_value_t = 1.0)]
     pub dtheta_deg: f64,
-    /// Grid spacing, µm.
+    /// Grid spacing, µm (default: a tenth of the feed per tooth, 0.5 … 20 µm, printed).
     #[arg(long, value_name = "G")]
-    pub grid_um: f64,
+    pub grid_um: Option<f64>,
     /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z above the reference
     /// surface).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
@@ -247,6 +252,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         fz_mm: args.fz_mm,
         feed: args.feed.map(Into::into),
         machine: args.machine.clone(),
+        rtcp: args.rtcp.into(),
         model: args.model.into(),
         dtheta_deg: args.dtheta_deg,
         grid_um: args.grid_um,
@@ -307,8 +313,15 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         let nan = f64::NAN;
         let shape = match &run.output {
             Output::Grid(sim) => format!(
-                "{} × {} nodes at {} µm",
-                sim.map.nx, sim.map.ny, args.grid_um
+                "{} × {} nodes at {} µm{}",
+                sim.map.nx,
+                sim.map.ny,
+                run.grid_um,
+                if args.grid_um.is_none() {
+                    " (a tenth of fz; --grid-um to change)"
+                } else {
+                    ""
+                }
             ),
             Output::Map(m) => format!("{} part points in {} cells", m.points.len(), m.tiles),
         };
@@ -354,6 +367,8 @@ fn summary(
         "nodes_cut": run.nodes_cut,
         "nodes_not_reached": run.nodes - run.nodes_cut,
         "cut_fraction": num(run.nodes_cut as f64 / run.nodes.max(1) as f64),
+        "grid_um": num(run.grid_um),
+        "grid_um_default": args.grid_um.is_none(),
         "warning": warning,
         "warnings": run.warnings,
         "tool": run.tool_source,

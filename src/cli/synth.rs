@@ -12,9 +12,10 @@ use std::path::{Path, PathBuf};
 pub enum SurfaceKind {
     /// The plane z = 0 (default field 20 × 10 mm).
     Plane,
-    /// z = −0.004·x² + 0.1 mm extruded along y (001 Fig 7; default field 10 × 10 mm).
+    /// z = −0.004·x² + 0.1 mm extruded along y (Lavernhe et al., Fig 7; default field 10 × 10 mm).
     ExtrudedParabola,
-    /// z = x·y / 200 mm (000 Fig 10; passes along its rulings; default field 40 × 40 mm).
+    /// z = x·y / 200 mm (the paraboloid of Lavernhe et al.'s feed study; passes along its rulings; default field
+    /// 40 × 40 mm).
     HyperbolicParaboloid,
     /// Camber waves and twist: z = sin(2πx/40) + 0.5 sin(2πy/30) + 0.002·x·y mm
     /// (default field 40 × 20 mm).
@@ -67,7 +68,7 @@ pub struct Args {
     /// Cutter description (tool.toml).
     #[arg(long, value_name = "TOOL.toml")]
     pub tool: PathBuf,
-    /// Tilt λ of the tool axis from the normal, degrees (model.md §7, convention A).
+    /// Tilt λ of the tool axis from the surface normal, degrees (in the plane set by the yaw).
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     pub tilt_deg: Option<f64>,
     /// Yaw ψ: rotation of the inclination plane about the normal, from the feed, degrees.
@@ -104,7 +105,7 @@ pub struct Args {
     #[arg(long, value_name = "MM_PER_MIN")]
     pub feed_mm_min: f64,
     /// Feed at the end of each pass, mm/min: the feed falls or rises linearly along every
-    /// pass from --feed-mm-min, one FEDRAT per move (001 Fig 6: 4000 → 500).
+    /// pass from --feed-mm-min, one FEDRAT per move (e.g. 4000 → 500, as Lavernhe et al., Fig 6).
     #[arg(long, value_name = "MM_PER_MIN")]
     pub feed_end_mm_min: Option<f64>,
     /// Spindle speed, rpm.
@@ -113,7 +114,7 @@ pub struct Args {
     /// Field: length along the passes, width across, mm (centred on the origin).
     #[arg(long, value_name = "A,B", value_delimiter = ',', num_args = 1)]
     pub size_mm: Option<Vec<f64>>,
-    /// Direction of the passes in the XY plane, degrees from +X (001 Fig 7 uses 45).
+    /// Direction of the passes in the XY plane, degrees from +X.
     #[arg(
         long,
         value_name = "DEG",

@@ -21,8 +21,9 @@ pub struct Args {
     /// Feed per tooth, mm.
     #[arg(long = "fz-mm", value_name = "MM", allow_hyphen_values = true)]
     pub fz_mm: f64,
-    /// Participating-teeth rule: `paper` (002 Eq 8) or `exact` (1-D envelope).
-    #[arg(long, value_enum, default_value_t = RuleArg::Paper)]
+    /// Which teeth cut: `exact` (the lower envelope of every tooth's marks) or `paper` (the
+    /// participating-tooth rule of Marin et al. 2023, Eq 8, for reproducing the paper).
+    #[arg(long, value_enum, default_value_t = RuleArg::Exact)]
     pub rule: RuleArg,
     /// Print one JSON object on stdout.
     #[arg(long)]
@@ -32,7 +33,8 @@ pub struct Args {
 /// The `--rule` values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum RuleArg {
-    /// 002 Eq 8: r_j > r_max − hc at the generating height.
+    /// Marin et al. 2023, Eq 8: a tooth cuts when its radius at the generating height
+    /// exceeds the largest one less the nominal crest height.
     Paper,
     /// Lower envelope of the teeth's feed-direction profiles.
     Exact,

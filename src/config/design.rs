@@ -57,7 +57,7 @@ struct DesignFile {
     tool: std::path::PathBuf,
     rpm: Spanned<f64>,
     grid_um: Spanned<f64>,
-    window_mm: Option<Spanned<[f64; 2]>>,
+    window_mm: Option<Spanned<super::Fixed<2>>>,
     pattern: Option<Spanned<PatternName>>,
     model: Option<Spanned<ModelKind>>,
     dtheta_deg: Option<Spanned<f64>>,
@@ -100,10 +100,17 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
         }
     };
     let rpm = positive("rpm", &d.rpm)?;
+    let (rlo, rhi) = crate::math::limits::RPM;
+    if !(rlo..=rhi).contains(&rpm) {
+        return Err(at(
+            d.rpm.span().start,
+            format!("rpm must lie between {rlo} and {rhi}, got {rpm}"),
+        ));
+    }
     let grid_um = positive("grid_um", &d.grid_um)?;
     let window_mm = match &d.window_mm {
         Some(w) => {
-            let [a, b] = *w.get_ref();
+            let [a, b] = w.get_ref().0;
             if !(a > 0.0 && a.is_finite() && b > 0.0 && b.is_finite()) {
                 return Err(at(
                     w.span().start,
@@ -126,10 +133,11 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
     let dtheta_deg = match &d.dtheta_deg {
         Some(v) => {
             let x = *v.get_ref();
-            if !(x.is_finite() && x > 0.0 && x <= 90.0) {
+            let lo = crate::math::limits::MIN_DTHETA_DEG;
+            if !(x.is_finite() && x >= lo && x <= 90.0) {
                 return Err(at(
                     v.span().start,
-                    format!("dtheta_deg must lie in (0, 90], got {x}"),
+                    format!("dtheta_deg must lie in [{lo}, 90], got {x}"),
                 ));
             }
             Some(x)
@@ -192,7 +200,11 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
             let ok = list.iter().all(|x| {
                 x.is_finite()
                     && match key {
-                        "scallop_um" | "stepover_mm" | "feed_mm_min" => *x > 0.0,
+                        "scallop_um" | "stepover_mm" => *x > 0.0 && *x <= 1e4,
+                        "feed_mm_min" => {
+                            let (lo, hi) = crate::math::limits::FEED_MM_MIN;
+                            (lo..=hi).contains(x)
+                        }
                         "tilt_deg" | "lead_deg" => (0.0..90.0).contains(x),
                         _ => true,
                     }

@@ -62,9 +62,9 @@ struct FileMachine {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct FileTool {
-    dir_home: Option<Spanned<[f64; 3]>>,
-    tip_home: Option<Spanned<[f64; 3]>>,
-    part_origin: Option<Spanned<[f64; 3]>>,
+    dir_home: Option<Spanned<super::Fixed<3>>>,
+    tip_home: Option<Spanned<super::Fixed<3>>>,
+    part_origin: Option<Spanned<super::Fixed<3>>>,
 }
 
 #[derive(Deserialize)]
@@ -72,9 +72,9 @@ struct FileTool {
 struct FileAxis {
     name: Option<String>,
     side: Option<Spanned<String>>,
-    direction: Option<Spanned<[f64; 3]>>,
-    axis: Option<Spanned<[f64; 3]>>,
-    point: Option<Spanned<[f64; 3]>>,
+    direction: Option<Spanned<super::Fixed<3>>>,
+    axis: Option<Spanned<super::Fixed<3>>>,
+    point: Option<Spanned<super::Fixed<3>>>,
     sign: Option<Spanned<f64>>,
     limits: Option<Spanned<Vec<f64>>>,
     vmax: Option<Spanned<Quantity>>,
@@ -125,7 +125,10 @@ impl Kind {
             (Kind::Vel, true) => 1.0,
             (Kind::Acc, true) => 10.0,
             (Kind::Jerk, true) => 100.0,
-            (Kind::Len, _) | (Kind::Time, _) => 0.0,
+            (Kind::Len, _) => 0.0,
+            // An interpolator faster than 10 µs per cycle does not exist; 1e-9 s would plan
+            // for ever.
+            (Kind::Time, _) => 1e-5,
         }
     }
 
@@ -256,6 +259,7 @@ impl Ctx<'_> {
                 (Kind::Vel, true) => "rev/s? 5 rev/s = 1800 deg/s",
                 (Kind::Acc, true) => "rev/s2? 3 rev/s2 = 1080 deg/s2",
                 (Kind::Jerk, true) => "rev/s3? 100 rev/s3 = 36000 deg/s3",
+                (Kind::Time, _) => "µs? the cycle time is in s (0.003 for 3 ms)",
                 _ => "",
             };
             return Err(self.invalid(
@@ -279,8 +283,8 @@ impl Ctx<'_> {
     }
 }
 
-fn unit_vec(ctx: &Ctx, key: &str, v: &Spanned<[f64; 3]>) -> Result<Vec3, MachineError> {
-    let [x, y, z] = *v.get_ref();
+fn unit_vec(ctx: &Ctx, key: &str, v: &Spanned<super::Fixed<3>>) -> Result<Vec3, MachineError> {
+    let [x, y, z] = v.get_ref().0;
     let w = Vec3::new(x, y, z);
     let n = w.norm();
     if !n.is_finite() || n < 1e-9 {
@@ -292,8 +296,8 @@ fn unit_vec(ctx: &Ctx, key: &str, v: &Spanned<[f64; 3]>) -> Result<Vec3, Machine
     Ok(w / n)
 }
 
-fn finite3(ctx: &Ctx, key: &str, v: &Spanned<[f64; 3]>) -> Result<Vec3, MachineError> {
-    let [x, y, z] = *v.get_ref();
+fn finite3(ctx: &Ctx, key: &str, v: &Spanned<super::Fixed<3>>) -> Result<Vec3, MachineError> {
+    let [x, y, z] = v.get_ref().0;
     if !(x.is_finite() && y.is_finite() && z.is_finite()) {
         return Err(ctx.invalid(key, v, "must be finite"));
     }
@@ -357,8 +361,10 @@ impl Machine {
         let cycle_time = ctx.quantity("cycle_time", cycle, Kind::Time, false)?;
         let min_block_cycles = match &file.min_block_cycles {
             None => 1.0,
-            Some(v) if v.get_ref().is_finite() && *v.get_ref() >= 0.0 => *v.get_ref(),
-            Some(v) => return Err(ctx.invalid("min_block_cycles", v, "must be >= 0")),
+            Some(v) if v.get_ref().is_finite() && (0.0..=1000.0).contains(v.get_ref()) => {
+                *v.get_ref()
+            }
+            Some(v) => return Err(ctx.invalid("min_block_cycles", v, "must lie in [0, 1000]")),
         };
         let lookahead_blocks = match &file.lookahead_blocks {
             None => 0,

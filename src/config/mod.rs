@@ -91,3 +91,25 @@ pub(crate) fn from_toml<T: serde::de::DeserializeOwned>(
         }
     })
 }
+
+/// A fixed-length array of numbers in a file: exactly `N` values, no more, no fewer (serde's
+/// own arrays accept extra elements from TOML).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fixed<const N: usize>(pub [f64; N]);
+
+impl<'de, const N: usize> serde::Deserialize<'de> for Fixed<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v: Vec<f64> = Vec::deserialize(d)?;
+        let a: [f64; N] = v.as_slice().try_into().map_err(|_| {
+            serde::de::Error::custom(format!("expected {N} numbers, found {}", v.len()))
+        })?;
+        Ok(Fixed(a))
+    }
+}
+
+impl<const N: usize> std::ops::Deref for Fixed<N> {
+    type Target = [f64; N];
+    fn deref(&self) -> &[f64; N] {
+        &self.0
+    }
+}

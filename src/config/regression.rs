@@ -6,7 +6,7 @@
 //! tool = "../tools/ball-r5-z4-presetter.toml"   # relative to the study file
 //! model = "crest"                               # or "simulate"
 //! fz_mm = 0.05
-//! rule = "paper"                                # or "exact"
+//! rule = "paper"                                # or "exact" (the default)
 //! ap_mm = 0.4
 //! [runout]                                      # optional: replaces the tool's [runout]
 //! tooth_radius_deviation_um = [-10, -15, -24, -25]
@@ -116,10 +116,11 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
     let s: StudyFile = super::from_toml(text, file)?;
     let at = |pos: usize, message: String| ConfigError::at(file, text, pos, message);
     let fz = *s.fz_mm.get_ref();
-    if !(fz.is_finite() && fz > 0.0) {
+    let (fz_lo, fz_hi) = crate::math::limits::FZ_MM;
+    if !(fz.is_finite() && (fz_lo..=fz_hi).contains(&fz)) {
         return Err(at(
             s.fz_mm.span().start,
-            format!("fz_mm must be positive, found {fz}"),
+            format!("fz_mm must lie between {fz_lo} and {fz_hi} mm, found {fz}"),
         ));
     }
     let ap = *s.ap_mm.get_ref();
@@ -148,10 +149,11 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
             }
             if let Some(d) = &sim.dtheta_deg {
                 let v = *d.get_ref();
-                if !(v.is_finite() && v > 0.0 && v <= 10.0) {
+                let lo = crate::math::limits::MIN_DTHETA_DEG;
+                if !(v.is_finite() && v >= lo && v <= 10.0) {
                     return Err(at(
                         d.span().start,
-                        format!("[simulate] dtheta_deg must lie in (0, 10], found {v}"),
+                        format!("[simulate] dtheta_deg must lie in [{lo}, 10], found {v}"),
                     ));
                 }
                 spec.dtheta_deg = v;
@@ -204,10 +206,13 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
             ));
         }
         let fz_mm = match &cs.fz_mm {
-            Some(f) if !(f.get_ref().is_finite() && *f.get_ref() > 0.0) => {
+            Some(f) if !(f.get_ref().is_finite() && (fz_lo..=fz_hi).contains(f.get_ref())) => {
                 return Err(at(
                     f.span().start,
-                    format!("case {n}: fz_mm must be positive, found {}", f.get_ref()),
+                    format!(
+                        "case {n}: fz_mm must lie between {fz_lo} and {fz_hi} mm, found {}",
+                        f.get_ref()
+                    ),
                 ));
             }
             f => f.as_ref().map(|f| *f.get_ref()),

@@ -4,7 +4,7 @@
 //! ```toml
 //! tool = "../tools/ball-r5-z4.toml"  # the cutter, relative to the study file
 //! ap_mm = 0.4                        # depth of cut along the normal, mm
-//! rule = "paper"                     # "paper" (002 Eq 8, default) or "exact"
+//! rule = "exact"                     # "exact" (default) or "paper" (Marin et al. 2023, Eq 8)
 //! x = "offset_um"                    # optional: the run-out key on the plots' x axis
 //! tool_heights_mm = [0.1, 0.4, 0.8, 1.5, 2.5, 4.0]  # optional: marked heights (Fig 14c)
 //!

@@ -264,12 +264,13 @@ impl ToolConfig {
     pub fn to_cutter(&self, text: &str) -> Result<Cutter, ToolConfigError> {
         self.min_chip_mm(text)?;
         let radius = finite(text, "radius_mm", &self.radius_mm)?;
-        if radius <= 0.0 {
+        let max_r = crate::math::limits::MAX_TOOL_RADIUS_MM;
+        if radius <= 0.0 || radius > max_r {
             return Err(invalid(
                 text,
                 "radius_mm",
                 self.radius_mm.span(),
-                format!("must be positive, found {radius}"),
+                format!("must lie in (0, {max_r}] mm, found {radius}"),
             ));
         }
         let corner = match &self.corner_radius_mm {
@@ -358,6 +359,18 @@ impl ToolConfig {
         }
         if let Some(r) = &self.runout {
             let offset_um = opt_finite(text, "runout.offset_um", &r.offset_um)?;
+            if offset_um.abs() > 1e3 * radius {
+                if let Some(o) = &r.offset_um {
+                    return Err(invalid(
+                        text,
+                        "runout.offset_um",
+                        o.span(),
+                        format!(
+                            "must not exceed the tool radius ({radius} mm), found {offset_um} µm"
+                        ),
+                    ));
+                }
+            }
             let tilt_deg = opt_finite(text, "runout.axis_tilt_deg", &r.axis_tilt_deg)?;
             if tilt_deg.abs() >= 45.0 {
                 if let Some(s) = &r.axis_tilt_deg {
@@ -386,6 +399,17 @@ impl ToolConfig {
                             key,
                             d.span(),
                             format!("must be finite, found {bad}"),
+                        ));
+                    }
+                    // A deviation may shorten a tooth, not turn it inside out.
+                    if let Some(bad) = d.get_ref().iter().find(|v| radius + **v * 1e-3 <= 0.0) {
+                        return Err(invalid(
+                            text,
+                            key,
+                            d.span(),
+                            format!(
+                                "value {bad} µm makes a tooth radius negative (radius_mm = {radius})"
+                            ),
                         ));
                     }
                     d.get_ref().iter().map(|v| v * 1e-3).collect()

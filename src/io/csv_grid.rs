@@ -68,7 +68,10 @@ pub(crate) fn parse(text: &str, dx_um: f64, dy_um: f64) -> Result<HeightMap, For
                     return Err(FormatError::line(
                         line_no,
                         k + 1,
-                        format!("expected a height in µm or NaN, found {:?}", f.trim()),
+                        format!(
+                            "expected a finite height in µm within ±1e6 (or NaN), found {:?}",
+                            f.trim()
+                        ),
                     ));
                 }
             }
@@ -82,7 +85,50 @@ pub(crate) fn parse(text: &str, dx_um: f64, dy_um: f64) -> Result<HeightMap, For
         .ok_or_else(|| FormatError::file("internal: row count mismatch"))
 }
 
+/// The spacing and origin a grid CSV written by crest carries in its first comment line:
+/// `# crest height map: dx_um=…, dy_um=…, x0_mm=…, y0_mm=…`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Meta {
+    pub dx_um: f64,
+    pub dy_um: f64,
+    pub x0_mm: f64,
+    pub y0_mm: f64,
+}
+
+/// Read the [`Meta`] comment, if the file has one (in its leading comment lines).
+pub(crate) fn meta(text: &str) -> Option<Meta> {
+    for line in text.lines() {
+        let t = line.trim();
+        if t.is_empty() {
+            continue;
+        }
+        let c = t.strip_prefix('#')?;
+        let Some(rest) = c.trim().strip_prefix("crest height map:") else {
+            continue;
+        };
+        let get = |key: &str| {
+            rest.split([',', ';'])
+                .filter_map(|kv| kv.trim().split_once('='))
+                .find(|(k, _)| k.trim() == key)
+                .and_then(|(_, v)| v.trim().parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+        };
+        return Some(Meta {
+            dx_um: get("dx_um").filter(|v| *v > 0.0)?,
+            dy_um: get("dy_um").filter(|v| *v > 0.0)?,
+            x0_mm: get("x0_mm").unwrap_or(0.0),
+            y0_mm: get("y0_mm").unwrap_or(0.0),
+        });
+    }
+    None
+}
+
 pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "# crest height map: dx_um={}, dy_um={}, x0_mm={}, y0_mm={}; heights in µm, rows = y ascending, NaN = not reached",
+        map.dx_um, map.dy_um, map.x0_mm, map.y0_mm
+    )?;
     let mut line = String::with_capacity(map.nx * 12);
     for row in 0..map.ny {
         line.clear();

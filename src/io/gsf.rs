@@ -138,13 +138,13 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
     let mut map = HeightMap::from_rows(
         nx,
         ny,
-        xreal * xy_um / nx as f64,
-        yreal * xy_um / ny as f64,
+        super::tidy(xreal * xy_um / nx as f64),
+        super::tidy(yreal * xy_um / ny as f64),
         z,
     )
     .ok_or_else(|| FormatError::file("internal: size mismatch"))?;
-    map.x0_mm = xoff * xy_um / 1000.0;
-    map.y0_mm = yoff * xy_um / 1000.0;
+    map.x0_mm = super::tidy(xoff * xy_um / 1000.0);
+    map.y0_mm = super::tidy(yoff * xy_um / 1000.0);
     Ok(map)
 }
 

@@ -214,6 +214,14 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
                     format!("expected a finite non-negative number, found `{s}`"),
                 ));
             }
+            // A roughness beyond a millimetre is not a measurement of a finished surface.
+            if nonneg && v > 1e3 {
+                return Err(bad(
+                    name,
+                    i,
+                    format!("expected a roughness in µm up to 1000, found `{s}`"),
+                ));
+            }
             Ok(v)
         };
         let lead_deg = number("lead_deg", false)?;

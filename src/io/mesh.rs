@@ -106,11 +106,26 @@ pub fn read_part(path: &Path) -> Result<PartFile, MeshFileError> {
             "unknown mesh format (expected .stl, .obj or .ply)".into(),
         )
     })?;
+    super::output::register_input(path);
     let bytes = std::fs::read(path).map_err(|e| err("1".into(), format!("cannot read: {e}")))?;
+    part_from_bytes(&bytes, format, &file)
+}
+
+/// [`read_part`] on the bytes of a file named `file` in `format`.
+pub fn part_from_bytes(
+    bytes: &[u8],
+    format: MeshFormat,
+    file: &str,
+) -> Result<PartFile, MeshFileError> {
+    let err = |at: String, message: String| MeshFileError {
+        file: file.to_string(),
+        at,
+        message,
+    };
     let parsed = match format {
-        MeshFormat::Stl => parse_stl(&bytes),
-        MeshFormat::Obj => parse_obj(&bytes),
-        MeshFormat::Ply => parse_ply(&bytes),
+        MeshFormat::Stl => parse_stl(bytes),
+        MeshFormat::Obj => parse_obj(bytes),
+        MeshFormat::Ply => parse_ply(bytes),
     }
     .map_err(|(at, message)| err(at, message))?;
     let Parsed { mesh, origins } = parsed;

@@ -21,6 +21,7 @@ mod xyz;
 
 pub mod measured;
 pub mod mesh;
+pub mod output;
 pub mod profile_csv;
 pub mod tables;
 pub mod text;
@@ -31,45 +32,11 @@ use std::path::{Path, PathBuf};
 
 use crate::surface::HeightMap;
 
-/// Write a file through a temporary file in the same directory, renamed at the end, so that
-/// a failure never leaves a partial output behind.
-pub fn write_atomic<F>(path: &Path, fill: F) -> std::io::Result<()>
-where
-    F: FnOnce(&mut dyn Write) -> std::io::Result<()>,
-{
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".crest-").suffix(".tmp");
-    // tempfile creates 0600 files; outputs are ordinary files (0666 less the umask).
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    let mut tmp = builder.tempfile_in(dir)?;
-    {
-        let mut buffered = std::io::BufWriter::with_capacity(1 << 16, tmp.as_file_mut());
-        fill(&mut buffered)?;
-        buffered.flush()?;
-    }
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
-}
+pub use output::write_atomic;
 
-/// Write a set of files `(name, bytes)` into the folder `dir` (created if needed), each
-/// through [`write_atomic`]; returns the paths written, in order.
+/// Write a set of files into the folder `dir`, whole or not at all (see [`output::write_set`]).
 pub fn write_files(dir: &Path, files: &[(String, Vec<u8>)]) -> std::io::Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir)?;
-    let mut written = Vec::with_capacity(files.len());
-    for (name, bytes) in files {
-        let path = dir.join(name);
-        write_atomic(&path, |w| w.write_all(bytes))?;
-        written.push(path);
-    }
-    Ok(written)
+    output::write_set(dir, files)
 }
 
 /// A height-map file format.
@@ -209,6 +176,7 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
     let format = HeightMapFormat::from_path(path).ok_or_else(|| HeightMapError::UnknownFormat {
         path: path.to_path_buf(),
     })?;
+    output::register_input(path);
     let bytes = std::fs::read(path).map_err(|source| HeightMapError::Io {
         path: path.to_path_buf(),
         source,
@@ -232,19 +200,32 @@ pub fn parse_heightmap(
             if xyz::has_xyz_header(text) {
                 xyz::parse(text)?
             } else {
-                let dx = opts.dx_um.ok_or_else(|| {
+                // The spacing from the options, else from the comment crest writes.
+                let meta = csv_grid::meta(text);
+                let dx = opts.dx_um.or(meta.map(|m| m.dx_um)).ok_or_else(|| {
                     FormatError::file("a grid CSV carries no spacing: give --dx-um (and --dy-um)")
                 })?;
-                let dy = opts.dy_um.unwrap_or(dx);
+                let dy = opts.dy_um.or(meta.map(|m| m.dy_um)).unwrap_or(dx);
                 check_spacing_value("dx", dx)?;
                 check_spacing_value("dy", dy)?;
-                return csv_grid::parse(text, dx, dy);
+                if let Some(m) = meta {
+                    check_against(opts.dx_um, m.dx_um, "dx")?;
+                    check_against(opts.dy_um, m.dy_um, "dy")?;
+                }
+                let mut map = csv_grid::parse(text, dx, dy)?;
+                if let Some(m) = meta {
+                    map.x0_mm = m.x0_mm;
+                    map.y0_mm = m.y0_mm;
+                }
+                check_heights(&map)?;
+                return Ok(map);
             }
         }
         HeightMapFormat::Xyz => xyz::parse(as_text(bytes)?)?,
         HeightMapFormat::Gsf => gsf::parse(bytes)?,
         HeightMapFormat::Sdf => sdf::parse(bytes)?,
     };
+    check_heights(&map)?;
     check_against(opts.dx_um, map.dx_um, "dx")?;
     check_against(opts.dy_um, map.dy_um, "dy")?;
     Ok(map)
@@ -329,7 +310,42 @@ pub(crate) fn parse_value(s: &str) -> Option<f64> {
     {
         return Some(f64::NAN);
     }
-    t.parse::<f64>().ok()
+    // `inf` and values that overflow to it (1e400) are not heights, nor is anything beyond
+    // a metre: refused rather than taken as missing.
+    t.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && v.abs() <= MAX_HEIGHT_UM)
+}
+
+/// A length read from a file's metres or ratios, rounded to 12 significant digits: the
+/// binary round trip of `2e-5` m × 1e6 gives 19.999999999999996 µm, which is 20 µm.
+pub(crate) fn tidy(v: f64) -> f64 {
+    if v.is_finite() && v != 0.0 {
+        format!("{v:.11e}").parse().unwrap_or(v)
+    } else {
+        v
+    }
+}
+
+/// Largest magnitude of a height (and of a text map's coordinate) that is read, µm (1 m).
+pub const MAX_HEIGHT_UM: f64 = 1e6;
+
+/// Refuse a map whose finite heights exceed [`MAX_HEIGHT_UM`] (binary formats), naming
+/// the first offending node.
+fn check_heights(map: &HeightMap) -> Result<(), FormatError> {
+    if let Some(k) = map
+        .z_um
+        .iter()
+        .position(|v| v.is_finite() && v.abs() > MAX_HEIGHT_UM)
+    {
+        return Err(FormatError::file(format!(
+            "the height at row {}, column {} is {} µm, beyond ±{MAX_HEIGHT_UM} µm (1 m): not a surface height",
+            k / map.nx.max(1),
+            k % map.nx.max(1),
+            map.z_um[k]
+        )));
+    }
+    Ok(())
 }
 
 /// Shortest round-trip text of a height; `NaN` for missing.

@@ -182,8 +182,14 @@ fn parse_text(text: &str) -> Result<HeightMap, FormatError> {
 }
 
 fn finish(h: Header, z: Vec<f64>) -> Result<HeightMap, FormatError> {
-    HeightMap::from_rows(h.nx, h.ny, h.xscale * 1e6, h.yscale * 1e6, z)
-        .ok_or_else(|| FormatError::file("internal: size mismatch"))
+    HeightMap::from_rows(
+        h.nx,
+        h.ny,
+        super::tidy(h.xscale * 1e6),
+        super::tidy(h.yscale * 1e6),
+        z,
+    )
+    .ok_or_else(|| FormatError::file("internal: size mismatch"))
 }
 
 fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
@@ -226,8 +232,8 @@ fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
             ));
         }
     }
-    if !h.zscale.is_finite() {
-        return Err(FormatError::byte(62, "Zscale is not finite"));
+    if !(h.zscale.is_finite() && h.zscale != 0.0) {
+        return Err(FormatError::byte(62, "Zscale is zero or not finite"));
     }
     check_header(&h, i64::from(b[78]), i64::from(b[80]))?;
     let size = [1usize, 2, 4, 4, 1, 2, 4, 8][h.data_type as usize];

@@ -37,6 +37,7 @@ pub enum TextError {
 /// mark at the start is dropped.
 pub fn read_text(path: &Path, what: &str) -> Result<String, TextError> {
     let file = path.display().to_string();
+    super::output::register_input(path);
     let bytes = std::fs::read(path).map_err(|source| TextError::Io {
         file: file.clone(),
         what: what.to_string(),

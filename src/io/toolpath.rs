@@ -1,11 +1,19 @@
-//! Reading tool-path files (CLSF or contact12) into a [`Program`], with errors that name
-//! the file, line and column.
+//! Reading tool-path files (CLSF and the APT family, contact12, or G-code through a
+//! machine) into a [`Program`], with errors that name the file, line and column.
 //!
-//! The kind of file is decided by content ([`crate::parse::looks_like_contact12`] on the
-//! first 64 KiB), not by extension. Reading streams: [`stream_program`] hands each posture
-//! to a callback and keeps none unless asked, so any file size reads in constant memory.
+//! The kind of file is decided by content on the first 64 KiB
+//! ([`crate::parse::looks_like_contact12`], then [`crate::parse::looks_like_gcode`], else
+//! CLSF), not by extension. Reading streams: [`stream_program`] hands each posture to a
+//! callback and keeps none unless asked, so any file size reads in constant memory.
+//! G-code is read through the forward kinematics of the machine in [`ReadOptions`]
+//! (`crate::nc`).
 
-use crate::parse::{ClsfReader, Contact12Reader, ParseError, SyntaxError, looks_like_contact12};
+use crate::kinematics::Machine;
+use crate::nc::{NcReader, Rtcp};
+use crate::parse::{
+    ClsfReader, Contact12Reader, GcodeReader, ParseError, SyntaxError, looks_like_contact12,
+    looks_like_gcode,
+};
 use crate::toolpath::{LowerError, LowerOptions, Lowerer, Posture, PostureSink, Program, Toolpath};
 use miette::{Diagnostic, MietteError, MietteSpanContents, SourceCode, SourceSpan, SpanContents};
 use std::fs::File;
@@ -19,6 +27,40 @@ pub enum InputKind {
     Clsf,
     /// The 12-column contact file.
     Contact12,
+    /// ISO G-code (read through a machine).
+    Gcode,
+}
+
+impl InputKind {
+    /// The name of the kind: `clsf`, `contact12` or `gcode`.
+    pub fn name(self) -> &'static str {
+        match self {
+            InputKind::Clsf => "clsf",
+            InputKind::Contact12 => "contact12",
+            InputKind::Gcode => "gcode",
+        }
+    }
+}
+
+/// How to read a tool-path file: the lowering, and for G-code the machine and its
+/// tool-centre-point control. A [`LowerOptions`] converts into one without a machine.
+#[derive(Debug, Clone, Default)]
+pub struct ReadOptions {
+    /// Lowering options (MSYS, keeping postures, NURBS tolerance).
+    pub lower: LowerOptions,
+    /// The machine G-code is read through (`--machine`); CLSF and contact12 ignore it.
+    pub machine: Option<Machine>,
+    /// Tool-centre-point control of G-code (`--rtcp`).
+    pub rtcp: Rtcp,
+}
+
+impl From<LowerOptions> for ReadOptions {
+    fn from(lower: LowerOptions) -> ReadOptions {
+        ReadOptions {
+            lower,
+            ..Default::default()
+        }
+    }
 }
 
 /// The text of one line, reported with its real line number in code frames.
@@ -73,18 +115,42 @@ pub struct InputError {
     span: Option<SourceSpan>,
 }
 
+/// At most this many characters of an offending line (or token) are shown in a message,
+/// around the error's column.
+const SHOW_CHARS: usize = 120;
+
+/// `text` cut to [`SHOW_CHARS`] characters around character `col` (0-based), with `…`
+/// where it was cut; returns the cut text and the new position of `col`.
+fn window(text: &str, col: usize) -> (String, usize) {
+    let n = text.chars().count();
+    if n <= SHOW_CHARS {
+        return (text.to_string(), col);
+    }
+    let start = col.saturating_sub(SHOW_CHARS / 2).min(n - SHOW_CHARS);
+    let mut out: String = text.chars().skip(start).take(SHOW_CHARS).collect();
+    let mut at = col - start;
+    if start > 0 {
+        out.insert(0, '…');
+        at += 1;
+    }
+    if start + SHOW_CHARS < n {
+        out.push('…');
+    }
+    (out, at)
+}
+
 impl InputError {
     fn new(file: &Path, s: &SyntaxError) -> InputError {
-        let (src, span) = if s.line_text.is_empty() {
+        let (line_text, col) = window(&s.line_text, s.column.saturating_sub(1) as usize);
+        let (src, span) = if line_text.is_empty() {
             (None, None)
         } else {
-            let byte = s
-                .line_text
+            let byte = line_text
                 .char_indices()
-                .nth(s.column.saturating_sub(1) as usize)
+                .nth(col)
                 .map(|(b, _)| b)
-                .unwrap_or(s.line_text.len());
-            let mut text = s.line_text.clone();
+                .unwrap_or(line_text.len());
+            let mut text = line_text;
             if byte >= text.len() {
                 // At the end of the line: point at a blank after the last character.
                 text.push(' ');
@@ -107,7 +173,7 @@ impl InputError {
             line: s.line,
             column: s.column,
             expected: s.expected.clone(),
-            found: s.found.clone(),
+            found: window(&s.found, 0).0,
             src,
             span,
         }
@@ -156,19 +222,34 @@ pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
             },
         )),
         LowerError::Output(io) => miette::Report::new(IoFailure {
-            context: "writing the output failed".into(),
+            context: OUTPUT_FAILED.into(),
             source: io,
         }),
     }
 }
 
+const OUTPUT_FAILED: &str = "writing the output failed";
+
+/// Name the output in a failure to write it (a full disk, a closed device): the lowering
+/// that streams into it does not know its name.
+pub fn name_output(e: miette::Report, output: &Path) -> miette::Report {
+    if e.downcast_ref::<IoFailure>()
+        .is_some_and(|f| f.context == OUTPUT_FAILED)
+    {
+        e.wrap_err(format!("{}: cannot write", output.display()))
+    } else {
+        e
+    }
+}
+
 fn open(path: &Path) -> miette::Result<BufReader<File>> {
+    super::output::register_input(path);
     let f =
         File::open(path).map_err(|e| miette::miette!("{}: cannot open: {e}", path.display()))?;
     Ok(BufReader::with_capacity(1 << 16, f))
 }
 
-/// Decide whether `path` holds CLSF or contact12, from its first 64 KiB.
+/// Decide whether `path` holds CLSF, contact12 or G-code, from its first 64 KiB.
 pub fn detect(path: &Path) -> miette::Result<InputKind> {
     let mut head = Vec::with_capacity(1 << 16);
     open(path)?
@@ -178,6 +259,8 @@ pub fn detect(path: &Path) -> miette::Result<InputKind> {
     let text = String::from_utf8_lossy(&head);
     Ok(if looks_like_contact12(&text) {
         InputKind::Contact12
+    } else if looks_like_gcode(&text) {
+        InputKind::Gcode
     } else {
         InputKind::Clsf
     })
@@ -188,7 +271,7 @@ pub fn detect(path: &Path) -> miette::Result<InputKind> {
 /// only when `opts.keep_postures`.
 pub fn stream_program(
     path: &Path,
-    opts: LowerOptions,
+    opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
 ) -> miette::Result<Program> {
     let kind = detect(path)?;
@@ -201,10 +284,16 @@ pub fn stream_from(
     path: &Path,
     kind: InputKind,
     reader: impl BufRead,
-    opts: LowerOptions,
+    opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
 ) -> miette::Result<Program> {
-    let mut low = Lowerer::new(opts);
+    let opts = opts.into();
+    let mut low = Lowerer::new(opts.lower.clone());
+    let stem = || {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
     match kind {
         InputKind::Clsf => {
             for rec in ClsfReader::new(reader) {
@@ -213,11 +302,25 @@ pub fn stream_from(
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
         }
+        InputKind::Gcode => {
+            let Some(machine) = opts.machine.as_ref() else {
+                return Err(miette::miette!(
+                    "{}: G-code is read through the machine's kinematics: give --machine MACHINE.toml",
+                    path.display()
+                ));
+            };
+            let mut nc = NcReader::new(machine, opts.rtcp, &stem())
+                .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
+            for block in GcodeReader::new(reader) {
+                let block = block.map_err(|e| parse_diagnostic(path, e))?;
+                nc.push(&block, &mut low, sink)
+                    .map_err(|e| lower_diagnostic(path, e))?;
+            }
+            nc.finish(&mut low, sink)
+                .map_err(|e| lower_diagnostic(path, e))?;
+        }
         InputKind::Contact12 => {
-            let name = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
+            let name = stem();
             low.begin_path(&name, "", sink)
                 .map_err(|e| lower_diagnostic(path, e))?;
             for row in Contact12Reader::new(reader) {
@@ -235,8 +338,9 @@ pub fn read_program(path: &Path) -> miette::Result<Program> {
     read_program_with(path, LowerOptions::default())
 }
 
-/// [`read_program`] with options (e.g. `apply_msys` for `--absolute`).
-pub fn read_program_with(path: &Path, opts: LowerOptions) -> miette::Result<Program> {
+/// [`read_program`] with options (e.g. `apply_msys` for `--absolute`, the machine for
+/// G-code).
+pub fn read_program_with(path: &Path, opts: impl Into<ReadOptions>) -> miette::Result<Program> {
     let mut sink = |_: &Toolpath, _: &Posture| Ok(());
     stream_program(path, opts, &mut sink)
 }

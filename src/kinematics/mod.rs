@@ -24,7 +24,7 @@ pub mod machine;
 pub mod plan;
 
 pub use blocks::{Blocks, Limit, Settings};
-pub use chain::{IkTracker, Joints, Pose};
+pub use chain::{IkFailure, IkTracker, Joints, Pose};
 pub use machine::Machine;
 pub use plan::Timing;
 use rayon::prelude::*;

@@ -3,6 +3,8 @@
 //! Lengths are mm and angles radians everywhere inside the library; conversion to µm,
 //! degrees and mm/min happens only at the interface (`cli`, `io`, `report`).
 
+pub mod limits;
+
 use nalgebra as na;
 
 pub mod rng;

@@ -237,9 +237,31 @@ impl Preprocess {
     }
 }
 
+/// Nesting indices larger than this many times the evaluation length filter nothing useful
+/// and would only cost memory (the kernel spans ±λ).
+pub const MAX_NESTING_TO_EXTENT: f64 = 100.0;
+
+/// Refuse nesting indices far beyond the data's extent `extent_um`.
+fn check_nesting(pp: &Preprocess, extent_um: f64) -> Result<(), MetricsError> {
+    for (name, v) in [("λs", pp.lambda_s_um), ("λc", pp.lambda_c_um)] {
+        if let Some(v) = v
+            && v > MAX_NESTING_TO_EXTENT * extent_um.max(1e-9)
+        {
+            return Err(MetricsError::BadSetting(format!(
+                "the nesting index {name} = {v} µm is more than {MAX_NESTING_TO_EXTENT} times the data's extent ({extent_um} µm)"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Apply the preprocessing chain to a map (returns a new, possibly cropped, map).
 pub fn preprocess_map(map: &HeightMap, pp: &Preprocess) -> Result<HeightMap, MetricsError> {
     pp.check()?;
+    check_nesting(
+        pp,
+        (map.nx as f64 * map.dx_um).max(map.ny as f64 * map.dy_um),
+    )?;
     let mut m = map.clone();
     if pp.level.degree() > 0 && !fit_remove_map(&mut m, pp.level.degree()) {
         return Err(MetricsError::TooFew(format!(
@@ -291,6 +313,7 @@ pub fn preprocess_map(map: &HeightMap, pp: &Preprocess) -> Result<HeightMap, Met
 /// Apply the preprocessing chain to a profile (1-D polynomial, 1-D Gaussian filters).
 pub fn preprocess_profile(p: &Profile, pp: &Preprocess) -> Result<Profile, MetricsError> {
     pp.check()?;
+    check_nesting(pp, p.z.len() as f64 * p.step_um)?;
     let mut z = p.z.clone();
     if pp.level.degree() > 0 && !fit_remove_line(&mut z, pp.level.degree()) {
         return Err(MetricsError::TooFew(format!(

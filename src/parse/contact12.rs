@@ -187,6 +187,10 @@ impl<R: BufRead> Contact12Reader<R> {
                 return Ok(None);
             }
             self.line = self.line.saturating_add(1);
+            // A UTF-8 byte-order mark at the start of the file is not part of the text.
+            if self.line == 1 && self.buf.starts_with(b"\xEF\xBB\xBF") {
+                self.buf.drain(..3);
+            }
             let mut end = self.buf.len();
             while end > 0 && (self.buf[end - 1] == b'\n' || self.buf[end - 1] == b'\r') {
                 end -= 1;
@@ -245,7 +249,7 @@ impl<R: BufRead> Iterator for Contact12Reader<R> {
 /// is neither blank nor a `$$` comment: contact12 when its first field is a number or NA,
 /// or when it is a header of at least 12 fields without a `/`.
 pub fn looks_like_contact12(head: &str) -> bool {
-    for line in head.lines() {
+    for line in head.trim_start_matches('\u{feff}').lines() {
         let t = line.trim();
         if t.is_empty() || t.starts_with("$$") {
             continue;
@@ -263,6 +267,14 @@ pub fn looks_like_contact12(head: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_byte_order_mark_is_not_a_header() {
+        let text = "\u{feff}1 2 3 0 0 1 1 2 3 0 0 1\n4 5 6 0 0 1 4 5 6 0 0 1\n";
+        assert!(looks_like_contact12(text));
+        let r = rows(text).unwrap();
+        assert_eq!(r.len(), 2);
+    }
 
     fn rows(s: &str) -> Result<Vec<Contact12Row>, ParseError> {
         Contact12Reader::new(s.as_bytes()).collect()

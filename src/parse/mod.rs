@@ -1,7 +1,9 @@
-//! Syntax of NX CLSF and of the 12-column contact file (contact12): nom grammars that
-//! turn text into records with spans (line, column). No geometry, no units.
+//! Syntax of NX CLSF (and the wider APT family), of the 12-column contact file (contact12)
+//! and of ISO G-code: grammars that turn text into records or blocks with spans (line,
+//! column). No geometry, no units.
 //!
-//! The accepted grammars are written in `grammars/clsf.ebnf` and `grammars/contact12.ebnf`.
+//! The accepted grammars are written in `grammars/clsf.ebnf`, `grammars/contact12.ebnf`
+//! and `grammars/gcode.ebnf`.
 //! Both readers stream: they hold one line at a time, so any file size reads in constant
 //! memory. Errors carry the 1-based line and column, what was expected and what was found.
 //!
@@ -16,10 +18,12 @@
 pub mod clsf;
 pub mod contact12;
 pub mod error;
+pub mod gcode;
 pub mod number;
 pub mod position;
 
 pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
 pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
 pub use error::{ParseError, SyntaxError};
+pub use gcode::{Block, GcodeReader, looks_like_gcode};
 pub use position::line_column;

@@ -62,10 +62,15 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
                     .strip_prefix(&format!("line {line}: "))
                     .unwrap_or(&msg)
                     .to_string();
+                // The column of the line's first character (the key or table).
+                let column = text
+                    .lines()
+                    .nth(line.saturating_sub(1))
+                    .map_or(1, |l| l.len() - l.trim_start().len() + 1);
                 ConfigError {
                     file: file.clone(),
                     line: *line,
-                    column: 1,
+                    column,
                     message: msg,
                 }
             }
@@ -189,4 +194,70 @@ pub fn resolve_cutter(
         }
     );
     Ok((cutter, what, Vec::new()))
+}
+
+/// The extent of the tool paths of `file` for budgets (one pass over the file, constant
+/// memory): cutting length, cutting runs and the range of programmed feeds, of the path
+/// `only` (0-based) or of all.
+pub fn path_extent(
+    file: &Path,
+    read: impl Into<crate::io::toolpath::ReadOptions>,
+    only: Option<usize>,
+) -> miette::Result<crate::resample::PathExtent> {
+    use crate::toolpath::{MotionKind, Posture, Toolpath};
+    let mut runs = 0usize;
+    let mut in_run = false;
+    let mut index: Option<usize> = None;
+    let mut last_name = String::new();
+    let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
+        if path.stats.postures == 1 {
+            index = Some(index.map_or(0, |i| i + 1));
+            in_run = false;
+            last_name = path.name.clone();
+        }
+        if only.is_some() && index != only {
+            return Ok(());
+        }
+        let cut = p.motion == MotionKind::Cut;
+        if cut && !in_run {
+            runs += 1;
+        }
+        in_run = cut;
+        Ok(())
+    };
+    let program = crate::io::toolpath::stream_program(file, read, &mut sink)?;
+    let mut extent = crate::resample::PathExtent {
+        runs,
+        ..Default::default()
+    };
+    for (i, p) in program.paths.iter().enumerate() {
+        if only.is_some_and(|o| o != i) {
+            continue;
+        }
+        extent.cutting_mm += p.stats.cutting_length_mm;
+        for &f in &p.stats.feeds_mm_min {
+            if f > 0.0 {
+                extent.feed_range_mm_min = Some(match extent.feed_range_mm_min {
+                    Some((lo, hi)) => (lo.min(f), hi.max(f)),
+                    None => (f, f),
+                });
+            }
+        }
+    }
+    Ok(extent)
+}
+
+/// Bytes per row of `crest resample`'s CSV, for the output budget.
+pub const RESAMPLE_ROW_BYTES: f64 = 200.0;
+
+/// Refuse an output estimated beyond `max_gb` unless `force`: the message gives the
+/// estimate and the options that lift the cap.
+pub fn check_output_budget(what: &str, bytes: f64, max_gb: f64, force: bool) -> miette::Result<()> {
+    if force || bytes <= max_gb * 1e9 {
+        return Ok(());
+    }
+    Err(miette::miette!(
+        "{what} would write about {:.2} GB, more than --max-output-gb {max_gb}: check the inputs (a typo in a coordinate or a tiny step?), or raise --max-output-gb / give --force",
+        bytes / 1e9
+    ))
 }

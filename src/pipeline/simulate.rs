@@ -112,14 +112,16 @@ pub struct SimulateRequest {
     pub fz_mm: Option<f64>,
     /// Programmed or predicted feed.
     pub feed: Option<FeedSource>,
-    /// Machine description for the predicted feed.
+    /// Machine description for the predicted feed (and to read G-code through).
     pub machine: Option<PathBuf>,
+    /// Tool-centre-point control of G-code input.
+    pub rtcp: crate::nc::Rtcp,
     /// Surface model.
     pub model: ModelKind,
     /// Spindle step of the ICE model, degrees.
     pub dtheta_deg: f64,
-    /// Grid spacing, µm.
-    pub grid_um: f64,
+    /// Grid spacing, µm; by default a tenth of the feed per tooth (see [`default_grid_um`]).
+    pub grid_um: Option<f64>,
     /// Grid placement.
     pub grid: GridRequest,
     /// Depth of cut, mm (default: process.toml, else 0.5).
@@ -192,6 +194,8 @@ pub struct SimulateRun {
     pub warnings: Vec<String>,
     /// Samples the path gave before culling.
     pub samples_total: usize,
+    /// Grid spacing used, µm (the option, or the default from the feed per tooth).
+    pub grid_um: f64,
     /// The cutter.
     pub cutter: Cutter,
     /// Spindle speed and feeds used.
@@ -257,10 +261,20 @@ pub fn resolve_cutting(
         (None, Some(fz), None) => (Some(fz * z * rpm), fz * z * rpm, fz),
         (None, None, Some(ff)) => (None, ff, ff / (z * rpm)),
         (None, None, None) => {
-            return Err(miette!(
-                "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
-                req.file.display()
-            ));
+            // A FEDRAT of 0 is not "no FEDRAT": name its line.
+            let zero = first_in_cut(program, |p| {
+                p.feed_mm_min.filter(|f| *f == 0.0).map(|_| p.line)
+            });
+            return Err(match zero {
+                Some(line) => miette!(
+                    "{}:{line}: the cutting moves run at FEDRAT 0 mm/min; add --feed-mm-min V or --fz-mm F",
+                    req.file.display()
+                ),
+                None => miette!(
+                    "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
+                    req.file.display()
+                ),
+            });
         }
     };
     Ok(Cutting {
@@ -329,6 +343,22 @@ impl FeedFigures {
     }
 }
 
+/// The default grid spacing: a tenth of the feed per tooth (so that each feed mark spans ten
+/// nodes), rounded down to 1, 2 or 5 × 10ⁿ µm, within 0.5 … 20 µm.
+pub fn default_grid_um(fz_mm: f64) -> f64 {
+    let target = (fz_mm * 1e3 / 10.0).clamp(0.5, 20.0);
+    let decade = 10f64.powf(target.log10().floor());
+    let m = target / decade;
+    let nice = if m >= 5.0 {
+        5.0
+    } else if m >= 2.0 {
+        2.0
+    } else {
+        1.0
+    };
+    nice * decade
+}
+
 /// Give every cutting posture of `program` that has no contact data the contact derived
 /// from the path (see [`crate::part::contact::derive`]). Returns how many postures got one.
 pub fn derive_contacts(program: &mut Program, cutter: &Cutter) -> usize {
@@ -376,12 +406,15 @@ pub fn simulate(
     req: &SimulateRequest,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> miette::Result<SimulateRun> {
-    if !(req.grid_um.is_finite() && req.grid_um > 0.0) {
-        return Err(miette!("--grid-um must be positive, got {}", req.grid_um));
+    if let Some(g) = req.grid_um {
+        if !(g.is_finite() && g > 0.0) {
+            return Err(miette!("--grid-um must be positive, got {g}"));
+        }
     }
-    if !(req.dtheta_deg.is_finite() && req.dtheta_deg > 0.0 && req.dtheta_deg <= 90.0) {
+    let dmin = crate::math::limits::MIN_DTHETA_DEG;
+    if !(req.dtheta_deg.is_finite() && req.dtheta_deg >= dmin && req.dtheta_deg <= 90.0) {
         return Err(miette!(
-            "--dtheta-deg must be in (0, 90], got {}",
+            "--dtheta-deg must be in [{dmin}, 90], got {}",
             req.dtheta_deg
         ));
     }
@@ -420,7 +453,18 @@ pub fn simulate(
         apply_msys: req.absolute,
         ..Default::default()
     };
-    let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
+    // G-code is read through the machine, which then predicts the feed only when asked.
+    let gcode = crate::io::toolpath::detect(&req.file)? == crate::io::toolpath::InputKind::Gcode;
+    let read = crate::io::toolpath::ReadOptions {
+        lower,
+        machine: match (&req.machine, gcode) {
+            (Some(m), true) => Some(super::load_machine(m)?),
+            _ => None,
+        },
+        rtcp: req.rtcp,
+    };
+    let read_machine = read.machine.clone();
+    let mut program = crate::io::toolpath::read_program_with(&req.file, read)?;
     let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
         req.tool.as_deref(),
         &program,
@@ -430,7 +474,14 @@ pub fn simulate(
     )?;
     warnings.extend(tool_warnings);
     let cutting = resolve_cutting(req, &process, &program, cutter.teeth())?;
-    let machine = resolve_feed_source(req.feed, req.machine.as_deref())?;
+    let machine = match (gcode, req.feed) {
+        (true, Some(FeedSource::Predicted)) => read_machine,
+        (true, _) => None,
+        (false, _) => resolve_feed_source(req.feed, req.machine.as_deref())?,
+    };
+    let grid_um = req
+        .grid_um
+        .unwrap_or_else(|| default_grid_um(cutting.fz_mm));
     let ap_mm = req.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
         return Err(miette!("--ap-mm must be positive, got {ap_mm}"));
@@ -535,6 +586,30 @@ pub fn simulate(
     if let Some(f) = cutting.feed_mm_min {
         ropts = ropts.with_feed_mm_min(f);
     }
+    // The budget: the samples the resampling streams (before culling) follow the path.
+    {
+        let mut extent = crate::resample::PathExtent::default();
+        for &i in &paths {
+            let p = &program.paths[i];
+            extent.cutting_mm += p.stats.cutting_length_mm;
+            extent.runs += p.cutting_runs().len();
+        }
+        let est = crate::resample::estimate_samples(
+            &extent,
+            mode,
+            cutting.fz_mm,
+            cutter.teeth(),
+            Some(cutting.rpm),
+        );
+        let cap = crate::math::limits::MAX_SAMPLES as f64;
+        if est > cap {
+            return Err(miette!(
+                "{file}: {:.1} mm of cutting moves would be resampled into about {est:.3e} poses (more than {cap:.0e}): check the feed per tooth ({} mm) and Δθ",
+                extent.cutting_mm,
+                cutting.fz_mm
+            ));
+        }
+    }
     let mut subset = Subset::default();
     let mut all_samples = (0usize, 0.0f64, (f64::INFINITY, f64::NEG_INFINITY, 0.0f64));
     let mut run_base = 0;
@@ -595,7 +670,7 @@ pub fn simulate(
             x1_mm: 0.0,
             y1_mm: 0.0,
         }),
-        req.grid_um * 1e-3,
+        grid_um * 1e-3,
     );
     sopts.depth_mm = ap_mm;
     sopts.process = process.effects(super::tool_min_chip(req.tool.as_deref())?);
@@ -726,6 +801,7 @@ pub fn simulate(
         reference,
         warnings,
         samples_total,
+        grid_um,
         cutter,
         cutting,
         ap_mm,

@@ -59,11 +59,13 @@
 //! ```
 
 mod curve;
+mod estimate;
 mod sphere;
 mod spindle;
 mod stream;
 mod walker;
 
+pub use estimate::{PathExtent, estimate_samples};
 pub use spindle::{SpindleScan, SpindleSource};
 pub use stream::{Resampler, resample, resample_with};
 
@@ -289,6 +291,9 @@ pub enum ResampleError {
         /// The feed, mm/min.
         value: f64,
     },
+    /// The feed given in the options is zero, negative or not finite.
+    #[error("the feed must be positive and finite, got {0} mm/min")]
+    InvalidOptionFeed(f64),
     /// Neither a feed nor a spindle speed is known.
     #[error(
         "no feed and no spindle speed: the path has no FEDRAT or SPINDL; set a feed \

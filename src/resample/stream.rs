@@ -72,7 +72,7 @@ fn validate(opts: &Options) -> Result<(), ResampleError> {
     }
     if let Some(v) = opts.feed_mm_min {
         if !(v.is_finite() && v > 0.0) {
-            return Err(ResampleError::InvalidFeed { line: 0, value: v });
+            return Err(ResampleError::InvalidOptionFeed(v));
         }
     }
     Ok(())

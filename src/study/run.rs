@@ -138,6 +138,12 @@ pub fn simulate_run(
     };
     let z = cutter.teeth().max(1) as f64;
     let fz_mm = p.feed_mm_min / (z * design.rpm);
+    crate::math::limits::within(
+        "the feed per tooth",
+        "mm",
+        fz_mm,
+        crate::math::limits::FZ_MM,
+    )?;
     let reach = reach_mm(cutter, &orientation.axis_fgn(), REACH_HEIGHT_MM)?;
     let win = run_window(design, reach, fz_mm, step_mm);
     let mut spec = PathSpec::new(

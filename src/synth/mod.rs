@@ -314,6 +314,40 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         ));
     }
     let (length, width) = spec.size_mm;
+    if length > 1e4 || width > 1e4 {
+        return Err(SynthError::Invalid(format!(
+            "the field {length} × {width} mm is beyond 10 m"
+        )));
+    }
+    if !spec.pass_angle_rad.is_finite() {
+        return Err(SynthError::Invalid(format!(
+            "the pass angle must be finite, got {}",
+            spec.pass_angle_rad
+        )));
+    }
+    for (what, unit, v, range) in [
+        (
+            "the feed",
+            "mm/min",
+            spec.feed_mm_min,
+            crate::math::limits::FEED_MM_MIN,
+        ),
+        (
+            "the spindle speed",
+            "rpm",
+            spec.spindle_rpm,
+            crate::math::limits::RPM,
+        ),
+    ] {
+        crate::math::limits::within(what, unit, v, range).map_err(SynthError::Invalid)?;
+    }
+    if length / spec.point_step_mm > 1e6 {
+        return Err(SynthError::Invalid(format!(
+            "{:.0} points of {} mm along a {length} mm pass are too many (at most 1e6)",
+            length / spec.point_step_mm,
+            spec.point_step_mm
+        )));
+    }
     let du = Vec3::new(spec.pass_angle_rad.cos(), spec.pass_angle_rad.sin(), 0.0);
     let dv = Vec3::new(-du.y, du.x, 0.0);
     let n_points = ((length / spec.point_step_mm).ceil() as usize).max(1) + 1;
@@ -438,6 +472,7 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
         length_mm: 75.0,
         taper_rad: 0.0,
         tip_rad: 0.0,
+        apt: None,
     };
     let path = Toolpath {
         name: spec.name.clone(),

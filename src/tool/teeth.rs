@@ -27,10 +27,11 @@ use std::f64::consts::{FRAC_PI_2, TAU};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Rule {
-    /// 002 Eq 8: r_j(z_c) > max r − hc(nominal fz).
-    #[default]
+    /// 002 Eq 8: r_j(z_c) > max r − hc(nominal fz) (the paper's rule, for reproducing it).
     Paper,
-    /// Lower envelope of the teeth's feed-direction profiles.
+    /// Lower envelope of the teeth's feed-direction profiles (the default: a tooth cuts
+    /// where its marks reach below the others').
+    #[default]
     Exact,
 }
 

@@ -10,12 +10,15 @@
 //! [`LowerOptions::apply_msys`] maps them to the absolute frame with the path's `MSYS`.
 //! Lengths become mm (`UNITS/INCH` and `IPM`/`IPR` feeds are converted), angles radians.
 
+mod apt;
+mod contour;
+
 use super::geom::Spline;
 use super::{
     ArcMove, Contact, MotionKind, Posture, Program, RawRecord, ToolData, Toolpath, Warning,
 };
 use crate::math::{Point3, Vec3, normalize_or_none};
-use crate::parse::{Arg, Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+use crate::parse::{Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
 use std::collections::HashMap;
 
 /// mm per inch.
@@ -78,6 +81,21 @@ fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError 
     }
 }
 
+/// Refuse a point beyond the plausibility limit ([`crate::math::limits::MAX_COORD_MM`]):
+/// a typo in a file must not cost unbounded time or output later.
+fn check_coords(p: &Point3, line: u32, column: u32) -> Result<(), LowerError> {
+    let lim = crate::math::limits::MAX_COORD_MM;
+    match p.coords.iter().find(|c| c.is_nan() || c.abs() > lim) {
+        Some(c) => Err(invalid(
+            line,
+            column,
+            "a coordinate within ±100000 mm (100 m)",
+            format!("{c}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Callback receiving each finished posture with the header of its path.
 pub type PostureSink<'a> = dyn FnMut(&Toolpath, &Posture) -> std::io::Result<()> + 'a;
 
@@ -119,6 +137,23 @@ pub struct Lowerer {
     frame: Option<MsysFrame>,
     /// The open path was started by a `TOOL PATH` record (and so needs `END-OF-PATH`).
     opened_by_record: bool,
+    /// Records of the wider APT family were seen (`PARTNO`, `CUTTER`, `LOADTL`, …): such
+    /// files have no `TOOL PATH` records, so motion outside one is no finding.
+    apt: bool,
+    /// `PARTNO` text: the name of paths started without a `TOOL PATH` record.
+    partno: Option<String>,
+    /// The last `CUTTER` tool: the tool of paths started without a `TOOL PATH` record.
+    cutter: Option<ToolData>,
+    /// `SET/MODE,INCR`: GOTO coordinates are increments from the current position.
+    incremental: bool,
+    /// `$$ contact contour data`: GOTO positions are contact points, not tool tips.
+    contact_contour: bool,
+    /// The pending posture's position is a contact point (contact contour data).
+    pending_cc: bool,
+    /// `PPRINT`/`TPRINT` records before the first path (they go into it).
+    notes: Vec<RawRecord>,
+    /// `TPRINT` text or `T<n>` of the last tool change: the tool name of APT paths.
+    tool_label: Option<String>,
 }
 
 /// An orthonormal MSYS frame.
@@ -210,6 +245,14 @@ impl Lowerer {
             last_out: None,
             frame: None,
             opened_by_record: false,
+            apt: false,
+            partno: None,
+            cutter: None,
+            incremental: false,
+            contact_contour: false,
+            pending_cc: false,
+            notes: Vec::new(),
+            tool_label: None,
         }
     }
 
@@ -229,6 +272,12 @@ impl Lowerer {
         }
     }
 
+    /// Record a finding of a front end that lowers its own input through this lowering
+    /// (G-code): at most five of one `kind` are kept, the rest counted.
+    pub fn note(&mut self, kind: &'static str, line: u32, column: u32, message: String) {
+        self.warn(kind, line, column, message);
+    }
+
     /// Start a tool path explicitly (contact12 input, or motion before any `TOOL PATH`).
     pub fn begin_path(
         &mut self,
@@ -240,6 +289,7 @@ impl Lowerer {
         self.path = Some(Toolpath {
             name: name.to_string(),
             tool_name: tool_name.to_string(),
+            prints: std::mem::take(&mut self.notes),
             ..Default::default()
         });
         Ok(())
@@ -252,18 +302,37 @@ impl Lowerer {
         sink: &mut PostureSink<'_>,
     ) -> Result<(), LowerError> {
         if self.path.is_none() {
-            self.warn(
-                "outside",
-                line,
-                column,
-                "motion before any TOOL PATH record; an unnamed tool path was started".into(),
-            );
-            self.begin_path("", "", sink)?;
+            if self.apt {
+                // An APT file: one path per tool, named by PARTNO, tool from CUTTER.
+                self.path_mut();
+            } else {
+                self.warn(
+                    "outside",
+                    line,
+                    column,
+                    "motion before any TOOL PATH record; an unnamed tool path was started".into(),
+                );
+                self.begin_path("", "", sink)?;
+            }
         }
         Ok(())
     }
 
+    /// The open path, or a new one: in an APT file (no `TOOL PATH` records) named by
+    /// `PARTNO`, with the tool of the last `CUTTER` and `TPRINT`/`LOADTL`.
     fn path_mut(&mut self) -> &mut Toolpath {
+        if self.path.is_none() {
+            let mut p = Toolpath {
+                prints: std::mem::take(&mut self.notes),
+                ..Default::default()
+            };
+            if self.apt {
+                p.name = self.partno.clone().unwrap_or_default();
+                p.tool_name = self.tool_label.clone().unwrap_or_default();
+                p.tool = self.cutter.clone();
+            }
+            self.path = Some(p);
+        }
         self.path.get_or_insert_with(Toolpath::default)
     }
 
@@ -279,6 +348,9 @@ impl Lowerer {
         let Some(mut p) = self.pending.take() else {
             return Ok(());
         };
+        if std::mem::take(&mut self.pending_cc) {
+            self.contact_contour_tip(&mut p);
+        }
         let start_file = self.current;
         self.current = Some(p.position);
         // Length of the move into p, in the file frame (MSYS is a rigid motion).
@@ -426,6 +498,14 @@ impl Lowerer {
                 normal_derived: false,
             });
         }
+        if self.contact_contour {
+            // The position is the contact point, not the tip: nothing to derive from.
+            return Ok(Contact {
+                point,
+                normal: *axis,
+                normal_derived: true,
+            });
+        }
         let derived = self
             .path
             .as_ref()
@@ -493,53 +573,7 @@ impl Lowerer {
                 subtype: _,
                 args,
             } => {
-                let nums: Vec<f64> = args
-                    .iter()
-                    .filter_map(|a| match a {
-                        Arg::Num(v) => Some(*v),
-                        Arg::Word(_) => None,
-                    })
-                    .collect();
-                let s = self.scale();
-                let get = |k: usize| nums.get(k).copied().unwrap_or(0.0);
-                let tool = match kind.as_str() {
-                    "MILL" => ToolData {
-                        kind: kind.clone(),
-                        diameter_mm: get(0) * s,
-                        corner_radius_mm: get(1) * s,
-                        length_mm: get(2) * s,
-                        taper_rad: get(3).to_radians(),
-                        tip_rad: get(4).to_radians(),
-                    },
-                    "DRILL" => ToolData {
-                        kind: kind.clone(),
-                        diameter_mm: get(0) * s,
-                        corner_radius_mm: get(1) * s,
-                        length_mm: get(2) * s,
-                        taper_rad: 0.0,
-                        tip_rad: get(3).to_radians(),
-                    },
-                    _ => ToolData {
-                        kind: kind.clone(),
-                        ..Default::default()
-                    },
-                };
-                if kind == "MILL" && nums.len() < 2 {
-                    return Err(invalid(
-                        line,
-                        column,
-                        "TLDATA/MILL with at least diameter and corner radius",
-                        format!("{} numbers", nums.len()),
-                    ));
-                }
-                if tool.diameter_mm < 0.0 || tool.corner_radius_mm < 0.0 {
-                    return Err(invalid(
-                        line,
-                        column,
-                        "a tool diameter and radius ≥ 0",
-                        format!("{} and {}", get(0), get(1)),
-                    ));
-                }
+                let tool = self.tldata(kind, args, line, column)?;
                 self.path_mut().tool = Some(tool);
             }
             RecordKind::Msys(m) => {
@@ -564,18 +598,26 @@ impl Lowerer {
                 p.msys_applied = applied;
             }
             RecordKind::Comment(text) => {
-                if text.to_ascii_lowercase().contains("contact contour") {
-                    self.warn(
-                        "contact-contour",
-                        line,
-                        column,
-                        "contact contour data: GOTO positions are contact points, not tool tips, and are read as tool tips".into(),
-                    );
+                let t = text.to_ascii_lowercase();
+                if t.contains("contact contour") {
+                    self.contact_contour = true;
+                } else if t.contains("centerline data") || t.contains("centreline data") {
+                    self.contact_contour = false;
                 }
             }
             RecordKind::Paint(_) | RecordKind::Cutcom(_) => {}
             RecordKind::Units(u) => self.inch = *u == LengthUnit::Inch,
-            RecordKind::LoadTool { .. } | RecordKind::SelectTool { .. } => {}
+            RecordKind::LoadTool { number, .. } => self.load_tool(*number, sink)?,
+            RecordKind::SelectTool { .. } => {}
+            RecordKind::Print { .. }
+            | RecordKind::Partno(_)
+            | RecordKind::Multax(_)
+            | RecordKind::Cutter(_)
+            | RecordKind::Tlaxis(_)
+            | RecordKind::Indirv(_)
+            | RecordKind::SetMode { .. }
+            | RecordKind::Fini
+            | RecordKind::End => self.push_apt(&rec.kind, line, column, sink)?,
             RecordKind::Fedrat { unit, value } => {
                 let per_rev = matches!(
                     unit,
@@ -654,10 +696,15 @@ impl Lowerer {
                 self.ensure_path(line, column, sink)?;
                 self.path_mut().stats.gotos += 1;
                 let s = self.scale();
-                let position = Point3::from(vec3(n.triple(0)) * s);
+                let mut position = Point3::from(vec3(n.triple(0)) * s);
+                if self.incremental {
+                    position += self.current.map_or_else(Vec3::zeros, |c| c.coords);
+                }
+                check_coords(&position, line, column)?;
                 if n.len() >= 6 {
                     self.axis = self.read_axis(n, 3, line, column)?;
                 }
+                self.pending_cc = self.contact_contour;
                 let mut p = self.posture_here(position, line);
                 if let Some(c) = self.circle.take() {
                     p.arc = Some(c.arc);
@@ -672,6 +719,7 @@ impl Lowerer {
                 self.ensure_path(line, column, sink)?;
                 let s = self.scale();
                 let position = Point3::from(vec3(n.triple(0)) * s);
+                check_coords(&position, line, column)?;
                 if n.len() >= 6 {
                     self.axis = self.read_axis(n, 3, line, column)?;
                 }
@@ -729,8 +777,10 @@ impl Lowerer {
             },
             RecordKind::Cntrl(c) => {
                 let s = self.scale();
+                let p = Point3::from(vec3(*c) * s);
+                check_coords(&p, line, column)?;
                 match &mut self.nurbs {
-                    Some(nb) => nb.cntrl.push(Point3::from(vec3(*c) * s)),
+                    Some(nb) => nb.cntrl.push(p),
                     None => self.warn(
                         "cntrl-orphan",
                         line,
@@ -765,60 +815,6 @@ impl Lowerer {
         }
     }
 
-    fn spindl(&mut self, args: &[Arg], line: u32, column: u32) {
-        let speed = args.iter().find_map(|a| match a {
-            Arg::Num(v) => Some(*v),
-            Arg::Word(_) => None,
-        });
-        if args.iter().any(|a| a.is_word("OFF")) {
-            self.spindle_rpm = None;
-            return;
-        }
-        let Some(v) = speed else {
-            return; // SPINDL/ON keeps the last speed.
-        };
-        let diameter = self
-            .path
-            .as_ref()
-            .and_then(|p| p.tool.as_ref())
-            .map(|t| t.diameter_mm);
-        let surface = if args.iter().any(|a| a.is_word("SMM")) {
-            Some(1000.0)
-        } else if args.iter().any(|a| a.is_word("SFM")) {
-            Some(304.8)
-        } else {
-            None
-        };
-        let rpm = match (surface, diameter) {
-            (None, _) => Some(v),
-            (Some(mm_per_unit), Some(d)) if d > 0.0 => {
-                Some(v * mm_per_unit / (std::f64::consts::PI * d))
-            }
-            (Some(_), _) => {
-                self.warn(
-                    "spindle-surface",
-                    line,
-                    column,
-                    "surface speed without a tool diameter: spindle speed unknown".into(),
-                );
-                None
-            }
-        };
-        self.spindle_rpm = rpm;
-        if let Some(fr) = self.feed_mm_rev {
-            self.feed_mm_min = rpm.map(|r| fr * r);
-            if let Some(f) = self.feed_mm_min {
-                self.note_feed(f);
-            }
-        }
-        if let Some(r) = rpm {
-            let st = &mut self.path_mut().stats;
-            if !st.spindles_rpm.contains(&r) && st.spindles_rpm.len() < SEEN_LIMIT {
-                st.spindles_rpm.push(r);
-            }
-        }
-    }
-
     /// Lower one contact12 line: columns 7-12 given in full = a cutting move with contact
     /// data; all of them missing or zero, or a missing/zero normal = a non-cutting move
     /// (`MotionKind::Rapid`).
@@ -833,6 +829,7 @@ impl Lowerer {
         self.path_mut().stats.gotos += 1;
         let c = &row.cl_axis;
         let position = Point3::new(c[0], c[1], c[2]);
+        check_coords(&position, line, row.columns[0])?;
         let raw_axis = Vec3::new(c[3], c[4], c[5]);
         let axis = unit_as_written(raw_axis).ok_or_else(|| {
             invalid(
@@ -920,6 +917,9 @@ impl Lowerer {
         self.last_out = None;
         self.frame = None;
         self.opened_by_record = false;
+        self.contact_contour = false;
+        self.pending_cc = false;
+        self.tool_label = None;
         Ok(())
     }
 

@@ -71,6 +71,11 @@ pub struct ToolData {
     pub taper_rad: f64,
     /// Tip angle, rad.
     pub tip_rad: f64,
+    /// The seven APT cutter parameters of `CUTTER/d,r,e,f,a,b,h`, when the file gives all
+    /// seven: diameter d, corner radius r, the corner centre's distance e from the axis and
+    /// f above the tip, the end angle a and the side angle b (rad), the height h (lengths
+    /// mm). Diameter, corner radius, length, tip and taper angles above are filled from it.
+    pub apt: Option<[f64; 7]>,
 }
 
 /// How the tool reached a posture.
@@ -152,6 +157,8 @@ pub struct Toolpath {
     pub stats: PathStats,
     /// Unknown records kept raw (at most 1000 per path).
     pub raw_records: Vec<RawRecord>,
+    /// `PPRINT`/`TPRINT` texts, kept as comments (at most 1000 per path).
+    pub prints: Vec<RawRecord>,
 }
 
 /// What lowering counted in one tool path.

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 /// The library's stages in pipeline order; a stage may use only earlier ones.
-const STAGES: [&str; 16] = [
+const STAGES: [&str; 17] = [
     "math",
     "parse",
     "toolpath",
@@ -15,6 +15,7 @@ const STAGES: [&str; 16] = [
     "part",
     "synth",
     "kinematics",
+    "nc",
     "surface",
     "metrics",
     "study",

@@ -5,7 +5,11 @@
 
 mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
 mod convert; // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
+mod dialects; // APT files of other CAM systems (samples/apt/), NX contact-contour data
+mod fuzz_corpus; // the fuzz corpora replayed: every input returns (no panic, abort or hang)
+mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
+mod hostile; // hostile input and lost data (issue 18): each reproduction, -o like coreutils, budgets
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties

@@ -601,12 +601,33 @@ fn help_states_default_level() {
 fn bad_inputs_exit_2_with_location() {
     let dir = tempdir();
     let f = write_sine(dir.path(), "s.csv");
+    // A bare CSV (no `# crest height map` spacing line) needs --dx-um.
+    let bare = dir.path().join("bare.csv");
+    let text = std::fs::read_to_string(&f).unwrap();
+    assert!(
+        text.starts_with("# crest height map: dx_um=0.5"),
+        "{}",
+        &text[..80]
+    );
+    let rows: String = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&bare, rows).unwrap();
+    crest()
+        .args(["metrics"])
+        .arg(&bare)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--dx-um"));
+    // The CSV crest wrote carries its spacing: no flag needed.
     crest()
         .args(["metrics"])
         .arg(&f)
         .assert()
-        .code(2)
-        .stderr(predicate::str::contains("--dx-um"));
+        .success()
+        .stdout(predicate::str::contains("dx 0.5 µm, dy 0.5 µm"));
     let bad = dir.path().join("bad.csv");
     std::fs::write(&bad, "1,2\n3,oops\n").unwrap();
     crest()

@@ -328,7 +328,7 @@ fn report_with_the_simulate_model() {
     );
     let study = format!(
         "title = \"simulate\"\ntool = \"{ROOT}/samples/tools/ball-r5-z4.toml\"\nmodel = \"simulate\"\n\
-         fz_mm = 0.05\nap_mm = 0.4\n[simulate]\nsurface_model = \"ice\"\ngrid_um = 2.0\ndtheta_deg = 1.0\n\
+         fz_mm = 0.05\nap_mm = 0.4\nrule = \"paper\"\n[simulate]\nsurface_model = \"ice\"\ngrid_um = 2.0\ndtheta_deg = 1.0\n\
          [[case]]\nlead_deg = 15.0\nside = \"concave\"\n"
     );
     write(dir.path(), "s.toml", &study);
@@ -622,7 +622,10 @@ fn bad_study_and_tool_are_rejected() {
     assert_bad(
         &w("z.toml", text.replace("fz_mm = 0.05", "fz_mm = -0.05")),
         &table,
-        &["z.toml", "fz_mm must be positive"],
+        &[
+            "z.toml",
+            "z.toml:28:9: fz_mm must lie between 0.000001 and 100 mm, found -0.05",
+        ],
     );
     assert_bad(
         &w(

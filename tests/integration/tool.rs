@@ -428,6 +428,8 @@ fn json_has_the_contract_keys_and_table3_values() {
         "0.4",
         "--fz-mm",
         "0.05",
+        "--rule",
+        "paper",
         "--json",
     ]);
     for key in [

@@ -445,13 +445,136 @@ pub(super) fn parse_record(i: Span<'_>) -> Res<'_, RecordKind> {
                 Ok((j, RecordKind::SelectTool { number }))
             }
         }
-        _ => {
-            // Unknown or pass-through record: keep the whole text.
-            let frag = i.fragment();
-            let rest = take_n(i, frag.len());
-            Ok((rest, unknown(w, &word_start)))
+        "PPRINT" | "TPRINT" | "PARTNO" => Ok(text_record(w, i)),
+        "MULTAX" => {
+            let (j, _) = space0(i)?;
+            if j.fragment().is_empty() {
+                return Ok((j, RecordKind::Multax(true)));
+            }
+            let (j, ()) = need_slash(i, "MULTAX")?;
+            let (k, a) = arg(j)?;
+            let on = if a.is_word("ON") {
+                true
+            } else if a.is_word("OFF") {
+                false
+            } else {
+                return fail(j, "ON or OFF");
+            };
+            let (k, ()) = end(k)?;
+            Ok((k, RecordKind::Multax(on)))
         }
+        "CUTTER" => {
+            let (i, ()) = need_slash(i, "CUTTER")?;
+            if starts_with_word(i) {
+                // CUTTER/DISPLY,… and other non-geometric forms are kept raw.
+                return Ok(raw_rest(w, i, &word_start));
+            }
+            let (j, n) = numbers(i, 7, false)?;
+            let (j, ()) = end(j)?;
+            Ok((j, RecordKind::Cutter(n)))
+        }
+        "TLAXIS" | "INDIRV" => {
+            let (i, ()) = need_slash(i, w)?;
+            if starts_with_word(i) {
+                // TLAXIS/NORMPS, … (axis modes of APT source) are kept raw.
+                return Ok(raw_rest(w, i, &word_start));
+            }
+            let (j, n) = numbers(i, 3, false)?;
+            if n.len() != 3 {
+                return fail_found(
+                    j,
+                    format!("3 numbers in {w}"),
+                    format!("{} numbers", n.len()),
+                );
+            }
+            let (j, ()) = end(j)?;
+            Ok((
+                j,
+                if w == "TLAXIS" {
+                    RecordKind::Tlaxis(n.triple(0))
+                } else {
+                    RecordKind::Indirv(n.triple(0))
+                },
+            ))
+        }
+        "SET" => {
+            let Ok((i, ())) = slash(i) else {
+                return Ok(raw_rest(w, i, &word_start));
+            };
+            let (j, a) = args(i)?;
+            let (j, ()) = end(j)?;
+            if a.len() == 2 && a[0].is_word("MODE") {
+                if a[1].is_word("ABSOL") {
+                    return Ok((j, RecordKind::SetMode { absolute: true }));
+                }
+                if a[1].is_word("INCR") {
+                    return Ok((j, RecordKind::SetMode { absolute: false }));
+                }
+            }
+            Ok((j, unknown(w, &word_start)))
+        }
+        "LOADTL" => {
+            let (i, ()) = need_slash(i, "LOADTL")?;
+            let (j, a) = args(i)?;
+            let number = match a.first() {
+                Some(Arg::Num(v)) => *v,
+                _ => return fail(i, "a tool number"),
+            };
+            let (j, ()) = end(j)?;
+            Ok((
+                j,
+                RecordKind::LoadTool {
+                    number,
+                    args: a[1..].to_vec(),
+                },
+            ))
+        }
+        "FINI" | "END" if i.fragment().trim().is_empty() => {
+            let (j, ()) = end(i)?;
+            Ok((
+                j,
+                if w == "FINI" {
+                    RecordKind::Fini
+                } else {
+                    RecordKind::End
+                },
+            ))
+        }
+        _ => Ok(raw_rest(w, i, &word_start)),
     }
+}
+
+/// Unknown or pass-through record: keep the whole text.
+fn raw_rest<'a>(w: &str, i: Span<'a>, start: &Span<'_>) -> (Span<'a>, RecordKind) {
+    let frag = i.fragment();
+    (take_n(i, frag.len()), unknown(w, start))
+}
+
+/// True when the argument list starts with a letter (a word, not a number).
+fn starts_with_word(i: Span<'_>) -> bool {
+    i.fragment()
+        .trim_start_matches([' ', '\t'])
+        .as_bytes()
+        .first()
+        .is_some_and(|b| b.is_ascii_alphabetic())
+}
+
+/// `PPRINT`, `TPRINT`, `PARTNO`: the text after `/` (or after the blank), trimmed.
+fn text_record<'a>(w: &str, i: Span<'a>) -> (Span<'a>, RecordKind) {
+    let frag = i.fragment();
+    let body = frag.trim_start_matches([' ', '\t']);
+    let body = body.strip_prefix('/').unwrap_or(body);
+    let text = body.trim().to_string();
+    let rest = take_n(i, frag.len());
+    let kind = if w == "PARTNO" {
+        RecordKind::Partno(text)
+    } else {
+        RecordKind::Print {
+            word: w.to_string(),
+            text,
+        }
+    };
+    (rest, kind)
 }
 
 fn unknown(word: &str, start: &Span<'_>) -> RecordKind {
@@ -730,6 +853,91 @@ mod tests {
     }
 
     #[test]
+    fn apt_dialect_records() {
+        use super::super::record::Numbers;
+        assert_eq!(
+            one("PPRINT/ OPERATION 1, ROUGH / FINISH "),
+            RecordKind::Print {
+                word: "PPRINT".into(),
+                text: "OPERATION 1, ROUGH / FINISH".into()
+            }
+        );
+        assert_eq!(
+            one("TPRINT T1 BALL D10"),
+            RecordKind::Print {
+                word: "TPRINT".into(),
+                text: "T1 BALL D10".into()
+            }
+        );
+        assert_eq!(one("PARTNO BLADE 7"), RecordKind::Partno("BLADE 7".into()));
+        assert_eq!(one("MULTAX"), RecordKind::Multax(true));
+        assert_eq!(one("MULTAX / ON"), RecordKind::Multax(true));
+        assert_eq!(one("multax/off"), RecordKind::Multax(false));
+        assert_eq!(err("MULTAX/MAYBE").2, "ON or OFF");
+        assert_eq!(
+            one("CUTTER / 10.000000, 5.000000, 0.000000, 5.000000, 0.000000, 0.000000, 50.000000"),
+            RecordKind::Cutter(
+                Numbers::from_slice(&[10.0, 5.0, 0.0, 5.0, 0.0, 0.0, 50.0]).unwrap()
+            )
+        );
+        assert!(matches!(one("CUTTER/10"), RecordKind::Cutter(n) if n.len() == 1));
+        assert!(matches!(
+            one("CUTTER/DISPLY,ALL"),
+            RecordKind::Unknown { .. }
+        ));
+        assert_eq!(
+            err("CUTTER/1,2,3,4,5,6,7,8").2,
+            "end of record after 7 numbers"
+        );
+        assert_eq!(
+            one("TLAXIS/ 0, 0.6, 0.8"),
+            RecordKind::Tlaxis([0.0, 0.6, 0.8])
+        );
+        assert_eq!(one("INDIRV/1,0,0"), RecordKind::Indirv([1.0, 0.0, 0.0]));
+        assert!(matches!(one("TLAXIS/NORMPS"), RecordKind::Unknown { .. }));
+        assert_eq!(err("TLAXIS/0,1").2, "3 numbers in TLAXIS");
+        assert_eq!(
+            one("SET/MODE, ABSOL"),
+            RecordKind::SetMode { absolute: true }
+        );
+        assert_eq!(
+            one("SET/MODE,INCR"),
+            RecordKind::SetMode { absolute: false }
+        );
+        assert!(matches!(one("SET/MODES,OFF"), RecordKind::Unknown { .. }));
+        assert_eq!(
+            one("LOADTL/3,ADJUST,3"),
+            RecordKind::LoadTool {
+                number: 3.0,
+                args: vec![Arg::Word("ADJUST".into()), Arg::Num(3.0)]
+            }
+        );
+        assert_eq!(err("LOADTL/T3").2, "a tool number");
+        assert_eq!(one("FINI"), RecordKind::Fini);
+        assert_eq!(one("END "), RecordKind::End);
+        assert!(matches!(one("END/PROG"), RecordKind::Unknown { .. }));
+        // Blanks around the slash and after the commas.
+        match one("GOTO / 1.0, 2.0, 3.0, 0.0, 0.0, 1.0") {
+            RecordKind::Goto(n) => assert_eq!(n.len(), 6),
+            k => panic!("{k:?}"),
+        }
+        assert_eq!(
+            one("FEDRAT/ 1200.000000, MMPM"),
+            RecordKind::Fedrat {
+                unit: Some(FeedUnit::Mmpm),
+                value: 1200.0
+            }
+        );
+        assert_eq!(
+            one("FEDRAT/PERMIN, 50"),
+            RecordKind::Fedrat {
+                unit: Some(FeedUnit::Permin),
+                value: 50.0
+            }
+        );
+    }
+
+    #[test]
     fn unknown_records_are_kept() {
         assert_eq!(
             one("COOLNT/ON"),
@@ -738,7 +946,7 @@ mod tests {
                 text: "COOLNT/ON".into()
             }
         );
-        assert!(matches!(one("FINI"), RecordKind::Unknown { .. }));
+        assert!(matches!(one("DISPLY/ON"), RecordKind::Unknown { .. }));
         assert!(matches!(one("rapid"), RecordKind::Rapid));
     }
 }

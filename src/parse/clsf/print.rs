@@ -125,6 +125,28 @@ impl fmt::Display for RecordKind {
                 LengthUnit::Inch => "UNITS/INCH",
             }),
             RecordKind::EndOfPath => f.write_str("END-OF-PATH"),
+            RecordKind::Print { word, text } => write!(f, "{word}/{text}"),
+            RecordKind::Partno(t) => write!(f, "PARTNO {t}"),
+            RecordKind::Multax(on) => f.write_str(if *on { "MULTAX/ON" } else { "MULTAX/OFF" }),
+            RecordKind::Cutter(n) => {
+                f.write_str("CUTTER/")?;
+                write_nums(f, n.as_slice())
+            }
+            RecordKind::Tlaxis(v) => {
+                f.write_str("TLAXIS/")?;
+                write_nums(f, v)
+            }
+            RecordKind::Indirv(v) => {
+                f.write_str("INDIRV/")?;
+                write_nums(f, v)
+            }
+            RecordKind::SetMode { absolute } => f.write_str(if *absolute {
+                "SET/MODE,ABSOL"
+            } else {
+                "SET/MODE,INCR"
+            }),
+            RecordKind::Fini => f.write_str("FINI"),
+            RecordKind::End => f.write_str("END"),
             RecordKind::Unknown { text, .. } => f.write_str(text),
         }
     }
@@ -143,6 +165,18 @@ mod tests {
             "SPINDL/RPM,1000,CLW",
             "KNOT/0.1,0.5,1",
             "TOOL PATH/A-1,TOOL,B_2",
+            "PPRINT/OPERATION 1, ROUGH",
+            "TPRINT/T1 BALL D10",
+            "PARTNO BLADE-7",
+            "MULTAX/ON",
+            "MULTAX/OFF",
+            "CUTTER/10,5,0,5,0,0,50",
+            "TLAXIS/0,0,1",
+            "INDIRV/1,0,0",
+            "SET/MODE,ABSOL",
+            "SET/MODE,INCR",
+            "FINI",
+            "END",
         ] {
             let r = one(s);
             assert_eq!(r.to_string(), s);

@@ -59,6 +59,10 @@ impl<R: BufRead> ClsfReader<R> {
                 return self.parse_joined().map(Some);
             }
             self.line = self.line.saturating_add(1);
+            // A UTF-8 byte-order mark at the start of the file is not part of the text.
+            if self.line == 1 && self.buf.starts_with(b"\xEF\xBB\xBF") {
+                self.buf.drain(..3);
+            }
             let mut end = self.buf.len();
             if end > 0 && self.buf[end - 1] == b'\n' {
                 end -= 1;
@@ -267,6 +271,13 @@ mod tests {
     use super::super::err;
     use super::super::record::Numbers;
     use super::*;
+
+    #[test]
+    fn a_byte_order_mark_is_skipped() {
+        let recs = parse_str("\u{feff}TOOL PATH/A,TOOL,T\nGOTO/1,2,3\nEND-OF-PATH\n").unwrap();
+        assert_eq!(recs.len(), 3);
+        assert_eq!((recs[1].line, recs[1].column), (2, 1));
+    }
 
     #[test]
     fn continuation_comments_and_line_endings() {

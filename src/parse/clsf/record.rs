@@ -178,7 +178,7 @@ pub enum RecordKind {
     Knot(Vec<f64>),
     /// `CNTRL/x,y,z`.
     Cntrl([f64; 3]),
-    /// `LOAD/TOOL,n[,…]`.
+    /// `LOAD/TOOL,n[,…]` or `LOADTL/n[,…]`.
     LoadTool {
         /// Tool number.
         number: f64,
@@ -200,6 +200,32 @@ pub enum RecordKind {
     Units(LengthUnit),
     /// `END-OF-PATH`.
     EndOfPath,
+    /// `PPRINT/text` or `TPRINT/text` (also without the slash): a comment kept as written.
+    Print {
+        /// `PPRINT` or `TPRINT`.
+        word: String,
+        /// The text after the slash (or the blank), trimmed.
+        text: String,
+    },
+    /// `PARTNO text` (or `PARTNO/text`): the part or program name.
+    Partno(String),
+    /// `MULTAX`, `MULTAX/ON` (true) or `MULTAX/OFF` (false).
+    Multax(bool),
+    /// `CUTTER/d[,r[,e,f,a,b[,h]]]`: 1 to 7 numbers as written (APT cutter parameters).
+    Cutter(Numbers),
+    /// `TLAXIS/i,j,k`: the tool axis of the following moves.
+    Tlaxis([f64; 3]),
+    /// `INDIRV/i,j,k`: the initial direction of the next move (no effect on postures).
+    Indirv([f64; 3]),
+    /// `SET/MODE,ABSOL` (true) or `SET/MODE,INCR` (false).
+    SetMode {
+        /// Absolute (true) or incremental (false) GOTO coordinates.
+        absolute: bool,
+    },
+    /// `FINI`: the end of the file.
+    Fini,
+    /// `END`: the end of a program section (no effect on postures).
+    End,
     /// Any other record, kept raw.
     Unknown {
         /// Major word, upper case.

@@ -1,0 +1,67 @@
+//! The options of the commands that read tool paths: `--machine` and `--rtcp` for G-code
+//! (read through the machine's kinematics), and how they combine with `--feed predicted`.
+
+use crest::io::toolpath::{InputKind, ReadOptions};
+use crest::kinematics::Machine;
+use crest::toolpath::LowerOptions;
+use std::path::Path;
+
+/// The `--rtcp` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum RtcpArg {
+    /// As the program says (`G43.4`, `TRAORI`, `M128` on; `G49`, `TRAFOOF`, `M129` off).
+    #[default]
+    Auto,
+    /// On throughout: X Y Z are the tool tip in the part frame.
+    On,
+    /// Off throughout: X Y Z are joint positions.
+    Off,
+}
+
+impl From<RtcpArg> for crest::nc::Rtcp {
+    fn from(r: RtcpArg) -> Self {
+        match r {
+            RtcpArg::Auto => crest::nc::Rtcp::Auto,
+            RtcpArg::On => crest::nc::Rtcp::On,
+            RtcpArg::Off => crest::nc::Rtcp::Off,
+        }
+    }
+}
+
+/// The reading options of a file of `kind`: the machine (loaded from `machine`) for
+/// G-code, none for CLSF and contact12.
+pub fn read_options(
+    kind: InputKind,
+    lower: LowerOptions,
+    machine: Option<&Path>,
+    rtcp: RtcpArg,
+) -> miette::Result<ReadOptions> {
+    let machine = match (kind, machine) {
+        (InputKind::Gcode, Some(m)) => Some(crest::pipeline::load_machine(m)?),
+        _ => None,
+    };
+    Ok(ReadOptions {
+        lower,
+        machine,
+        rtcp: rtcp.into(),
+    })
+}
+
+/// The machine to predict the feed on, for `resample` and `simulate`: for G-code the
+/// machine reads the file, and plans the feed only with `--feed predicted`; for CLSF and
+/// contact12 `--machine` means `--feed predicted` (see
+/// [`crest::pipeline::simulate::resolve_feed_source`]).
+pub fn feed_machine(
+    kind: InputKind,
+    read: &ReadOptions,
+    feed: Option<super::feed::FeedSource>,
+    machine: Option<&Path>,
+) -> miette::Result<Option<Machine>> {
+    if kind == InputKind::Gcode {
+        return Ok(match feed {
+            Some(super::feed::FeedSource::Predicted) => read.machine.clone(),
+            _ => None,
+        });
+    }
+    super::feed::resolve_feed_source(feed, machine)
+}
