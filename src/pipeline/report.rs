@@ -98,10 +98,32 @@ pub fn regression(
         ));
     }
     let inputs = load(measured, study_path)?;
+    // With --free, the model columns show the calibrated model (fitted on every case); the
+    // comparisons are then replaced by the leave-one-out values (`judge_by_loo`).
+    let calibration = match &opts.free {
+        Some(f) => Some(calibrate(&inputs, f)?),
+        None => None,
+    };
+    let (study, cutter) = match (&calibration, &opts.free) {
+        (Some(cal), Some(f)) => {
+            let free =
+                Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?;
+            let (process, cutter) = crate::study::calibrate::apply(
+                &free,
+                &cal.values(),
+                &inputs.study.process,
+                &inputs.cutter,
+            );
+            let mut study = inputs.study.clone();
+            study.process = process;
+            (study, cutter)
+        }
+        _ => (inputs.study.clone(), inputs.cutter.clone()),
+    };
     let mut reg = regress(
         &inputs.table,
-        &inputs.study,
-        &inputs.cutter,
+        &study,
+        &cutter,
         tolerance_pct,
         Provenance {
             measured_file: inputs.measured_name.clone(),
@@ -115,8 +137,7 @@ pub fn regression(
         }
         None => None,
     };
-    if opts.free.is_some() {
-        let cal = calibrate(&inputs, opts.free.as_deref().unwrap_or_default())?;
+    if let Some(cal) = calibration {
         crate::study::regression::judge_by_loo(&mut reg, cal);
     }
     if let Some((n, seed)) = opts.monte_carlo {

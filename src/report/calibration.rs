@@ -27,6 +27,7 @@ pub fn calibration_json(cal: &Calibration) -> serde_json::Value {
         "loo_rms_pct": cal.loo_rms_pct,
         "fit_rms_pct": cal.fit_rms_pct,
         "constant_loo_rms_pct": cal.constant_loo_rms_pct,
+        "factor_loo_rms_pct": cal.factor_loo_rms_pct,
         "geometric_constant": cal.geometric_constant,
         "chi2": cal.chi2,
         "dof": cal.dof,
@@ -36,12 +37,12 @@ pub fn calibration_json(cal: &Calibration) -> serde_json::Value {
 /// `calibration.csv`: one row per case and parameter.
 pub fn calibration_csv(cal: &Calibration) -> String {
     let mut s = String::from(
-        "lead_deg,side,parameter,measured_um,sigma_um,geometric_um,calibrated_um,loo_um,constant_loo_um\n",
+        "lead_deg,side,parameter,measured_um,sigma_um,geometric_um,calibrated_um,loo_um,constant_loo_um,factor_loo_um\n",
     );
     for c in &cal.cases {
         let _ = writeln!(
             s,
-            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
             c.lead_deg,
             c.side.name(),
             c.parameter,
@@ -50,7 +51,8 @@ pub fn calibration_csv(cal: &Calibration) -> String {
             c.geometric_um,
             c.calibrated_um,
             c.loo_um,
-            c.constant_loo_um
+            c.constant_loo_um,
+            c.factor_loo_um
         );
     }
     s
@@ -83,15 +85,20 @@ pub fn statement(cal: &Calibration, tolerance_pct: f64) -> Vec<String> {
         ));
     } else {
         out.push(format!(
-            "The geometric prediction differs between cases, so the fitted effects act on case-to-case differences too. For reference, a constant offset per parameter on the geometric model predicts the left-out cases with RMS {:.1} % (the calibrated model: {:.1} %).",
-            cal.constant_loo_rms_pct, cal.loo_rms_pct
+            "The geometric prediction differs between cases, so the fitted effects act on case-to-case differences too. For reference, a constant offset per parameter on the geometric model predicts the left-out cases with RMS {:.1} %, a constant factor per parameter with RMS {:.1} % (the calibrated model: {:.1} %).",
+            cal.constant_loo_rms_pct, cal.factor_loo_rms_pct, cal.loo_rms_pct
         ));
     }
     let n = cal.parameters.len();
     for i in 0..n {
         for j in i + 1..n {
             let r = cal.correlation[i][j];
-            if r.abs() > 0.9 {
+            if !r.is_finite() {
+                out.push(format!(
+                    "The correlation of {} and {} is not determined: the model's values do not change with at least one of them near the fit.",
+                    cal.parameters[i].0, cal.parameters[j].0
+                ));
+            } else if r.abs() > 0.9 {
                 out.push(format!(
                     "{} and {} are correlated at {r:+.2}: the data cannot tell them apart; only a combination of the two is determined.",
                     cal.parameters[i].0, cal.parameters[j].0
@@ -136,14 +143,14 @@ pub fn markdown(r: &Regression) -> String {
         );
         let _ = writeln!(
             s,
-            "| lead (°) | side | param | measured mean ± σ (µm) | geometric (µm) | calibrated (µm) | leave-one-out (µm) | LOO deviation (%) | constant-offset LOO (µm) | result (LOO) |"
+            "| lead (°) | side | param | measured mean ± σ (µm) | geometric (µm) | calibrated (µm) | leave-one-out (µm) | LOO deviation (%) | constant-offset LOO (µm) | constant-factor LOO (µm) | result (LOO) |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
         for c in &cal.cases {
             let d = pct(c.loo_um, c.measured_um);
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.4} ± {:.4} | {:.4} | {:.4} | {:.4} | {:+.1} | {:.4} | {} |",
+                "| {} | {} | {} | {:.4} ± {:.4} | {:.4} | {:.4} | {:.4} | {:+.1} | {:.4} | {:.4} | {} |",
                 trim_decimals(c.lead_deg, 3),
                 c.side.name(),
                 c.parameter,
@@ -154,6 +161,7 @@ pub fn markdown(r: &Regression) -> String {
                 c.loo_um,
                 d,
                 c.constant_loo_um,
+                c.factor_loo_um,
                 if d.abs() <= r.tolerance_pct {
                     "pass"
                 } else {

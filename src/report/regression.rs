@@ -311,6 +311,9 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s);
 
     let _ = writeln!(s, "## Measured against simulated\n");
+    if r.calibration.is_some() {
+        let _ = writeln!(s, "{LOO_NOTE}\n");
+    }
     let _ = writeln!(s, "| {} |", TABLE_HEAD.join(" | "));
     let _ = writeln!(s, "|{}", "---|".repeat(TABLE_HEAD.len()));
     for row in table_rows(r) {
@@ -443,7 +446,12 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     }
     let _ = writeln!(
         s,
-        "</ul>\n<h2>Measured against simulated</h2>\n<table>\n<tr>"
+        "</ul>\n<h2>Measured against simulated</h2>\n{}<table>\n<tr>",
+        if r.calibration.is_some() {
+            format!("<p>{}</p>\n", esc(LOO_NOTE))
+        } else {
+            String::new()
+        }
     );
     for h in TABLE_HEAD {
         let _ = write!(s, "<th>{}</th>", esc(h));
@@ -505,6 +513,9 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
 }
 
 pub use super::calibration::{calibration_csv, calibration_json};
+
+/// What the simulated column holds in a calibrated report.
+const LOO_NOTE: &str = "With --free, the simulated column (and the plots) hold each case's leave-one-out prediction: the model refitted without that case. The model table below shows the model fitted on every case.";
 
 /// Every file of a report, rendered in memory: `rz.svg` and `ra.svg` (for the parameters the
 /// table has), `report.html` and `report.md`, as `(file name, bytes)`.

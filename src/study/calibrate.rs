@@ -7,8 +7,15 @@
 //! standard deviation of that parameter over the table (two samples per case give a σ that
 //! can be near zero by chance, and one such case would take the whole fit). Uncertainties are
 //! the covariance (JᵀWJ)⁻¹ scaled by the reduced χ² (the scatter about the fit, not the
-//! printed σ, sets them). The same fit with a constant offset per parameter added to the
-//! geometric prediction is the reference a physical model must beat.
+//! printed σ, sets them), with J by central differences of [`FD_STEP`] of each parameter's
+//! scale: a simulated surface lives on a grid, so its Rz and Ra are step functions of h_min
+//! on the scale of the chip thickness between neighbouring nodes, and a smaller difference
+//! can land on one flat step (a zero column, a singular JᵀWJ). A parameter the data do not
+//! determine gets a NaN uncertainty, never zero.
+//!
+//! Two references a physical model must beat, each with its own leave-one-out: the
+//! geometric prediction plus a constant offset per parameter, and the geometric prediction
+//! times a constant factor per parameter.
 
 use super::measured::{MeasuredCase, Side};
 use super::regression::{Study, StudyCase, predict_case};
@@ -192,6 +199,8 @@ pub struct CalibratedCase {
     pub loo_um: f64,
     /// Geometric plus the constant offset refitted without this case, µm.
     pub constant_loo_um: f64,
+    /// Geometric times the constant factor refitted without this case, µm.
+    pub factor_loo_um: f64,
 }
 
 /// A calibration.
@@ -217,6 +226,8 @@ pub struct Calibration {
     pub fit_rms_pct: f64,
     /// The same for the constant-offset reference (geometric + one offset per parameter).
     pub constant_loo_rms_pct: f64,
+    /// The same for the constant-factor reference (geometric × one factor per parameter).
+    pub factor_loo_rms_pct: f64,
     /// Whether the geometric prediction is the same for every case (within 0.5 %).
     pub geometric_constant: bool,
 }
@@ -290,10 +301,18 @@ fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// Finite-difference step, as a fraction of a parameter's scale (its value, at least 5 % of
+/// its range up to 10).
+pub const FD_STEP: f64 = 0.05;
+
+/// The finite-difference step of parameter `i` at `x`.
+fn fd_step(x: f64, (lo, hi): (f64, f64)) -> f64 {
+    FD_STEP * x.abs().max(0.05 * (hi - lo).min(10.0))
+}
+
 /// A weighted least-squares fit of `model(x)` to `targets` (those with `use_[k]`).
 struct Fit {
     x: Vec<f64>,
-    jtj: Vec<Vec<f64>>,
     chi2: f64,
     m: usize,
 }
@@ -326,7 +345,7 @@ fn fit(
         let mut jac = vec![vec![0.0; r.len()]; n];
         for i in 0..n {
             let (lo, hi) = bounds[i];
-            let mut h = 0.01 * x[i].abs().max(0.05 * (hi - lo).min(10.0));
+            let mut h = fd_step(x[i], (lo, hi));
             if x[i] + h > hi {
                 h = -h;
             }
@@ -377,7 +396,6 @@ fn fit(
     }
     Ok(Fit {
         x,
-        jtj,
         chi2: c2,
         m: r.len(),
     })
@@ -459,11 +477,39 @@ pub fn calibrate(
     let calibrated = model(&full.x)?;
     let dof = full.m - n;
     let scale = if dof > 0 { full.chi2 / dof as f64 } else { 1.0 };
-    let cov: Vec<Vec<f64>> = invert(&full.jtj)
+    // JᵀWJ at the fit by central differences (one-sided at a bound).
+    let mut jac = vec![vec![0.0; targets.len()]; n];
+    for i in 0..n {
+        let h = fd_step(full.x[i], bounds[i]);
+        let (mut xp, mut xm) = (full.x.clone(), full.x.clone());
+        xp[i] = (full.x[i] + h).min(bounds[i].1);
+        xm[i] = (full.x[i] - h).max(bounds[i].0);
+        let (vp, vm) = (model(&xp)?, model(&xm)?);
+        for (k, t) in targets.iter().enumerate() {
+            jac[i][k] = (vp[k] - vm[k]) / (xp[i] - xm[i]) / t.sigma;
+        }
+    }
+    let jtj: Vec<Vec<f64>> = (0..n)
+        .map(|a| {
+            (0..n)
+                .map(|b| jac[a].iter().zip(&jac[b]).map(|(p, q)| p * q).sum())
+                .collect()
+        })
+        .collect();
+    let cov: Vec<Vec<f64>> = invert(&jtj)
         .into_iter()
         .map(|row| row.into_iter().map(|v| v * scale).collect())
         .collect();
-    let sd: Vec<f64> = (0..n).map(|i| cov[i][i].max(0.0).sqrt()).collect();
+    let sd: Vec<f64> = (0..n)
+        .map(|i| {
+            let v = cov[i][i];
+            if v.is_finite() && v >= 0.0 {
+                v.sqrt()
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
     let correlation = (0..n)
         .map(|i| {
             (0..n)
@@ -503,6 +549,24 @@ pub fn calibrate(
         .iter()
         .zip(&geometric)
         .map(|(t, g)| g + offset(&|u: &Target| u.case != t.case, t.rz))
+        .collect();
+    // The constant-factor reference: geometric × the weighted least-squares factor
+    // Σ w·m·g / Σ w·g² per parameter.
+    let factor = |keep: &dyn Fn(&Target) -> bool, rz: bool| {
+        let (mut sgg, mut smg) = (0.0, 0.0);
+        for (t, g) in targets.iter().zip(&geometric) {
+            if t.rz == rz && keep(t) {
+                let w = 1.0 / (t.sigma * t.sigma);
+                sgg += w * g * g;
+                smg += w * t.mean * g;
+            }
+        }
+        smg / sgg
+    };
+    let factor_loo: Vec<f64> = targets
+        .iter()
+        .zip(&geometric)
+        .map(|(t, g)| g * factor(&|u: &Target| u.case != t.case, t.rz))
         .collect();
     let rms = |v: &[f64]| {
         let d: Vec<f64> = targets
@@ -546,6 +610,7 @@ pub fn calibrate(
                 calibrated_um: calibrated[k],
                 loo_um: loo[k],
                 constant_loo_um: constant_loo[k],
+                factor_loo_um: factor_loo[k],
             }
         })
         .collect();
@@ -565,6 +630,7 @@ pub fn calibrate(
         loo_rms_pct: rms(&loo),
         fit_rms_pct: rms(&calibrated),
         constant_loo_rms_pct: rms(&constant_loo),
+        factor_loo_rms_pct: rms(&factor_loo),
         geometric_constant: spread(true) && spread(false),
     })
 }

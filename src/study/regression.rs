@@ -751,17 +751,19 @@ pub struct Regression {
 /// Attach a calibration to `reg` and judge every case by its leave-one-out prediction alone
 /// (never by the in-sample fit): a case passes when each parameter's leave-one-out value is
 /// within the tolerance of the measured mean.
+/// The comparisons then hold the leave-one-out values, so the table, the plots and the
+/// verdict all show what is judged.
 pub fn judge_by_loo(reg: &mut Regression, cal: super::calibrate::Calibration) {
+    let tol = reg.tolerance_pct;
     for c in &mut reg.cases {
         let mut pass = true;
-        for k in &c.comparisons {
+        for k in &mut c.comparisons {
             let loo = cal.cases.iter().find(|x| {
                 x.lead_deg == c.lead_deg && x.side == c.side && x.parameter == k.parameter
             });
-            let ok = loo.is_some_and(|x| {
-                (100.0 * (x.loo_um - x.measured_um) / x.measured_um).abs() <= reg.tolerance_pct
-            });
-            pass &= ok;
+            let loo_um = loo.map_or(f64::NAN, |x| x.loo_um);
+            *k = Comparison::new(&k.parameter, k.measured, loo_um, tol);
+            pass &= k.pass;
         }
         c.pass = pass;
     }
