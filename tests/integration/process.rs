@@ -187,3 +187,238 @@ fn runout_identification_recovers_period_teeth_and_rz() {
         "cases cover several numbers of cutting teeth: {seen:?}"
     );
 }
+
+/// A crest-model study (fast: one 1-D profile per case) with ploughing and texture, as TOML.
+fn crest_study_toml(offset_um: f64, phase_deg: f64, extra: &str) -> String {
+    format!(
+        "title = \"mc\"\ntool = \"{root}/samples/tools/ball-r5-z4.toml\"\nmodel = \"crest\"\n\
+         rule = \"exact\"\nfz_mm = 0.05\nap_mm = 0.4\n\
+         [runout]\noffset_um = {offset_um}\noffset_phase_deg = {phase_deg}\n\
+         [process]\nmin_chip_um = 1.5\ntexture_sq_um = 0.2\ntexture_corr_um = 20.0\ntexture_seed = 3\n\
+         {extra}\
+         [[case]]\nlead_deg = 5.0\nside = \"concave\"\n[[case]]\nlead_deg = 25.0\nside = \"convex\"\n",
+        root = crate::util::ROOT
+    )
+}
+
+use proptest::prelude::*;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
+    /// Monte Carlo bands (run-out offset and tooth deviations, and calibrated h_min and Sq
+    /// drawn from their covariance) contain the deterministic result, shrink as every input
+    /// uncertainty is scaled down by the same factor, and collapse onto the deterministic
+    /// result when the uncertainty is zero.
+    #[test]
+    fn monte_carlo_bands_contain_the_deterministic_result_and_shrink(
+        offset_um in 1.0f64..20.0,
+        phase_deg in 0.0f64..360.0,
+        sigma_offset_um in 0.05f64..0.5,
+        sigma_tooth_um in 0.05f64..0.5,
+        sigma_h_um in 0.02f64..0.3,
+        sigma_sq_um in 0.005f64..0.05,
+        seed in any::<u64>(),
+    ) {
+        use crest::study::calibrate::{Calibration, Free, apply};
+        use crest::study::montecarlo::case_bands;
+        let text = crest_study_toml(
+            offset_um,
+            phase_deg,
+            &format!(
+                "[uncertainty]\nrunout_offset_um = {sigma_offset_um}\n\
+                 tooth_deviation_um = {sigma_tooth_um}\nspindle_phase = false\n"
+            ),
+        );
+        let dir = crate::util::tempdir();
+        let path = crate::util::write(dir.path(), "mc.toml", &text);
+        let inputs = crest::pipeline::report::load(
+            &crate::util::repo("samples/measured/marin2023-table2.csv"),
+            &path,
+        )
+        .unwrap();
+        let (study, cutter) = (inputs.study, inputs.cutter);
+        let free = [Free::MinChip, Free::TextureSq];
+        let cal = Calibration {
+            parameters: vec![
+                ("min_chip_um".into(), 1.5, sigma_h_um),
+                ("texture_sq_um".into(), 0.2, sigma_sq_um),
+            ],
+            correlation: vec![vec![1.0, 0.0], vec![0.0, 1.0]],
+            covariance: vec![
+                vec![sigma_h_um * sigma_h_um, 0.0],
+                vec![0.0, sigma_sq_um * sigma_sq_um],
+            ],
+            bounds: free.iter().map(Free::bounds).collect(),
+            cases: Vec::new(),
+            chi2: 0.0,
+            dof: 1,
+            loo_rms_pct: 0.0,
+            fit_rms_pct: 0.0,
+            constant_loo_rms_pct: 0.0,
+            factor_loo_rms_pct: 0.0,
+            geometric_constant: true,
+        };
+        let (p, c) = apply(&free, &cal.values(), &study.process, &cutter);
+        let widths: Vec<Vec<f64>> = [1.0, 0.5, 0.25, 0.0]
+            .iter()
+            .map(|&k| {
+                let mut s = study.clone();
+                s.uncertainty = study.uncertainty.scaled(k);
+                let b = case_bands(&s, &cutter, Some((&cal, &free)), 64, seed).unwrap();
+                b.iter()
+                    .zip(&s.cases)
+                    .flat_map(|(b, case)| {
+                        // The deterministic result is the nominal prediction.
+                        let det = crest::study::regression::predict_case(&s, &c, case, &p, 0.0)
+                            .unwrap();
+                        assert_eq!(b.deterministic_um, (det.rz_um, det.ra_um));
+                        for (band, v, name) in [(b.rz, det.rz_um, "Rz"), (b.ra, det.ra_um, "Ra")] {
+                            assert!(band.contains(v), "k {k} lead {}: {name} {v} outside {band:?}", case.lead_deg);
+                            if k == 0.0 {
+                                assert!(band.width() <= 1e-9 * v.abs(), "k 0: {name} {band:?} against {v}");
+                            }
+                        }
+                        [b.rz.width(), b.ra.width()]
+                    })
+                    .collect()
+            })
+            .collect();
+        for w in widths.windows(2) {
+            for (big, small) in w[0].iter().zip(&w[1]) {
+                prop_assert!(*small <= *big * 1.0000001 + 1e-12, "{widths:?}");
+            }
+        }
+    }
+}
+
+/// `crest calibrate --json` carries the keys issue 16 names: `parameters` and
+/// `parameters_sigma` (name → value), `cases` with lead_deg, side, parameter, measured_um,
+/// sigma_um, geometric_um, calibrated_um, loo_um, and `loo_rms_pct`; `-o` writes the same.
+#[test]
+fn calibrate_json_has_the_documented_keys() {
+    let dir = crate::util::tempdir();
+    let study = crate::util::write(dir.path(), "s.toml", crest_study_toml(3.0, 30.0, ""));
+    let out = dir.path().join("out");
+    let v = crate::util::success_json(crate::util::crest().args([
+        "calibrate",
+        "--measured",
+        "samples/measured/marin2023-table2.csv",
+        "--study",
+        study.to_str().unwrap(),
+        "--free",
+        "min_chip_um,texture_sq_um",
+        "--json",
+        "-o",
+        out.to_str().unwrap(),
+    ]));
+    for key in ["parameters", "parameters_sigma"] {
+        let m = v[key].as_object().unwrap_or_else(|| panic!("{key}: {v}"));
+        let names: Vec<&str> = m.keys().map(String::as_str).collect();
+        assert_eq!(names, ["min_chip_um", "texture_sq_um"], "{key}");
+        assert!(
+            m.values().all(|x| x.as_f64().is_some_and(f64::is_finite)),
+            "{v}"
+        );
+    }
+    // A real fit has a positive standard uncertainty for each parameter.
+    for (name, s) in v["parameters_sigma"].as_object().unwrap() {
+        assert!(s.as_f64().unwrap() > 0.0, "{name}: σ {s}");
+    }
+    let h = v["parameters"]["min_chip_um"].as_f64().unwrap();
+    assert!((0.0..=20.0).contains(&h), "{v}");
+    let cases = v["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 4, "two cases, Rz and Ra each");
+    for c in cases {
+        for key in [
+            "lead_deg",
+            "side",
+            "parameter",
+            "measured_um",
+            "sigma_um",
+            "geometric_um",
+            "calibrated_um",
+            "loo_um",
+        ] {
+            assert!(c.get(key).is_some(), "case without {key}: {c}");
+        }
+        assert!(["Rz", "Ra"].contains(&c["parameter"].as_str().unwrap()));
+        assert!(["concave", "convex"].contains(&c["side"].as_str().unwrap()));
+        assert!(c["loo_um"].as_f64().is_some_and(f64::is_finite), "{c}");
+    }
+    assert!(v["loo_rms_pct"].as_f64().is_some_and(f64::is_finite));
+    let file = crate::util::json(&std::fs::read(out.join("calibration.json")).unwrap());
+    assert_eq!(file["parameters"], v["parameters"]);
+    assert!(out.join("calibration.csv").is_file());
+}
+
+/// `crest runout identify --json` carries period_mm, teeth_cutting, offset_um, phase_deg,
+/// tooth_deviation_um, residual_um and identifiable; `--write-tool` writes a tool that reads
+/// back with the identified deviations.
+#[test]
+fn runout_identify_json_has_the_documented_keys() {
+    let dir = crate::util::tempdir();
+    // One tooth cuts: arcs of R = 5 mm every Z·fz = 0.2 mm, irregularly sampled.
+    let mut csv = String::from("x_mm,z_um\n");
+    let (r, period) = (5.0f64, 0.2f64);
+    let mut x = 0.0;
+    let mut k = 0u32;
+    while x < 8.0 * period {
+        let d = x - (x / period).round() * period;
+        let _ = std::fmt::Write::write_fmt(
+            &mut csv,
+            format_args!("{x:.6},{:.6}\n", (r - (r * r - d * d).sqrt()) * 1e3),
+        );
+        k += 1;
+        x += 0.0004 + 0.0003 * f64::from(k % 3);
+    }
+    let profile = crate::util::write(dir.path(), "p.csv", csv);
+    let tool_out = dir.path().join("identified.toml");
+    let v = crate::util::success_json(crate::util::crest().args([
+        "runout",
+        "identify",
+        "--profile",
+        profile.to_str().unwrap(),
+        "--tool",
+        "samples/tools/ball-r5-z4.toml",
+        "--fz-mm",
+        "0.05",
+        "--lead-deg",
+        "15",
+        "--json",
+        "--write-tool",
+        tool_out.to_str().unwrap(),
+    ]));
+    for key in [
+        "period_mm",
+        "teeth_cutting",
+        "offset_um",
+        "phase_deg",
+        "tooth_deviation_um",
+        "residual_um",
+        "identifiable",
+    ] {
+        assert!(v.get(key).is_some(), "no {key}: {v}");
+    }
+    assert!(
+        (v["period_mm"].as_f64().unwrap() - 0.2).abs() < 1e-12,
+        "{v}"
+    );
+    assert_eq!(v["teeth_cutting"], serde_json::json!([1]));
+    assert_eq!(v["tooth_deviation_um"].as_array().unwrap().len(), 4);
+    // One tooth cutting: the offset and phase are not identifiable.
+    assert!(v["offset_um"].is_null() && v["phase_deg"].is_null(), "{v}");
+    let text = crate::util::read(&tool_out);
+    let cutter = crest::config::tool::load_tool_toml(&text).unwrap();
+    assert_eq!(cutter.teeth(), 4);
+    let devs: Vec<f64> = v["tooth_deviation_um"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_f64().unwrap() * 1e-3)
+        .collect();
+    for (a, b) in cutter.runout.tooth_radius_dev_mm.iter().zip(&devs) {
+        // tool.toml holds the deviations to 0.1 nm.
+        assert!((a - b).abs() <= 1e-7, "{a} {b}");
+    }
+}
