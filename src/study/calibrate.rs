@@ -257,39 +257,13 @@ fn values(targets: &[Target], preds: &[(f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
-/// Solve the small dense system `a x = b` (Gaussian elimination, partial pivoting).
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for i in 0..n {
-        let p = (i..n).max_by(|&x, &y| a[x][i].abs().total_cmp(&a[y][i].abs()))?;
-        if a[p][i].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(i, p);
-        b.swap(i, p);
-        for r in i + 1..n {
-            let f = a[r][i] / a[i][i];
-            for c in i..n {
-                a[r][c] -= f * a[i][c];
-            }
-            b[r] -= f * b[i];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|c| a[i][c] * x[c]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    Some(x)
-}
-
 fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
     let cols: Vec<Option<Vec<f64>>> = (0..n)
         .map(|j| {
             let mut e = vec![0.0; n];
             e[j] = 1.0;
-            solve(a.to_vec(), e)
+            crate::math::dense::solve(a.to_vec(), e)
         })
         .collect();
     (0..n)
@@ -300,6 +274,9 @@ fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
         })
         .collect()
 }
+
+/// The model's values at the target cases for a parameter vector.
+type ModelFn<'a> = dyn Fn(&[f64]) -> Result<Vec<f64>, String> + 'a;
 
 /// Finite-difference step, as a fraction of a parameter's scale (its value, at least 5 % of
 /// its range up to 10).
@@ -318,7 +295,7 @@ struct Fit {
 }
 
 fn fit(
-    model: &dyn Fn(&[f64]) -> Result<Vec<f64>, String>,
+    model: &ModelFn,
     targets: &[Target],
     keep: &[bool],
     x0: &[f64],
@@ -370,7 +347,7 @@ fn fit(
             for (i, row) in a.iter_mut().enumerate() {
                 row[i] += lambda * jtj[i][i].max(1e-12);
             }
-            let Some(d) = solve(a, g.clone()) else {
+            let Some(d) = crate::math::dense::solve(a, g.clone()) else {
                 lambda *= 10.0;
                 continue;
             };

@@ -250,7 +250,7 @@ pub fn identify(
             }
         }
         let mm: Vec<Vec<f64>> = m.iter().map(|r| r.to_vec()).collect();
-        if let Some(sol) = solve3(mm, v.to_vec()) {
+        if let Some(sol) = crate::math::dense::solve(mm, v.to_vec()) {
             offset = Some((sol[1].hypot(sol[2]), sol[2].atan2(sol[1]).to_degrees()));
         }
     } else {
@@ -289,29 +289,4 @@ pub fn identify(
             notes,
         },
     })
-}
-
-fn solve3(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for i in 0..n {
-        let p = (i..n).max_by(|&x, &y| a[x][i].abs().total_cmp(&a[y][i].abs()))?;
-        if a[p][i].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(i, p);
-        b.swap(i, p);
-        for r in i + 1..n {
-            let f = a[r][i] / a[i][i];
-            for c in i..n {
-                a[r][c] -= f * a[i][c];
-            }
-            b[r] -= f * b[i];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|c| a[i][c] * x[c]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    Some(x)
 }
