@@ -24,3 +24,9 @@ sh reports/feed-paraboloid/regenerate.sh
 
 # Curvature (issue 15): convex against concave against plane, the N-buffer on design surfaces.
 sh reports/curvature/regenerate.sh
+
+# Process effects (issue 16): the engine's ploughing against Brammertz's closed form, and 002
+# Table 2 with ploughing and texture calibrated, judged by leave-one-out (exits 1: see
+# reports/marin2023-calibrated/README.md), hence `|| true`.
+cargo run --release --example brammertz
+sh reports/marin2023-calibrated/regenerate.sh || true
