@@ -40,7 +40,7 @@ mod tests {
             vec![1.0, 1.0, 0.0],
             vec![2.0, 0.0, 3.0],
         ];
-        let x = solve(a, vec![5.0, 3.0, 11.0]).unwrap();
+        let x = solve(a, vec![7.0, 3.0, 11.0]).unwrap();
         for (v, w) in x.iter().zip([1.0, 2.0, 3.0]) {
             assert!((v - w).abs() < 1e-12, "{x:?}");
         }
