@@ -204,12 +204,21 @@ fn crest_study_toml(offset_um: f64, phase_deg: f64, extra: &str) -> String {
 use proptest::prelude::*;
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
+    #![proptest_config(ProptestConfig::with_cases(10))]
 
-    /// Monte Carlo bands (run-out offset and tooth deviations, and calibrated h_min and Sq
-    /// drawn from their covariance) contain the deterministic result, shrink as every input
-    /// uncertainty is scaled down by the same factor, and collapse onto the deterministic
-    /// result when the uncertainty is zero.
+    /// Monte Carlo bands of the calibrated parameters (h_min and Sq drawn from their
+    /// covariance) contain the deterministic result and shrink as their uncertainty is scaled
+    /// down (same seed, so the same draws scaled); with the run-out uncertain as well, every
+    /// band collapses onto the deterministic result when all uncertainties are zero.
+    ///
+    /// Not claimed, because proptest found it false: with run-out uncertainty, that the band
+    /// contains the deterministic result or narrows steadily. Where the nominal run-out ties
+    /// two teeth (an offset at phase 0 gives teeth 2 and 4 the same radius), every
+    /// perturbation breaks the tie and raises the roughness: the nominal value is the band's
+    /// minimum (offset 1 µm, phase 0, σ 0.5 µm per tooth: Ra 0.341 µm against P5 0.382 µm).
+    /// And with ploughing the result jumps where a tooth's chip crosses h_min, so a band of
+    /// tooth deviations stays wide as σ falls (offset 5.7 µm at 88°: Rz band 0.52 µm at
+    /// σ = 0.5 µm, 0.45 µm at σ = 0.12 µm) and only vanishes at σ = 0.
     #[test]
     fn monte_carlo_bands_contain_the_deterministic_result_and_shrink(
         offset_um in 1.0f64..20.0,
@@ -260,33 +269,46 @@ proptest! {
             geometric_constant: true,
         };
         let (p, c) = apply(&free, &cal.values(), &study.process, &cutter);
-        let widths: Vec<Vec<f64>> = [1.0, 0.5, 0.25, 0.0]
+        let det: Vec<(f64, f64)> = study
+            .cases
+            .iter()
+            .map(|case| {
+                let d = crest::study::regression::predict_case(&study, &c, case, &p, 0.0).unwrap();
+                (d.rz_um, d.ra_um)
+            })
+            .collect();
+        // Every input uncertain, scaled to zero: the bands collapse onto the nominal result.
+        let mut s = study.clone();
+        s.uncertainty = study.uncertainty.scaled(0.0);
+        s.uncertainty.parameter_scale = 0.0;
+        for (b, d) in case_bands(&s, &cutter, Some((&cal, &free)), 16, seed).unwrap().iter().zip(&det) {
+            prop_assert_eq!(b.deterministic_um, *d);
+            for (band, v) in [(b.rz, d.0), (b.ra, d.1)] {
+                prop_assert!(band.width() <= 1e-9 * v.abs() && band.contains(v), "{:?} against {}", band, v);
+            }
+        }
+        // The calibrated parameters alone uncertain, scaled by k.
+        let widths: Vec<Vec<f64>> = [1.0, 0.5, 0.25]
             .iter()
             .map(|&k| {
                 let mut s = study.clone();
-                s.uncertainty = study.uncertainty.scaled(k);
-                let b = case_bands(&s, &cutter, Some((&cal, &free)), 64, seed).unwrap();
-                b.iter()
-                    .zip(&s.cases)
-                    .flat_map(|(b, case)| {
-                        // The deterministic result is the nominal prediction.
-                        let det = crest::study::regression::predict_case(&s, &c, case, &p, 0.0)
-                            .unwrap();
-                        assert_eq!(b.deterministic_um, (det.rz_um, det.ra_um));
-                        for (band, v, name) in [(b.rz, det.rz_um, "Rz"), (b.ra, det.ra_um, "Ra")] {
-                            assert!(band.contains(v), "k {k} lead {}: {name} {v} outside {band:?}", case.lead_deg);
-                            if k == 0.0 {
-                                assert!(band.width() <= 1e-9 * v.abs(), "k 0: {name} {band:?} against {v}");
-                            }
-                        }
-                        [b.rz.width(), b.ra.width()]
-                    })
-                    .collect()
+                s.uncertainty = study.uncertainty.scaled(0.0);
+                s.uncertainty.parameter_scale = k;
+                let bands = case_bands(&s, &cutter, Some((&cal, &free)), 48, seed).unwrap();
+                let mut w = Vec::new();
+                for (b, d) in bands.iter().zip(&det) {
+                    for (band, v, name) in [(b.rz, d.0, "Rz"), (b.ra, d.1, "Ra")] {
+                        assert!(band.contains(v), "k {k} lead {}: {name} {v} outside {band:?}", b.lead_deg);
+                        assert!(band.width() > 0.0, "k {k} lead {}: {name} {band:?}", b.lead_deg);
+                        w.push(band.width());
+                    }
+                }
+                w
             })
             .collect();
         for w in widths.windows(2) {
             for (big, small) in w[0].iter().zip(&w[1]) {
-                prop_assert!(*small <= *big * 1.0000001 + 1e-12, "{widths:?}");
+                prop_assert!(*small <= *big * 1.0000001 + 1e-12, "{:?}", widths);
             }
         }
     }
@@ -298,7 +320,12 @@ proptest! {
 #[test]
 fn calibrate_json_has_the_documented_keys() {
     let dir = crate::util::tempdir();
-    let study = crate::util::write(dir.path(), "s.toml", crest_study_toml(3.0, 30.0, ""));
+    // Three cases: without one, four values remain for two parameters.
+    let study = crate::util::write(
+        dir.path(),
+        "s.toml",
+        crest_study_toml(3.0, 30.0, "") + "[[case]]\nlead_deg = 15.0\nside = \"concave\"\n",
+    );
     let out = dir.path().join("out");
     let v = crate::util::success_json(crate::util::crest().args([
         "calibrate",
@@ -328,7 +355,7 @@ fn calibrate_json_has_the_documented_keys() {
     let h = v["parameters"]["min_chip_um"].as_f64().unwrap();
     assert!((0.0..=20.0).contains(&h), "{v}");
     let cases = v["cases"].as_array().unwrap();
-    assert_eq!(cases.len(), 4, "two cases, Rz and Ra each");
+    assert_eq!(cases.len(), 6, "three cases, Rz and Ra each");
     for c in cases {
         for key in [
             "lead_deg",
