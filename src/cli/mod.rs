@@ -13,6 +13,7 @@ macro_rules! outln {
     };
 }
 
+mod calibrate;
 mod contact;
 mod convert;
 mod demo;
@@ -64,6 +65,8 @@ enum Command {
     Plot(plot::Args),
     /// Regression report against a measured table.
     Report(report::Args),
+    /// Fit process parameters to a measured table (weighted least squares, leave-one-out).
+    Calibrate(calibrate::Args),
     /// Predict the actual feed from the machine's axis limits.
     Feed(feed::Args),
     /// Write synthetic tool paths with contact data.
@@ -169,6 +172,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Metrics(a) => metrics::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Report(a) => report::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
         Command::Feed(a) => feed::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Study(a) => study::run(a),

@@ -33,22 +33,43 @@ pub struct Args {
     /// surface).
     #[arg(long)]
     pub view: bool,
+    /// Calibrate these process parameters (comma-separated, as `crest calibrate --free`);
+    /// a case then passes only on its leave-one-out prediction.
+    #[arg(long, value_name = "NAME[,NAME…]")]
+    pub free: Option<String>,
+    /// Monte Carlo samples for P5/P50/P95 bands (inputs from the study's [uncertainty]).
+    #[arg(long, value_name = "N")]
+    pub monte_carlo: Option<usize>,
+    /// Seed of the Monte Carlo samples.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
 }
 
 /// Run `crest report`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let command = format!(
+    let mut command = format!(
         "crest report --measured {} --study {} -o {} --tolerance-pct {}",
         args.measured.display(),
         args.study.display(),
         args.output.display(),
         args.tolerance_pct
     );
+    if let Some(f) = &args.free {
+        command.push_str(&format!(" --free {f}"));
+    }
+    if let Some(n) = args.monte_carlo {
+        command.push_str(&format!(" --monte-carlo {n} --seed {}", args.seed));
+    }
+    let opts = crest::pipeline::report::ReportOptions {
+        free: args.free.clone(),
+        monte_carlo: args.monte_carlo.map(|n| (n, args.seed)),
+    };
     let reg = crest::pipeline::report::regression(
         &args.measured,
         &args.study,
         args.tolerance_pct,
         command,
+        &opts,
     )?;
     // Render everything before writing anything.
     let mut files = crest::report::regression::outputs(&reg).map_err(|e| miette!("{e}"))?;

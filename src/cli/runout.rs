@@ -2,27 +2,72 @@
 //! offset, phase, axis tilt, lead and fz), written as `DIR/runout.csv` and SVG/PNG plots.
 //! The study format is documented in `crest::config::runout` and
 //! `samples/studies/runout.toml`.
+//!
+//! `crest runout identify --profile PROFILE.csv --tool TOOL.toml --fz-mm F [--lead-deg L]
+//! [--json] [--write-tool FILE]`: the run-out identified from a measured profile
+//! (`crest::study::identify`).
 
 use super::Outcome;
+use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
 
 /// Options of `crest runout`.
 #[derive(Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Args {
+    /// `identify`: the run-out from a measured profile.
+    #[command(subcommand)]
+    pub command: Option<Sub>,
     /// Study description (`study.toml`).
-    #[arg(value_name = "STUDY.TOML")]
-    pub study: PathBuf,
+    #[arg(value_name = "STUDY.TOML", required = true)]
+    pub study: Option<PathBuf>,
     /// Output folder (created if missing).
-    #[arg(short = 'o', long = "out", value_name = "DIR")]
-    pub out: PathBuf,
+    #[arg(short = 'o', long = "out", value_name = "DIR", required = true)]
+    pub out: Option<PathBuf>,
     /// Print one JSON object on stdout (the rows and the files written).
     #[arg(long)]
     pub json: bool,
 }
 
+/// Subcommands of `crest runout`.
+#[derive(Debug, clap::Subcommand)]
+pub enum Sub {
+    /// Identify the run-out (mark period, teeth that cut, deviations, offset) from a profile.
+    Identify(IdentifyArgs),
+}
+
+/// Options of `crest runout identify`.
+#[derive(Debug, clap::Args)]
+pub struct IdentifyArgs {
+    /// Profile along the feed (CSV `x_mm,z_um`, any spacing).
+    #[arg(long, value_name = "PROFILE.csv")]
+    pub profile: PathBuf,
+    /// The tool (shape, radius, teeth, pitch; its run-out is ignored).
+    #[arg(long, value_name = "TOOL.toml")]
+    pub tool: PathBuf,
+    /// Programmed feed per tooth, mm.
+    #[arg(long = "fz-mm", value_name = "F")]
+    pub fz_mm: f64,
+    /// Lead angle, degrees (default 0).
+    #[arg(long = "lead-deg", value_name = "L", default_value_t = 0.0)]
+    pub lead_deg: f64,
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the tool with the identified deviations as this tool.toml.
+    #[arg(long, value_name = "FILE")]
+    pub write_tool: Option<PathBuf>,
+}
+
 /// Run `crest runout`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let run = crest::pipeline::runout::runout(&args.study)?;
+    if let Some(Sub::Identify(a)) = args.command {
+        return identify(a);
+    }
+    let (Some(study_path), Some(out_dir)) = (args.study, args.out) else {
+        return Err(miette!("crest runout needs STUDY.TOML and -o DIR"));
+    };
+    let run = crest::pipeline::runout::runout(&study_path)?;
     let (study, cutter, rows, tool_path) = (&run.study, &run.cutter, &run.rows, &run.tool_path);
     let mut csv = Vec::new();
     crest::io::tables::write_runout_csv(rows, cutter.teeth(), &mut csv)
@@ -32,11 +77,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         crest::plot::runout::figures(rows, study, cutter.teeth(), &run.lateral, &run.tool_name())
             .map_err(|e| miette::miette!("cannot draw the run-out charts: {e}"))?,
     );
-    let written = crest::io::write_files(&args.out, &files)
-        .map_err(|e| miette::miette!("{}: cannot write the outputs: {e}", args.out.display()))?;
+    let written = crest::io::write_files(&out_dir, &files)
+        .map_err(|e| miette::miette!("{}: cannot write the outputs: {e}", out_dir.display()))?;
     if args.json {
         let out = serde_json::json!({
-            "study": args.study.display().to_string(),
+            "study": study_path.display().to_string(),
             "tool": tool_path.display().to_string(),
             "rule": study.rule.name(),
             "x": study.x.key(),
@@ -57,6 +102,51 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
         for p in &written {
             outln!("wrote {}", p.display());
+        }
+    }
+    Ok(Outcome::Ok)
+}
+
+fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
+    let (xs, zs) = crest::io::profile_csv::read_profile_csv(&a.profile)?;
+    let tool_text = crest::io::text::read_text(&a.tool, "tool file")?;
+    let cutter = crest::pipeline::tool_from_text(&tool_text, &a.tool.display().to_string())?;
+    let id = crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg)
+        .map_err(|e| miette!("{}: {e}", a.profile.display()))?;
+    if let Some(out) = &a.write_tool {
+        let text = crest::config::tool::with_tooth_deviations(&tool_text, &id.tooth_deviation_um);
+        crest::io::write_atomic(out, |w| w.write_all(text.as_bytes()))
+            .into_diagnostic()
+            .wrap_err_with(|| format!("cannot write {}", out.display()))?;
+    }
+    if a.json {
+        outln!("{}", serde_json::to_string(&id).into_diagnostic()?);
+    } else {
+        outln!(
+            "period {:.4} mm; teeth cutting {:?} of {}; residual {:.3} µm",
+            id.period_mm,
+            id.teeth_cutting,
+            cutter.teeth(),
+            id.residual_um
+        );
+        let devs: Vec<String> = id
+            .tooth_deviation_um
+            .iter()
+            .map(|d| format!("{d:.3}"))
+            .collect();
+        outln!(
+            "tooth deviations (µm, tooth 1 = deepest): {}",
+            devs.join(" / ")
+        );
+        match (id.offset_um, id.phase_deg) {
+            (Some(e), Some(p)) => outln!("offset {e:.3} µm at {p:.1}°"),
+            _ => outln!("offset and phase: not identifiable from this profile"),
+        }
+        for n in &id.identifiable.notes {
+            outln!("{n}");
+        }
+        if let Some(out) = &a.write_tool {
+            outln!("wrote {}", out.display());
         }
     }
     Ok(Outcome::Ok)

@@ -19,8 +19,8 @@ pub mod tool;
 pub use machine::MachineError;
 pub use process::ProcessConfig;
 pub use tool::{
-    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, load_tool_toml,
-    parse_tool_config,
+    MAX_TEETH, RunoutConfig, ShapeName, ToolConfig, ToolConfigError, load_tool_min_chip,
+    load_tool_toml, parse_tool_config,
 };
 
 use crate::parse::line_column;

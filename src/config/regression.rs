@@ -14,6 +14,13 @@
 //! surface_model = "ice"
 //! grid_um = 1.0
 //! dtheta_deg = 0.5
+//! [process]                                     # optional: process effects (docs/process-effects.md)
+//! min_chip_um = 2.0                             # also recovery, texture_sq_um, texture_corr_um, texture_seed
+//! [uncertainty]                                 # optional: inputs of --monte-carlo (standard uncertainties)
+//! runout_offset_um = 1.0                        # 2-D error of the offset vector, per component
+//! tooth_deviation_um = 1.0                      # error of every tooth's radial deviation
+//! spindle_phase = true                          # draw the spindle phase of every pass (default)
+//! parameter_scale = 1.0                         # times the calibrated parameters' uncertainties
 //! [[case]]
 //! lead_deg = 15
 //! side = "convex"
@@ -54,6 +61,15 @@ struct SimulateFile {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct UncertaintyFile {
+    runout_offset_um: Option<Spanned<f64>>,
+    tooth_deviation_um: Option<Spanned<f64>>,
+    spindle_phase: Option<bool>,
+    parameter_scale: Option<Spanned<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct CaseFile {
     lead_deg: Spanned<f64>,
     side: Side,
@@ -86,6 +102,10 @@ struct StudyFile {
     simulate: Option<SimulateFile>,
     #[serde(default)]
     notes: Option<String>,
+    #[serde(default)]
+    process: Option<super::process::EffectsFile>,
+    #[serde(default)]
+    uncertainty: Option<UncertaintyFile>,
     #[serde(rename = "case", default)]
     cases: Vec<Spanned<CaseFile>>,
 }
@@ -239,7 +259,38 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
             model: cs.model,
         });
     }
+    let process = match &s.process {
+        Some(p) => p.to_process(text, file, None)?,
+        None => crate::surface::Process::default(),
+    };
+    let mut uncertainty = crate::study::montecarlo::Uncertainty::default();
+    if let Some(u) = &s.uncertainty {
+        let nonneg = |key: &str, v: &Option<Spanned<f64>>| -> Result<Option<f64>, ConfigError> {
+            match v {
+                Some(x) if !(x.get_ref().is_finite() && *x.get_ref() >= 0.0) => Err(at(
+                    x.span().start,
+                    format!("uncertainty.{key} must be ≥ 0, found {}", x.get_ref()),
+                )),
+                Some(x) => Ok(Some(*x.get_ref())),
+                None => Ok(None),
+            }
+        };
+        if let Some(v) = nonneg("runout_offset_um", &u.runout_offset_um)? {
+            uncertainty.runout_offset_um = v;
+        }
+        if let Some(v) = nonneg("tooth_deviation_um", &u.tooth_deviation_um)? {
+            uncertainty.tooth_deviation_um = v;
+        }
+        if let Some(v) = nonneg("parameter_scale", &u.parameter_scale)? {
+            uncertainty.parameter_scale = v;
+        }
+        if let Some(b) = u.spindle_phase {
+            uncertainty.spindle_phase = b;
+        }
+    }
     Ok(Study {
+        process,
+        uncertainty,
         title: s.title,
         source: s.source,
         tool: s.tool,

@@ -9,6 +9,8 @@
 //! teeth = 4
 //! helix_deg = 30.0            # 0 = straight edges
 //! tooth_pitch_deg = [0, 85, 180, 265]   # optional: uneven pitch, tooth 1 first and 0
+//! edge_radius_um = 8.0        # optional: cutting-edge radius rβ (process effects)
+//! min_chip_ratio = 0.3        # optional: h_min / rβ (default 0.3; docs/process-effects.md)
 //! [runout]                    # optional; every key inside defaults to 0
 //! offset_um = 10.0
 //! offset_phase_deg = 0.0
@@ -198,9 +200,68 @@ pub struct ToolConfig {
     /// cutting order (tooth j trails tooth 1 by this angle); must start at 0 and increase.
     #[serde(default)]
     pub tooth_pitch_deg: Option<Spanned<Vec<f64>>>,
+    /// Optional cutting-edge radius rβ, µm: h_min = `min_chip_ratio`·rβ unless the process
+    /// gives `min_chip_um`.
+    #[serde(default)]
+    pub edge_radius_um: Option<Spanned<f64>>,
+    /// h_min / rβ (typically 0.2-0.4; default [`DEFAULT_MIN_CHIP_RATIO`]).
+    #[serde(default)]
+    pub min_chip_ratio: Option<Spanned<f64>>,
     /// Optional run-out.
     #[serde(default)]
     pub runout: Option<RunoutConfig>,
+}
+
+/// h_min / rβ when a tool file gives `edge_radius_um` without `min_chip_ratio`.
+pub const DEFAULT_MIN_CHIP_RATIO: f64 = 0.3;
+
+impl ToolConfig {
+    /// The minimum uncut chip thickness of the edge, mm: `edge_radius_um × min_chip_ratio`
+    /// (None without an edge radius).
+    pub fn min_chip_mm(&self, text: &str) -> Result<Option<f64>, ToolConfigError> {
+        if let Some(r) = &self.min_chip_ratio {
+            let v = finite(text, "min_chip_ratio", r)?;
+            if !(v > 0.0 && v <= 1.0) {
+                return Err(invalid(
+                    text,
+                    "min_chip_ratio",
+                    r.span(),
+                    format!("must lie in (0, 1], found {v}"),
+                ));
+            }
+            if self.edge_radius_um.is_none() {
+                return Err(invalid(
+                    text,
+                    "min_chip_ratio",
+                    r.span(),
+                    "needs edge_radius_um".to_string(),
+                ));
+            }
+        }
+        let Some(e) = &self.edge_radius_um else {
+            return Ok(None);
+        };
+        let edge = finite(text, "edge_radius_um", e)?;
+        if edge < 0.0 {
+            return Err(invalid(
+                text,
+                "edge_radius_um",
+                e.span(),
+                format!("must not be negative, found {edge}"),
+            ));
+        }
+        let ratio = self
+            .min_chip_ratio
+            .as_ref()
+            .map_or(DEFAULT_MIN_CHIP_RATIO, |r| *r.get_ref());
+        Ok(Some(edge * ratio * 1e-3))
+    }
+}
+
+/// The minimum chip thickness a `tool.toml` document gives through its edge radius, mm.
+pub fn load_tool_min_chip(text: &str) -> Result<Option<f64>, ToolConfigError> {
+    let c = parse_tool_config(text)?;
+    c.min_chip_mm(text)
 }
 
 /// The `[runout]` table (model.md §3.1); every key defaults to 0.
@@ -274,6 +335,7 @@ impl ToolConfig {
     /// Check the values and build the cutter. `text` is the document the config was parsed
     /// from (for line numbers).
     pub fn to_cutter(&self, text: &str) -> Result<Cutter, ToolConfigError> {
+        self.min_chip_mm(text)?;
         let (shape, radius) = self.shape_and_radius(text)?;
         let max_r = crate::math::limits::MAX_TOOL_RADIUS_MM;
         if radius <= 0.0 || radius > max_r {
@@ -733,6 +795,32 @@ impl ToolConfig {
     }
 }
 
+/// The `tool.toml` document `text` with its `[runout]` table replaced by one holding only
+/// `tooth_radius_deviation_um = devs_um` (an identified run-out, ready to re-simulate).
+pub fn with_tooth_deviations(text: &str, devs_um: &[f64]) -> String {
+    let mut out = String::new();
+    let mut skip = false;
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with('[') {
+            skip = t.starts_with("[runout]");
+        }
+        if !skip {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    let list: Vec<String> = devs_um
+        .iter()
+        .map(|d| crate::math::trim_decimals(*d, 4))
+        .collect();
+    out.push_str(&format!(
+        "\n[runout]\ntooth_radius_deviation_um = [{}]\n",
+        list.join(", ")
+    ));
+    out
+}
+
 /// Read a `tool.toml` document into a [`Cutter`] (lengths mm, angles rad).
 ///
 /// ```
@@ -765,6 +853,19 @@ axis_tilt_deg = 0.0
 axis_tilt_phase_deg = 0.0
 tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
 "#;
+
+    #[test]
+    fn edge_radius_gives_the_minimum_chip() {
+        let base = "shape = \"ball\"\nradius_mm = 5\nteeth = 2\nhelix_deg = 0\n";
+        assert_eq!(load_tool_min_chip(base).unwrap(), None);
+        let t = format!("{base}edge_radius_um = 8\nmin_chip_ratio = 0.25\n");
+        assert_relative_eq!(load_tool_min_chip(&t).unwrap().unwrap(), 0.002);
+        let t = format!("{base}edge_radius_um = 10\n");
+        assert_relative_eq!(load_tool_min_chip(&t).unwrap().unwrap(), 0.003);
+        let t = format!("{base}min_chip_ratio = 0.3\n");
+        let e = load_tool_toml(&t).unwrap_err();
+        assert_eq!((e.line(), e.column()), (5, 18));
+    }
 
     #[test]
     fn issue_example_loads() {

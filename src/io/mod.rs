@@ -22,6 +22,7 @@ mod xyz;
 pub mod measured;
 pub mod mesh;
 pub mod output;
+pub mod profile_csv;
 pub mod series;
 pub mod tables;
 pub mod text;

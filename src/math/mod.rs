@@ -3,9 +3,12 @@
 //! Lengths are mm and angles radians everywhere inside the library; conversion to µm,
 //! degrees and mm/min happens only at the interface (`cli`, `io`, `report`).
 
+pub mod dense;
 pub mod limits;
 
 use nalgebra as na;
+
+pub mod rng;
 
 /// A point in a Cartesian frame, mm.
 pub type Point3 = na::Point3<f64>;

@@ -80,6 +80,15 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
     })
 }
 
+/// The minimum chip thickness a tool file gives through `edge_radius_um` (mm), or None
+/// (no file or no edge radius).
+pub fn tool_min_chip(path: Option<&Path>) -> miette::Result<Option<f64>> {
+    let Some(path) = path else { return Ok(None) };
+    let text = read_text(path, "tool file")?;
+    crate::config::load_tool_min_chip(&text)
+        .map_err(|e| ToolFileError::new(&path.display().to_string(), &text, &e).into())
+}
+
 /// Read `path` as a `process.toml`.
 pub fn load_process(path: &Path) -> miette::Result<ProcessConfig> {
     let text = read_text(path, "process file")?;

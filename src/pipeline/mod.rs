@@ -5,7 +5,9 @@
 
 pub mod inputs;
 
-pub use inputs::{ToolFileError, load_machine, load_process, load_tool, tool_from_text};
+pub use inputs::{
+    ToolFileError, load_machine, load_process, load_tool, tool_from_text, tool_min_chip,
+};
 pub use progress::{Progress, Silent};
 pub mod contact;
 pub mod design;

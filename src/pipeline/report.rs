@@ -3,31 +3,35 @@
 //! predicted and held against its measurement.
 
 use crate::io::text::read_text;
+use crate::study::calibrate::{Calibration, Free};
 use crate::study::regression::{Provenance, Regression, regress};
 use miette::{WrapErr, miette};
 use std::path::Path;
 
-/// Read the measured table and the study, load the tool and run the regression.
-/// `tolerance_pct` is the pass band in percent of the measured mean; `command` is recorded
-/// in the report.
-pub fn regression(
-    measured: &Path,
-    study_path: &Path,
-    tolerance_pct: f64,
-    command: String,
-) -> miette::Result<Regression> {
-    if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {
-        return Err(miette!(
-            "--tolerance-pct must be a non-negative number, found {tolerance_pct}"
-        ));
-    }
+/// The inputs of a regression: the measured table, the study and its tool (run-out applied).
+pub struct Inputs {
+    /// The measured table.
+    pub table: crate::study::measured::MeasuredTable,
+    /// The study.
+    pub study: crate::study::regression::Study,
+    /// The study's tool with its run-out.
+    pub cutter: crate::tool::Cutter,
+    /// Measured table file, as given.
+    pub measured_name: String,
+    /// Study file, as given.
+    pub study_name: String,
+}
+
+/// Read the measured table and the study and load the study's tool (relative to the study
+/// file) with the study's run-out.
+pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
     let measured_name = measured.display().to_string();
     let study_name = study_path.display().to_string();
     let table = crate::io::measured::parse_measured(
         &read_text(measured, "measured table")?,
         &measured_name,
     )?;
-    let study =
+    let mut study =
         crate::config::regression::parse_study(&read_text(study_path, "study")?, &study_name)?;
     let tool_path = study_path
         .parent()
@@ -35,6 +39,11 @@ pub fn regression(
         .join(&study.tool);
     let mut cutter = super::load_tool(&tool_path)
         .wrap_err_with(|| format!("{study_name}: tool = \"{}\"", study.tool))?;
+    if study.process.min_chip_mm == 0.0 {
+        if let Some(h) = super::tool_min_chip(Some(&tool_path))? {
+            study.process.min_chip_mm = h;
+        }
+    }
     if let Some(r) = &study.runout {
         let n = r.tooth_radius_dev_mm.len();
         if n != 0 && n != cutter.teeth() {
@@ -45,15 +54,102 @@ pub fn regression(
         }
         cutter.runout = r.clone();
     }
-    Ok(regress(
-        &table,
+    Ok(Inputs {
+        table,
+        study,
+        cutter,
+        measured_name,
+        study_name,
+    })
+}
+
+/// Calibrate the comma-separated `free` parameters of the inputs' study.
+pub fn calibrate(inputs: &Inputs, free: &str) -> miette::Result<Calibration> {
+    let free = Free::parse_list(free, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?;
+    let measured = crate::study::measured::summarize(&inputs.table);
+    crate::study::calibrate::calibrate(&measured, &inputs.study, &inputs.cutter, &free)
+        .map_err(|e| miette!("{}: {e}", inputs.study_name))
+}
+
+/// Options of a report beyond the files.
+#[derive(Debug, Clone, Default)]
+pub struct ReportOptions {
+    /// Free parameters to calibrate (comma-separated), if any.
+    pub free: Option<String>,
+    /// Monte Carlo samples and seed, if any.
+    pub monte_carlo: Option<(usize, u64)>,
+}
+
+/// Read the measured table and the study, load the tool and run the regression.
+/// `tolerance_pct` is the pass band in percent of the measured mean; `command` is recorded
+/// in the report. With `opts.free` the parameters are calibrated and a case counts as
+/// explained only by its leave-one-out prediction; with `opts.monte_carlo` every prediction
+/// gets its P5/P50/P95 band.
+pub fn regression(
+    measured: &Path,
+    study_path: &Path,
+    tolerance_pct: f64,
+    command: String,
+    opts: &ReportOptions,
+) -> miette::Result<Regression> {
+    if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {
+        return Err(miette!(
+            "--tolerance-pct must be a non-negative number, found {tolerance_pct}"
+        ));
+    }
+    let inputs = load(measured, study_path)?;
+    // With --free, the model columns show the calibrated model (fitted on every case); the
+    // comparisons are then replaced by the leave-one-out values (`judge_by_loo`).
+    let calibration = match &opts.free {
+        Some(f) => Some(calibrate(&inputs, f)?),
+        None => None,
+    };
+    let (study, cutter) = match (&calibration, &opts.free) {
+        (Some(cal), Some(f)) => {
+            let free =
+                Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?;
+            let (process, cutter) = crate::study::calibrate::apply(
+                &free,
+                &cal.values(),
+                &inputs.study.process,
+                &inputs.cutter,
+            );
+            let mut study = inputs.study.clone();
+            study.process = process;
+            (study, cutter)
+        }
+        _ => (inputs.study.clone(), inputs.cutter.clone()),
+    };
+    let mut reg = regress(
+        &inputs.table,
         &study,
         &cutter,
         tolerance_pct,
         Provenance {
-            measured_file: measured_name,
-            study_file: study_name,
+            measured_file: inputs.measured_name.clone(),
+            study_file: inputs.study_name.clone(),
             command,
         },
-    )?)
+    )?;
+    let free = match &opts.free {
+        Some(f) => {
+            Some(Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?)
+        }
+        None => None,
+    };
+    if let Some(cal) = calibration {
+        crate::study::regression::judge_by_loo(&mut reg, cal);
+    }
+    if let Some((n, seed)) = opts.monte_carlo {
+        let bands = crate::study::montecarlo::case_bands(
+            &inputs.study,
+            &inputs.cutter,
+            reg.calibration.as_ref().zip(free.as_deref()),
+            n,
+            seed,
+        )
+        .map_err(|e| miette!("{}: Monte Carlo: {e}", inputs.study_name))?;
+        reg.monte_carlo = Some(bands);
+    }
+    Ok(reg)
 }

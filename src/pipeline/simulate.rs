@@ -686,6 +686,7 @@ pub fn simulate(
         grid_um * 1e-3,
     );
     sopts.depth_mm = ap_mm;
+    sopts.process = process.effects(super::tool_min_chip(req.tool.as_deref())?);
     let reference_arg = match (&part, reference) {
         (Some(p), ReferenceSource::Part) => Reference::Part(p),
         _ => Reference::Contacts,

@@ -213,7 +213,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart: &Chart) -> Res
         let entries = panel
             .series
             .iter()
-            .filter(|s| s.line && !s.label.is_empty())
+            .filter(|s| (s.line || s.markers) && !s.label.is_empty())
             .count();
         let legend = entries > 1;
         // Legend box as shares of the plot area (about 19 px a line, 330 px wide).
@@ -338,26 +338,37 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, chart: &Chart) -> Res
             if s.markers {
                 let finite = pts.iter().filter(|p| p.0.is_finite() && p.1.is_finite());
                 let style = c.filled();
-                let drawn = match shape_of(s.color) {
-                    0 => cc
-                        .draw_series(finite.map(|&p| Circle::new(p, 4, style)))
-                        .map(|_| ()),
-                    1 => cc
-                        .draw_series(finite.map(|&p| {
+                let shape = shape_of(s.color);
+                let anno =
+                    match shape {
+                        0 => cc.draw_series(finite.map(|&p| Circle::new(p, 4, style))),
+                        1 => cc.draw_series(finite.map(|&p| {
                             EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], style)
-                        }))
-                        .map(|_| ()),
-                    2 => cc
-                        .draw_series(finite.map(|&p| TriangleMarker::new(p, 5, style)))
-                        .map(|_| ()),
-                    _ => cc
-                        .draw_series(finite.map(|&p| {
+                        })),
+                        2 => cc.draw_series(finite.map(|&p| TriangleMarker::new(p, 5, style))),
+                        _ => cc.draw_series(finite.map(|&p| {
                             EmptyElement::at(p)
                                 + Polygon::new(vec![(0, -5), (5, 0), (0, 5), (-5, 0)], style)
-                        }))
-                        .map(|_| ()),
-                };
-                drawn.map_err(|e| e.to_string())?;
+                        })),
+                    }
+                    .map_err(|e| e.to_string())?;
+                // A series of markers alone gets its marker in the legend.
+                if !s.line && !s.label.is_empty() {
+                    anno.label(s.label.as_str()).legend(move |(x, y)| {
+                        let fill = |k: usize| {
+                            if shape == k {
+                                c.filled()
+                            } else {
+                                TRANSPARENT.filled()
+                            }
+                        };
+                        EmptyElement::at((x, y))
+                            + Circle::new((12, 0), 4, fill(0))
+                            + Rectangle::new([(8, -4), (16, 4)], fill(1))
+                            + TriangleMarker::new((12, 0), 5, fill(2))
+                            + Polygon::new(vec![(12, -5), (17, 0), (12, 5), (7, 0)], fill(3))
+                    });
+                }
             }
         }
         if legend {

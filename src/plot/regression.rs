@@ -1,8 +1,20 @@
 //! The regression figure: measured roughness (mean ± σ and single samples) against the
-//! simulated value per lead angle and side, as SVG.
+//! simulated value per lead angle and side (the leave-one-out value in a calibrated report,
+//! with the Monte Carlo P5-P95 band when there is one), as SVG.
 
 use crate::study::measured::Side;
+use crate::study::montecarlo::Band;
 use crate::study::regression::{CaseResult, Comparison, Regression};
+
+/// The Monte Carlo band of `c`'s `parameter`, when the report has bands.
+fn band_of(r: &Regression, c: &CaseResult, parameter: &str) -> Option<Band> {
+    let b = r
+        .monte_carlo
+        .as_ref()?
+        .iter()
+        .find(|b| b.lead_deg == c.lead_deg && b.side == c.side)?;
+    Some(if parameter == "Rz" { b.rz } else { b.ra })
+}
 
 /// Draw the figure of one parameter (`Rz` or `Ra`) as an SVG string.
 pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
@@ -52,6 +64,9 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         ymax = ymax
             .max(k.measured.mean + k.measured.sd.unwrap_or(0.0))
             .max(k.simulated_um);
+        if let Some(b) = band_of(r, c, parameter) {
+            ymax = ymax.max(b.p95);
+        }
         for v in samples(c) {
             ymax = ymax.max(v);
         }
@@ -75,7 +90,14 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
         root.fill(&WHITE).map_err(e)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(
-                format!("{parameter}: measured (mean ± σ, samples) against simulated"),
+                format!(
+                    "{parameter}: measured (mean ± σ, samples) against {}",
+                    if r.calibration.is_some() {
+                        "leave-one-out prediction"
+                    } else {
+                        "simulated"
+                    }
+                ),
                 (font, 20),
             )
             .margin(12)
@@ -149,7 +171,12 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
                 ))
                 .map_err(|x| x.to_string())?
                 .label(format!(
-                    "simulated {} ({})",
+                    "{} {} ({})",
+                    if r.calibration.is_some() {
+                        "leave-one-out"
+                    } else {
+                        "simulated"
+                    },
                     side.name(),
                     r.cases[0].model.name()
                 ))
@@ -162,6 +189,23 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
                         .map(|p| Cross::new(*p, 6, colour.stroke_width(2))),
                 )
                 .map_err(|x| x.to_string())?;
+            // Monte Carlo P5-P95 band of the model, a translucent bar beside the marks.
+            let bars: Vec<(f64, Band)> = mine
+                .iter()
+                .filter_map(|(c, _)| band_of(r, c, parameter).map(|b| (c.lead_deg + dx, b)))
+                .collect();
+            if !bars.is_empty() {
+                let w = 0.6 * offset;
+                chart
+                    .draw_series(bars.iter().map(|(x, b)| {
+                        Rectangle::new([(x - w, b.p5), (x + w, b.p95)], colour.mix(0.25).filled())
+                    }))
+                    .map_err(|x| x.to_string())?
+                    .label(format!("model P5-P95 {} (Monte Carlo)", side.name()))
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x + 6, y - 6), (x + 14, y + 6)], colour.mix(0.25).filled())
+                    });
+            }
         }
         chart
             .configure_series_labels()

@@ -2,5 +2,6 @@
 //! 3-D viewer page of a height map or a part map. Rendering only: the numbers come from
 //! [`crate::study`] and [`crate::metrics`], the charts from [`crate::plot`].
 
+pub mod calibration;
 pub mod regression;
 pub mod view;

@@ -2,6 +2,7 @@
 //! against simulated roughness per case, the method and the findings. Rendering only: the
 //! numbers come from [`crate::study::regression`], the plots from [`crate::plot::regression`].
 
+use crate::math::trim_decimals;
 use crate::study::measured::Stat;
 use crate::study::regression::{CaseResult, CrestPrediction, PROFILE_STEP_MM, Regression};
 use crate::surface::ModelKind;
@@ -172,6 +173,27 @@ fn findings(r: &Regression) -> Vec<String> {
             ));
         }
     }
+    if let Some(cal) = &r.calibration {
+        out.push(format!(
+            "With process effects calibrated ({}), a case counts as explained only by its leave-one-out prediction (refitted without it), never by the in-sample fit: leave-one-out RMS {:.1} % (see Calibration).",
+            cal.parameters
+                .iter()
+                .map(|(n, v, s)| format!("{n} = {v:.3} ± {s:.3}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            cal.loo_rms_pct
+        ));
+        return out;
+    }
+    if !r.process.is_off() {
+        out.push(format!(
+            "The simulated values include the study's process effects (minimum chip {} µm, recovery {}, texture Sq {} µm).",
+            trim_decimals(r.process.min_chip_mm * 1e3, 4),
+            trim_decimals(r.process.recovery, 4),
+            trim_decimals(r.process.texture.map_or(0.0, |t| t.sq_mm * 1e3), 4)
+        ));
+        return out;
+    }
     out.push(
         "The models are purely geometric: a rigid tool with the given run-out sweeping its \
          circular arcs (crest) or its edges (z-map). They have no plowing, elastic recovery or \
@@ -289,12 +311,17 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s);
 
     let _ = writeln!(s, "## Measured against simulated\n");
+    if r.calibration.is_some() {
+        let _ = writeln!(s, "{LOO_NOTE}\n");
+    }
     let _ = writeln!(s, "| {} |", TABLE_HEAD.join(" | "));
     let _ = writeln!(s, "|{}", "---|".repeat(TABLE_HEAD.len()));
     for row in table_rows(r) {
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     let _ = writeln!(s);
+
+    s.push_str(&super::calibration::markdown(r));
 
     let _ = writeln!(s, "## Model\n");
     let _ = writeln!(s, "| {} |", MODEL_HEAD.join(" | "));
@@ -419,7 +446,12 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     }
     let _ = writeln!(
         s,
-        "</ul>\n<h2>Measured against simulated</h2>\n<table>\n<tr>"
+        "</ul>\n<h2>Measured against simulated</h2>\n{}<table>\n<tr>",
+        if r.calibration.is_some() {
+            format!("<p>{}</p>\n", esc(LOO_NOTE))
+        } else {
+            String::new()
+        }
     );
     for h in TABLE_HEAD {
         let _ = write!(s, "<th>{}</th>", esc(h));
@@ -437,7 +469,9 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
         }
         let _ = writeln!(s, "</tr>");
     }
-    let _ = writeln!(s, "</table>\n<h2>Model</h2>\n<table>\n<tr>");
+    let _ = writeln!(s, "</table>");
+    s.push_str(&super::calibration::html(r));
+    let _ = writeln!(s, "<h2>Model</h2>\n<table>\n<tr>");
     for h in MODEL_HEAD {
         let _ = write!(s, "<th>{}</th>", esc(h));
     }
@@ -477,6 +511,11 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "</ul>\n</body>\n</html>");
     s
 }
+
+pub use super::calibration::{calibration_csv, calibration_json};
+
+/// What the simulated column holds in a calibrated report.
+const LOO_NOTE: &str = "With --free, the simulated column (and the plots) hold each case's leave-one-out prediction: the model refitted without that case. The model table below shows the model fitted on every case.";
 
 /// Every file of a report, rendered in memory: `rz.svg` and `ra.svg` (for the parameters the
 /// table has), `report.html` and `report.md`, as `(file name, bytes)`.

@@ -7,8 +7,12 @@
 //! [`crate::report`]'s. Runs and cases are evaluated in parallel with rayon, in a fixed
 //! order, so the results do not depend on the thread count.
 
+pub mod brammertz;
+pub mod calibrate;
 pub mod design;
+pub mod identify;
 pub mod measured;
+pub mod montecarlo;
 pub mod regression;
 pub mod run;
 pub mod runout;

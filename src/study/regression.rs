@@ -19,7 +19,7 @@
 
 use super::measured::{MeasuredCase, MeasuredTable, Side, Stat, summarize};
 use crate::math::trim_decimals;
-use crate::surface::ModelKind;
+use crate::surface::{ModelKind, Process};
 use crate::tool::{Cutter, Rule, Runout, crest_height_mm};
 use serde::Serialize;
 
@@ -114,6 +114,10 @@ pub struct Study {
     pub simulate: Option<SimulateSpec>,
     /// Free text (Markdown paragraphs) printed in the report's discussion.
     pub notes: Option<String>,
+    /// Process effects (`[process]`; off by default) applied by both models.
+    pub process: Process,
+    /// Input uncertainties of the Monte Carlo bands (`[uncertainty]`).
+    pub uncertainty: super::montecarlo::Uncertainty,
     /// The cases.
     pub cases: Vec<StudyCase>,
 }
@@ -240,6 +244,34 @@ pub fn crest_model(
     side: Side,
     surface_radius_mm: Option<f64>,
 ) -> Result<CrestPrediction, String> {
+    crest_model_with(
+        cutter,
+        lead_deg,
+        ap_mm,
+        fz_mm,
+        rule,
+        side,
+        surface_radius_mm,
+        &Process::default(),
+    )
+}
+
+/// [`crest_model`] with process effects: when `process` is not off, Rz and Ra come from the
+/// feed-direction profile built mark by mark in cutting order with the chip rule of
+/// [`crate::surface::process`] (the same marks: one tooth every fz_eff for the paper rule,
+/// every tooth at its own position and normal deviation for the exact rule), the texture
+/// added along the line y = 0, over 5 sampling lengths after 20 periods of run-in.
+#[allow(clippy::too_many_arguments)]
+pub fn crest_model_with(
+    cutter: &Cutter,
+    lead_deg: f64,
+    ap_mm: f64,
+    fz_mm: f64,
+    rule: Rule,
+    side: Side,
+    surface_radius_mm: Option<f64>,
+    process: &Process,
+) -> Result<CrestPrediction, String> {
     use crate::tool::{FeedProfile, feed_profile_for, mark_positions_mm, normal_deviation_mm};
     let a =
         crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule).map_err(|e| e.to_string())?;
@@ -269,52 +301,30 @@ pub fn crest_model(
         feed_profile_for(cutter, lead)
     };
     let fz_eff = a.fz_effective_mm;
-    let (rz, ra, lc, crest_mm) = match rule {
-        Rule::Paper => {
-            let h = |u: f64| {
-                (-1..=2)
-                    .map(|k| profile.height(u - f64::from(k) * fz_eff))
-                    .fold(f64::INFINITY, f64::min)
-            };
-            let (rz, ra, lc, p2v) = periodic_roughness(fz_eff, fz_eff, &h);
-            let crest = if arc_radius == r {
-                a.crest_height_corrected_mm
-            } else {
-                p2v * 1e-3
-            };
-            (rz, ra, lc, crest)
-        }
+    let marks: Vec<(f64, f64)> = match rule {
+        Rule::Paper => vec![(0.0, 0.0)],
         Rule::Exact => {
             let period = cutter.teeth() as f64 * fz_mm;
-            let pos = mark_positions_mm(cutter, fz_mm);
-            let dev: Vec<f64> = (0..cutter.teeth())
-                .map(|j| normal_deviation_mm(cutter, j, a.generating_height_mm, lead))
-                .collect();
-            let h = |u: f64| {
-                let mut best = f64::INFINITY;
-                for (p, d) in pos.iter().zip(&dev) {
-                    for k in [-1.0, 0.0, 1.0] {
-                        let x = u - p.rem_euclid(period) - k * period;
-                        let v = match profile {
-                            FeedProfile::Circle { radius_mm } => FeedProfile::Circle {
-                                radius_mm: (radius_mm + d).max(0.0),
-                            }
-                            .height(x),
-                            _ => profile.height(x),
-                        } - d;
-                        best = best.min(v);
-                    }
-                }
-                best
-            };
-            let (rz, ra, lc, p2v) = periodic_roughness(period, fz_eff, &h);
-            let crest = if arc_radius == r {
-                a.crest_height_exact_mm
-            } else {
-                p2v * 1e-3
-            };
-            (rz, ra, lc, crest)
+            mark_positions_mm(cutter, fz_mm)
+                .iter()
+                .enumerate()
+                .map(|(j, p)| {
+                    (
+                        p.rem_euclid(period),
+                        normal_deviation_mm(cutter, j, a.generating_height_mm, lead),
+                    )
+                })
+                .collect()
         }
+    };
+    let period = match rule {
+        Rule::Paper => fz_eff,
+        Rule::Exact => cutter.teeth() as f64 * fz_mm,
+    };
+    let (rz, ra, lc, crest_mm) = if process.is_off() {
+        geometric_roughness(rule, &profile, fz_eff, period, &marks, &a, arc_radius == r)
+    } else {
+        processed_roughness(&profile, fz_eff, period, &marks, process)
     };
     Ok(CrestPrediction {
         rule: rule.name().to_string(),
@@ -338,6 +348,112 @@ pub fn crest_model(
         contact_radius_mm: a.contact_radius_mm,
         cutting_speed_ratio: a.cutting_speed_ratio,
     })
+}
+
+/// Height of a mark of `profile` lowered by the normal deviation `d` at distance `x`.
+fn mark_height(profile: &crate::tool::FeedProfile, d: f64, x: f64) -> f64 {
+    use crate::tool::FeedProfile;
+    let h = match *profile {
+        FeedProfile::Circle { radius_mm } => FeedProfile::Circle {
+            radius_mm: (radius_mm + d).max(0.0),
+        }
+        .height(x),
+        _ => profile.height(x),
+    };
+    h - d
+}
+
+/// The geometric profile's (Rz, Ra, λc, crest): the envelope of the marks.
+fn geometric_roughness(
+    rule: Rule,
+    profile: &crate::tool::FeedProfile,
+    fz_eff: f64,
+    period: f64,
+    marks: &[(f64, f64)],
+    a: &crate::tool::Analysis,
+    plane: bool,
+) -> (f64, f64, f64, f64) {
+    match rule {
+        Rule::Paper => {
+            let h = |u: f64| {
+                (-1..=2)
+                    .map(|k| profile.height(u - f64::from(k) * fz_eff))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(fz_eff, fz_eff, &h);
+            let crest = if plane {
+                a.crest_height_corrected_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+        Rule::Exact => {
+            let h = |u: f64| {
+                let mut best = f64::INFINITY;
+                for &(p, d) in marks {
+                    for k in [-1.0, 0.0, 1.0] {
+                        best = best.min(mark_height(profile, d, u - p - k * period));
+                    }
+                }
+                best
+            };
+            let (rz, ra, lc, p2v) = periodic_roughness(period, fz_eff, &h);
+            let crest = if plane {
+                a.crest_height_exact_mm
+            } else {
+                p2v * 1e-3
+            };
+            (rz, ra, lc, crest)
+        }
+    }
+}
+
+/// Run-in periods before the evaluated profile of the processed model.
+const RUN_IN_PERIODS: f64 = 20.0;
+
+/// The processed profile's (Rz, Ra, λc, peak-to-valley): marks in cutting order (the tool
+/// moves +x, so by position) through the chip rule, texture added, over 5λc after the
+/// run-in; sampled every ≤ [`PROFILE_STEP_MM`].
+fn processed_roughness(
+    profile: &crate::tool::FeedProfile,
+    fz_eff: f64,
+    period: f64,
+    marks: &[(f64, f64)],
+    process: &Process,
+) -> (f64, f64, f64, f64) {
+    let lc = crate::metrics::sampling_length_mm(fz_eff);
+    let total = 5.0 * lc;
+    let steps_per_period = 2.0 * (0.5 * period / PROFILE_STEP_MM).ceil().max(1.0);
+    let dx = period / steps_per_period;
+    let n = (total / dx).round().max(1.0) as usize;
+    let xs: Vec<f64> = (0..=n).map(|i| i as f64 * dx).collect();
+    // Marks from the run-in to past the end, ordered by position.
+    let m0 = -(RUN_IN_PERIODS.max(1.0)).ceil() as i64;
+    let m1 = (total / period).ceil() as i64 + RUN_IN_PERIODS as i64;
+    let mut centres: Vec<(f64, f64)> = (m0..=m1)
+        .flat_map(|m| marks.iter().map(move |&(p, d)| (p + m as f64 * period, d)))
+        .collect();
+    centres.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let field = process
+        .texture
+        .filter(|t| t.sq_mm > 0.0)
+        .map(|t| crate::surface::process::TextureField::new(&t));
+    let heights: Vec<f64> = xs
+        .iter()
+        .map(|&x| {
+            let z = centres.iter().fold(f64::INFINITY, |z, &(c, d)| {
+                let w = mark_height(profile, d, x - c);
+                crate::surface::process::apply_pass(z, w, process.min_chip_mm, process.recovery)
+            });
+            z + field.as_ref().map_or(0.0, |f| f.value(x, 0.0))
+        })
+        .collect();
+    let lo = heights.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let um: Vec<f64> = heights.iter().map(|h| (h - lo) * 1e3).collect();
+    let (rz, ra) = crate::metrics::rz_ra(&um);
+    (rz, ra, lc, hi - lo)
 }
 
 /// What the `simulate` model predicts for one case.
@@ -377,6 +493,30 @@ pub fn simulate_case(
     rsm_mm: f64,
     spec: &SimulateSpec,
 ) -> Result<ZmapPrediction, String> {
+    simulate_case_with(
+        cutter,
+        lead_deg,
+        ap_mm,
+        fz_mm,
+        rsm_mm,
+        spec,
+        &Process::default(),
+        0.0,
+    )
+}
+
+/// [`simulate_case`] with process effects and the spindle at `phase_rad` at the start.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_case_with(
+    cutter: &Cutter,
+    lead_deg: f64,
+    ap_mm: f64,
+    fz_mm: f64,
+    rsm_mm: f64,
+    spec: &SimulateSpec,
+    process: &Process,
+    phase_rad: f64,
+) -> Result<ZmapPrediction, String> {
     use crate::surface::{GridSpec, Model as Zmodel, Options, simulate};
     let lc = crate::metrics::sampling_length_mm(rsm_mm);
     let eval = 5.0 * lc;
@@ -385,7 +525,7 @@ pub fn simulate_case(
     let margin = 0.5 + 3.0 * teeth * fz_mm;
     // Samples every 10° of spindle; the engine subdivides to Δθ.
     let length = eval + 2.0 * margin;
-    let samples = crate::synth::pass::straight_pass(
+    let mut samples = crate::synth::pass::straight_pass(
         cutter,
         lead_deg.to_radians(),
         fz_mm,
@@ -394,6 +534,11 @@ pub fn simulate_case(
         10.0,
     )
     .ok_or_else(|| "the simulated pass needs too many samples; fz is too small".to_string())?;
+    if phase_rad != 0.0 {
+        for s in &mut samples {
+            s.theta_rad += phase_rad;
+        }
+    }
     let dx = spec.grid_um * 1e-3;
     let grid = GridSpec::Window {
         x0_mm: 0.0,
@@ -409,6 +554,7 @@ pub fn simulate_case(
     };
     let mut opts = Options::new(model, grid, dx);
     opts.depth_mm = ap_mm.max(dx);
+    opts.process = *process;
     let sim = simulate(&samples, cutter, &opts, &|_, _| {}).map_err(|e| e.to_string())?;
     let map = &sim.map;
     if map.ny == 0 || map.nx < 2 {
@@ -432,6 +578,71 @@ pub fn simulate_case(
         pv_um: hi - lo,
         nodes: sim.nodes_cut,
         map: map.clone(),
+    })
+}
+
+/// What a study's model predicts for one case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CasePrediction {
+    /// Rz of the case's model, µm.
+    pub rz_um: f64,
+    /// Ra of the case's model, µm.
+    pub ra_um: f64,
+    /// The crest model (always computed).
+    pub crest: CrestPrediction,
+    /// The z-map, for `model = "simulate"`.
+    pub zmap: Option<ZmapPrediction>,
+}
+
+/// Predict case `c` of `study` with `cutter` (run-out applied), process effects `process`
+/// and, for the simulate model, the spindle at `phase_rad` at the start of the pass.
+pub fn predict_case(
+    study: &Study,
+    cutter: &Cutter,
+    c: &StudyCase,
+    process: &Process,
+    phase_rad: f64,
+) -> Result<CasePrediction, String> {
+    let fz = c.fz_mm.unwrap_or(study.fz_mm);
+    let model = c.model.unwrap_or(study.model);
+    let crest = crest_model_with(
+        cutter,
+        c.lead_deg,
+        study.ap_mm,
+        fz,
+        study.rule,
+        c.side,
+        c.surface_radius_mm,
+        process,
+    )?;
+    let zmap = match model {
+        Model::Crest => None,
+        Model::Simulate => {
+            if c.surface_radius_mm.is_some() {
+                return Err("the simulate model runs on a plane; remove surface_radius_mm or use model = \"crest\"".to_string());
+            }
+            let spec = study.simulate.unwrap_or_default();
+            Some(simulate_case_with(
+                cutter,
+                c.lead_deg,
+                study.ap_mm,
+                fz,
+                crest.fz_eff_mm,
+                &spec,
+                process,
+                phase_rad,
+            )?)
+        }
+    };
+    let (rz_um, ra_um) = match &zmap {
+        Some(z) => (z.rz_um, z.ra_um),
+        None => (crest.rz_um, crest.ra_um),
+    };
+    Ok(CasePrediction {
+        rz_um,
+        ra_um,
+        crest,
+        zmap,
     })
 }
 
@@ -533,6 +744,35 @@ pub struct Regression {
     pub cases: Vec<CaseResult>,
     /// Every case passes.
     pub pass: bool,
+    /// Process effects of the study (what the simulated columns include).
+    pub process: Process,
+    /// The calibration (`--free`); then a case passes on its leave-one-out prediction.
+    pub calibration: Option<super::calibrate::Calibration>,
+    /// Monte Carlo bands per case (`--monte-carlo`).
+    pub monte_carlo: Option<Vec<super::montecarlo::CaseBands>>,
+}
+
+/// Attach a calibration to `reg` and judge every case by its leave-one-out prediction alone
+/// (never by the in-sample fit): a case passes when each parameter's leave-one-out value is
+/// within the tolerance of the measured mean.
+/// The comparisons then hold the leave-one-out values, so the table, the plots and the
+/// verdict all show what is judged.
+pub fn judge_by_loo(reg: &mut Regression, cal: super::calibrate::Calibration) {
+    let tol = reg.tolerance_pct;
+    for c in &mut reg.cases {
+        let mut pass = true;
+        for k in &mut c.comparisons {
+            let loo = cal.cases.iter().find(|x| {
+                x.lead_deg == c.lead_deg && x.side == c.side && x.parameter == k.parameter
+            });
+            let loo_um = loo.map_or(f64::NAN, |x| x.loo_um);
+            *k = Comparison::new(&k.parameter, k.measured, loo_um, tol);
+            pass &= k.pass;
+        }
+        c.pass = pass;
+    }
+    reg.pass = reg.cases.iter().all(|c| c.pass);
+    reg.calibration = Some(cal);
 }
 
 /// Inputs of [`regress`] besides the parsed files.
@@ -590,43 +830,10 @@ pub fn regress(
         };
         let fz = c.fz_mm.unwrap_or(study.fz_mm);
         let model = c.model.unwrap_or(study.model);
-        let prediction = crest_model(
-            cutter,
-            c.lead_deg,
-            study.ap_mm,
-            fz,
-            study.rule,
-            c.side,
-            c.surface_radius_mm,
-        )
-        .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
-        let zmap = match model {
-            Model::Crest => None,
-            Model::Simulate => {
-                if c.surface_radius_mm.is_some() {
-                    return Err(err(format!(
-                        "case {}: the simulate model runs on a plane; remove surface_radius_mm or use model = \"crest\"",
-                        i + 1
-                    )));
-                }
-                let spec = study.simulate.unwrap_or_default();
-                Some(
-                    simulate_case(
-                        cutter,
-                        c.lead_deg,
-                        study.ap_mm,
-                        fz,
-                        prediction.fz_eff_mm,
-                        &spec,
-                    )
-                    .map_err(|e| err(format!("case {}: {e}", i + 1)))?,
-                )
-            }
-        };
-        let (sim_rz, sim_ra) = match &zmap {
-            Some(z) => (z.rz_um, z.ra_um),
-            None => (prediction.rz_um, prediction.ra_um),
-        };
+        let p = predict_case(study, cutter, c, &study.process, 0.0)
+            .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
+        let (sim_rz, sim_ra) = (p.rz_um, p.ra_um);
+        let (prediction, zmap) = (p.crest, p.zmap);
         let mut comparisons = Vec::new();
         if let Some(rz) = m.rz {
             comparisons.push(Comparison::new("Rz", rz, sim_rz, tolerance_pct));
@@ -665,6 +872,9 @@ pub fn regress(
         version: env!("CARGO_PKG_VERSION").to_string(),
         cases,
         pass,
+        process: study.process,
+        calibration: None,
+        monte_carlo: None,
     })
 }
 

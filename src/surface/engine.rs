@@ -11,8 +11,9 @@
 //!    recomputed with a 4× wider band, up to the depth of cut.
 
 use super::grid::{GridFrame, Nominal, grid_contacts};
+use super::process::{TextureField, apply_pass};
 use super::profile::Profile;
-use super::raster::Tile;
+use super::raster::{Tile, cover};
 use super::{GridSpec, HeightMap, Model, Options, Reference, Simulation, SurfaceError};
 use crate::math::{Frame, Point3, Vec3, nlerp};
 use crate::resample::Sample;
@@ -91,6 +92,8 @@ struct Setup<'a> {
     opts: &'a Options,
     /// grid rows (u, v, w) scaled to node space.
     g: Matrix3<f64>,
+    /// The texture field, when the process adds one.
+    texture: Option<TextureField>,
 }
 
 /// Simulate the surface that `cutter` leaves along `samples`.
@@ -209,6 +212,11 @@ pub fn simulate_with(
         along_normal,
         opts,
         g,
+        texture: opts
+            .process
+            .texture
+            .filter(|t| t.sq_mm > 0.0)
+            .map(|t| TextureField::new(&t)),
     };
     let mut map = HeightMap::new_nan(nx, ny, d * 1e3, d * 1e3);
     map.x0_mm = x0;
@@ -218,7 +226,12 @@ pub fn simulate_with(
     let ntx = nx.div_ceil(t);
     let nty = ny.div_ceil(t);
     let mut pending: Vec<usize> = (0..ntx * nty).collect();
-    let mut band = opts.band_mm.min(opts.depth_mm);
+    let mut band = if opts.process.ploughs() {
+        opts.band_mm.max(4.0 * opts.process.min_chip_mm)
+    } else {
+        opts.band_mm
+    }
+    .min(opts.depth_mm);
     let mut strips_total = 0;
     let mut widened = 0;
     // Tiles finished (certain, or computed with the full depth) out of all tiles: the
@@ -288,6 +301,7 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
     positive(opts.band_mm, "band")?;
     positive(opts.chord_tol_mm, "chord tolerance")?;
     positive(cutter.radius_mm, "tool radius")?;
+    opts.process.check().map_err(SurfaceError::InvalidOption)?;
     if cutter.teeth() == 0 || cutter.teeth() > u16::MAX as usize {
         return Err(SurfaceError::InvalidOption(format!(
             "the cutter has {} teeth",
@@ -798,9 +812,15 @@ impl Setup<'_> {
         let qc = self.tile_nominal(i0, j0, w, h);
         let cull = qc.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.0)) + band;
         let mut cols: Vec<[f64; 3]> = Vec::new();
-        for &si in list {
-            self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
-        }
+        let slack = if self.opts.process.ploughs() {
+            self.plough_tile(&mut tile, strips, list, cull, &mut cols);
+            self.opts.process.min_chip_mm
+        } else {
+            for &si in list {
+                self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
+            }
+            0.0
+        };
         let mut out = vec![f64::NAN; w * h];
         let mut uncertain = false;
         let depth = self.opts.depth_mm;
@@ -809,7 +829,7 @@ impl Setup<'_> {
                 let z = tile.z[r * w + c];
                 let (q, cos_beta) = qc[r * w + c];
                 let above = z - q;
-                if above.is_nan() || above > band {
+                if above.is_nan() || above + slack > band {
                     uncertain = true;
                 }
                 if above <= depth {
@@ -818,7 +838,90 @@ impl Setup<'_> {
                 }
             }
         }
+        if let Some(tex) = &self.texture {
+            for r in 0..h {
+                let y = self.y0 + (j0 + r) as f64 * self.d;
+                for c in 0..w {
+                    let v = &mut out[r * w + c];
+                    if v.is_finite() {
+                        *v += tex.value(self.x0 + (i0 + c) as f64 * self.d, y) * 1e3;
+                    }
+                }
+            }
+        }
         (out, uncertain && !last)
+    }
+
+    /// The tile's strips applied pass by pass with the chip rule ([`super::process`]).
+    /// Strips arrive in cutting order (samples, sub-steps, teeth). A tooth's pass over a
+    /// node is the run of its touches there with no gap longer than a quarter turn (ICE) or
+    /// one sample (dome); a pass is applied when it has ended, passes in the order they
+    /// began, each with its own lowest height at the node.
+    fn plough_tile(
+        &self,
+        tile: &mut Tile,
+        strips: &[Strip],
+        list: &[u32],
+        cull: f64,
+        cols: &mut Vec<[f64; 3]>,
+    ) {
+        let nt = self.cutter_teeth;
+        let n = tile.w * tile.h;
+        let p = self.opts.process;
+        let (h_min, rec) = (p.min_chip_mm, p.recovery);
+        // Per node and tooth: lowest height of the open pass (+∞ = none), start, last touch.
+        let mut open = vec![[f64::INFINITY, 0.0, 0.0]; n * nt];
+        let gap = match self.opts.model {
+            Model::Ice { .. } => 0.5 * PI,
+            Model::Dome => 0.5,
+        };
+        let rect = (tile.i0, tile.j0, tile.w, tile.h);
+        let z = &mut tile.z;
+        // Apply, in start order, the passes at node `i` that ended before time `t`.
+        let close = |z: &mut [f64], open: &mut [[f64; 3]], i: usize, t: f64| loop {
+            let mut best: Option<usize> = None;
+            for q in 0..nt {
+                let st = open[i * nt + q];
+                if st[0] < f64::INFINITY
+                    && (t - st[2]).abs() > gap
+                    && best.is_none_or(|b| st[1] < open[i * nt + b][1])
+                {
+                    best = Some(q);
+                }
+            }
+            let Some(q) = best else { break };
+            let st = &mut open[i * nt + q];
+            z[i] = apply_pass(z[i], st[0], h_min, rec);
+            st[0] = f64::INFINITY;
+        };
+        for &si in list {
+            let s = &strips[si as usize];
+            let k = s.k as usize;
+            let t = match self.opts.model {
+                Model::Ice { .. } => {
+                    let a = self.samples[k].theta_rad;
+                    let b = self.samples.get(k + 1).map_or(a, |x| x.theta_rad);
+                    a + (b - a) * s.a as f64 / s.n as f64
+                }
+                Model::Dome => k as f64,
+            };
+            let j = s.tooth as usize;
+            self.strip_triangles(s, cols, |a, b, c| {
+                cover(rect, a, b, c, cull, |i, wv| {
+                    close(z, &mut open, i, t);
+                    let st = &mut open[i * nt + j];
+                    if st[0] == f64::INFINITY {
+                        *st = [wv, t, t];
+                    } else {
+                        st[0] = st[0].min(wv);
+                        st[2] = t;
+                    }
+                })
+            });
+        }
+        for i in 0..n {
+            close(z, &mut open, i, f64::INFINITY);
+        }
     }
 
     /// Nominal height and cos β at every node of a tile: exact on a global sub-lattice
@@ -881,6 +984,16 @@ impl Setup<'_> {
     }
 
     fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Vec<[f64; 3]>) {
+        self.strip_triangles(s, cols, |a, b, c| tile.triangle(a, b, c, cull));
+    }
+
+    /// The triangles of strip `s`, in order (`cols` is scratch space).
+    fn strip_triangles(
+        &self,
+        s: &Strip,
+        cols: &mut Vec<[f64; 3]>,
+        mut tri: impl FnMut([f64; 3], [f64; 3], [f64; 3]),
+    ) {
         let k = s.k as usize;
         let (lo, hi) = (s.lo as usize, s.hi as usize);
         let j = s.tooth as usize;
@@ -910,8 +1023,8 @@ impl Setup<'_> {
             let a = &cols[c * nl..(c + 1) * nl];
             let b = &cols[(c + 1) * nl..(c + 2) * nl];
             for i in 0..nl - 1 {
-                tile.triangle(a[i], a[i + 1], b[i + 1], cull);
-                tile.triangle(a[i], b[i + 1], b[i], cull);
+                tri(a[i], a[i + 1], b[i + 1]);
+                tri(a[i], b[i + 1], b[i]);
             }
         }
     }

@@ -19,12 +19,16 @@
 //! ([`raster`]). Only triangles within a band above the nominal surface are generated; a
 //! tile whose result is not provably inside that band is recomputed with a wider band,
 //! up to the depth of cut, so the band only changes the speed, never the result.
+//!
+//! Process effects ([`process`]: minimum chip thickness, elastic recovery, texture) are off
+//! by default; with ploughing on, each tile applies its tooth passes in cutting order.
 
 pub mod cull;
 mod engine;
 pub(crate) mod grid;
 mod heightmap;
 pub mod map;
+pub mod process;
 pub(crate) mod profile;
 pub(crate) mod raster;
 
@@ -32,6 +36,7 @@ pub use engine::{simulate, simulate_with};
 pub use grid::GridFrame;
 pub use heightmap::HeightMap;
 pub use map::{MapPoint, PartMap, map_part};
+pub use process::{Process, Texture};
 
 /// Which surface model imprints the tool.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,6 +176,8 @@ pub struct Options {
     pub chord_tol_mm: f64,
     /// Nodes per tile side (memory per tile = side² × 8 bytes).
     pub tile: usize,
+    /// Process effects (ploughing, elastic recovery, texture); off by default.
+    pub process: Process,
 }
 
 impl Options {
@@ -184,6 +191,7 @@ impl Options {
             band_mm: 0.005,
             chord_tol_mm: 1e-5,
             tile: 256,
+            process: Process::default(),
         }
     }
 }

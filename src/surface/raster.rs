@@ -31,6 +31,30 @@ impl Tile {
     /// `cull_w`; each covered node keeps the minimum of its height and the triangle's.
     #[inline]
     pub fn triangle(&mut self, a: [f64; 3], b: [f64; 3], c: [f64; 3], cull_w: f64) {
+        let rect = (self.i0, self.j0, self.w, self.h);
+        let z = &mut self.z;
+        cover(rect, a, b, c, cull_w, |i, wv| {
+            if wv < z[i] {
+                z[i] = wv;
+            }
+        });
+    }
+}
+
+/// Every node of the tile rectangle `(i0, j0, w, h)` that the triangle covers, with the
+/// triangle's height there: `f(index in the tile, W)`, rows in order, columns ascending.
+/// Nothing when its lowest vertex is above `cull_w`.
+#[inline]
+pub(crate) fn cover(
+    rect: (usize, usize, usize, usize),
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+    cull_w: f64,
+    mut f: impl FnMut(usize, f64),
+) {
+    let (i0, j0, w, h) = rect;
+    {
         if a[2].min(b[2]).min(c[2]) > cull_w {
             return;
         }
@@ -39,10 +63,10 @@ impl Tile {
         let xmax = a[0].max(b[0]).max(c[0]);
         let ymin = a[1].min(b[1]).min(c[1]);
         let ymax = a[1].max(b[1]).max(c[1]);
-        let tx0 = self.i0 as f64;
-        let ty0 = self.j0 as f64;
-        let tx1 = (self.i0 + self.w) as f64 - 1.0;
-        let ty1 = (self.j0 + self.h) as f64 - 1.0;
+        let tx0 = i0 as f64;
+        let ty0 = j0 as f64;
+        let tx1 = (i0 + w) as f64 - 1.0;
+        let ty1 = (j0 + h) as f64 - 1.0;
         if xmax < tx0 - EPS || xmin > tx1 + EPS || ymax < ty0 - EPS || ymin > ty1 + EPS {
             return;
         }
@@ -97,14 +121,10 @@ impl Tile {
             }
             let (c0, c1) = (c0 as usize, c1 as usize);
             let base = a[2] + gy * (y - a[1]) - gx * a[0];
-            let off = (row - self.j0) * self.w;
-            let span = &mut self.z[off + c0 - self.i0..=off + c1 - self.i0];
+            let off = (row - j0) * w;
             let mut x = c0 as f64;
-            for z in span.iter_mut() {
-                let wv = base + gx * x;
-                if wv < *z {
-                    *z = wv;
-                }
+            for i in off + c0 - i0..=off + c1 - i0 {
+                f(i, base + gx * x);
                 x += 1.0;
             }
         }

@@ -15,6 +15,7 @@ mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`,
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
 mod plot; // `crest plot`: every plot kind, titles and axis labels
+mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`

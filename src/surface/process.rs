@@ -1,0 +1,229 @@
+//! Process effects beyond geometry: the minimum uncut chip thickness (ploughing) with
+//! elastic recovery, applied pass by pass in cutting order, and a seeded Gaussian random
+//! texture. All are off by default; see `docs/process-effects.md` for the equations.
+//!
+//! **Ploughing.** A tooth pass at a node brings its own lowest height `w` there. With `z` the
+//! height the node has when the pass arrives (`+∞` before the first), the uncut chip along
+//! the normal is `h = z − w`. The pass removes the material (`z ← w`) only when `h ≥ h_min`;
+//! a thinner layer is ploughed: it passes under the edge and springs back by the fraction
+//! `recovery` of its depth (`z ← w + recovery·(z − w)`; 1 = whole, Brammertz's and
+//! Vogler–DeVor–Kapoor's assumption). A later pass whose chip reaches `h_min` removes it.
+//!
+//! **Texture.** A stationary Gaussian field of standard deviation Sq and autocorrelation
+//! `exp(−r²/ℓ²)` (ℓ = the correlation length, where it falls to 1/e), as a sum of
+//! [`TEXTURE_MODES`] random-phase cosines whose wave vectors are drawn from its spectrum.
+//! It is a function of the node's position alone, so it does not depend on tiles or threads.
+
+use crate::math::rng::Rng;
+use std::f64::consts::TAU;
+
+/// Cosine modes of the texture field.
+pub const TEXTURE_MODES: usize = 256;
+
+/// A seeded Gaussian random texture added to the surface.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Texture {
+    /// Standard deviation of the heights, mm.
+    pub sq_mm: f64,
+    /// Correlation length ℓ (autocorrelation exp(−r²/ℓ²)), mm.
+    pub corr_mm: f64,
+    /// Seed of the field.
+    pub seed: u64,
+}
+
+/// The process effects of a simulation (all off by default).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Process {
+    /// Minimum uncut chip thickness h_min, mm (0 = every pass cuts: the geometric surface).
+    pub min_chip_mm: f64,
+    /// Fraction of a ploughed layer's depth that springs back (0..1; 1 = all of it).
+    pub recovery: f64,
+    /// Random texture added to the heights.
+    pub texture: Option<Texture>,
+}
+
+impl Default for Process {
+    fn default() -> Self {
+        Process {
+            min_chip_mm: 0.0,
+            recovery: 1.0,
+            texture: None,
+        }
+    }
+}
+
+impl Process {
+    /// Whether passes must be applied in cutting order with the chip rule.
+    pub fn ploughs(&self) -> bool {
+        self.min_chip_mm > 0.0
+    }
+
+    /// Whether every effect is off (the geometric surface).
+    pub fn is_off(&self) -> bool {
+        !self.ploughs() && self.texture.is_none_or(|t| t.sq_mm == 0.0)
+    }
+
+    /// Check the values; the message names the key of `process.toml`.
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.min_chip_mm.is_finite() && self.min_chip_mm >= 0.0) {
+            return Err(format!(
+                "min_chip_um must be ≥ 0, got {}",
+                self.min_chip_mm * 1e3
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.recovery) {
+            return Err(format!("recovery must lie in 0..1, got {}", self.recovery));
+        }
+        if let Some(t) = self.texture {
+            if !(t.sq_mm.is_finite() && t.sq_mm >= 0.0) {
+                return Err(format!("texture_sq_um must be ≥ 0, got {}", t.sq_mm * 1e3));
+            }
+            if !(t.corr_mm.is_finite() && t.corr_mm > 0.0) {
+                return Err(format!(
+                    "texture_corr_um must be positive, got {}",
+                    t.corr_mm * 1e3
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One pass applied to a node at height `z` (`+∞` = stock): the pass's lowest height `w`.
+#[inline]
+pub fn apply_pass(z: f64, w: f64, min_chip: f64, recovery: f64) -> f64 {
+    if w >= z {
+        z
+    } else if z - w >= min_chip {
+        w
+    } else {
+        w + recovery * (z - w)
+    }
+}
+
+/// The texture as a function of position: `value(x, y)` in mm for x, y in mm.
+#[derive(Debug, Clone)]
+pub struct TextureField {
+    amp: f64,
+    modes: Vec<[f64; 3]>,
+}
+
+impl TextureField {
+    /// The field of `t`: wave vectors k ~ N(0, 2/ℓ²) per component (the spectrum of
+    /// exp(−r²/ℓ²)), phases uniform, amplitude Sq·√(2/M).
+    pub fn new(t: &Texture) -> TextureField {
+        let mut rng = Rng::new(t.seed);
+        let s = 2f64.sqrt() / t.corr_mm;
+        let modes = (0..TEXTURE_MODES)
+            .map(|_| {
+                let kx = s * rng.normal();
+                let ky = s * rng.normal();
+                [kx, ky, TAU * rng.uniform()]
+            })
+            .collect();
+        TextureField {
+            amp: t.sq_mm * (2.0 / TEXTURE_MODES as f64).sqrt(),
+            modes,
+        }
+    }
+
+    /// Height of the texture at (x, y), mm.
+    pub fn value(&self, x: f64, y: f64) -> f64 {
+        if self.amp == 0.0 {
+            return 0.0;
+        }
+        self.amp
+            * self
+                .modes
+                .iter()
+                .map(|m| (m[0] * x + m[1] * y + m[2]).cos())
+                .sum::<f64>()
+    }
+}
+
+/// The 1-D surface left by passes in time order: `passes[i](x)` is pass i's height at x
+/// (mm; `+∞` where it does not reach), applied with the chip rule at every x of `xs`.
+pub fn profile_1d(xs: &[f64], passes: &[&dyn Fn(f64) -> f64], p: &Process) -> Vec<f64> {
+    xs.iter()
+        .map(|&x| {
+            passes.iter().fold(f64::INFINITY, |z, f| {
+                apply_pass(z, f(x), p.min_chip_mm, p.recovery)
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brammertz (1961), as quoted by e.g. Weule, Hüntrup & Tritschler (CIRP Annals 50/1,
+    /// 2001, Eq 1): Rt = f²/(8 rε) + (h_min/2)(1 + rε·h_min/f²).
+    fn brammertz(r: f64, s: f64, h: f64) -> f64 {
+        s * s / (8.0 * r) + 0.5 * h * (1.0 + r * h / (s * s))
+    }
+
+    #[test]
+    fn one_d_ploughing_matches_brammertz_from_its_minimum_up() {
+        let r: f64 = 5.0;
+        for h in [0.001f64, 0.0025] {
+            let s_min = (2.0 * r * h).sqrt();
+            for f in [1.0, 1.2, 1.5, 2.0, 3.0] {
+                let s = s_min * f;
+                let n = 40;
+                let arcs: Vec<Box<dyn Fn(f64) -> f64>> = (0..n)
+                    .map(|i| {
+                        let c = i as f64 * s;
+                        Box::new(move |x: f64| {
+                            let d = x - c;
+                            if d.abs() < r {
+                                r - (r * r - d * d).sqrt()
+                            } else {
+                                f64::INFINITY
+                            }
+                        }) as Box<dyn Fn(f64) -> f64>
+                    })
+                    .collect();
+                let refs: Vec<&dyn Fn(f64) -> f64> = arcs.iter().map(|b| b.as_ref()).collect();
+                let p = Process {
+                    min_chip_mm: h,
+                    ..Process::default()
+                };
+                let x0 = 30.0 * s;
+                let xs: Vec<f64> = (0..=4000).map(|i| x0 + s * i as f64 / 2000.0).collect();
+                let z = profile_1d(&xs, &refs, &p);
+                let rt = z.iter().copied().fold(f64::MIN, f64::max)
+                    - z.iter().copied().fold(f64::MAX, f64::min);
+                let want = brammertz(r, s, h);
+                assert!(
+                    (rt / want - 1.0).abs() < 0.02,
+                    "h {h} s {s}: {rt} against {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn texture_has_its_sq_and_depends_only_on_position() {
+        let t = Texture {
+            sq_mm: 0.001,
+            corr_mm: 0.01,
+            seed: 3,
+        };
+        let f = TextureField::new(&t);
+        let n = 400;
+        let mut sum2 = 0.0;
+        for j in 0..n {
+            for i in 0..n {
+                let v = f.value(i as f64 * 0.005, j as f64 * 0.005);
+                sum2 += v * v;
+            }
+        }
+        let sq = (sum2 / (n * n) as f64).sqrt();
+        assert!((sq / 0.001 - 1.0).abs() < 0.1, "{sq}");
+        assert_eq!(f.value(0.3, 0.7), TextureField::new(&t).value(0.3, 0.7));
+        assert!(apply_pass(f64::INFINITY, 1.0, 0.5, 1.0) == 1.0);
+        assert!(apply_pass(1.2, 1.0, 0.5, 1.0) == 1.2);
+        assert!(apply_pass(1.2, 1.0, 0.5, 0.5) == 1.1);
+    }
+}
