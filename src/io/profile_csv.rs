@@ -10,33 +10,10 @@ pub fn read_profile_csv(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
     parse_profile_csv(&text, &path.display().to_string())
 }
 
-/// Parse profile CSV text that came from `file`.
+/// Parse profile CSV text that came from `file` (the two-column table of
+/// [`super::series`]; a profile needs at least two points).
 pub fn parse_profile_csv(text: &str, file: &str) -> miette::Result<(Vec<f64>, Vec<f64>)> {
-    let (mut xs, mut zs) = (Vec::new(), Vec::new());
-    for (i, line) in text.lines().enumerate() {
-        let t = line.trim();
-        if t.is_empty() || t.starts_with('#') {
-            continue;
-        }
-        let cols: Vec<&str> = t
-            .split([',', ';', '\t', ' '])
-            .filter(|c| !c.is_empty())
-            .collect();
-        let nums: Option<Vec<f64>> = cols.iter().take(2).map(|c| c.parse::<f64>().ok()).collect();
-        match nums {
-            Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => {
-                xs.push(v[0]);
-                zs.push(v[1]);
-            }
-            _ if xs.is_empty() && i == 0 => continue, // header
-            _ => {
-                return Err(miette::miette!(
-                    "{file}:{}:1: expected two numbers `x_mm,z_um`, found `{t}`",
-                    i + 1
-                ));
-            }
-        }
-    }
+    let (xs, zs) = super::series::two_columns(text, file).map_err(|e| miette::miette!("{e}"))?;
     if xs.len() < 2 {
         return Err(miette::miette!(
             "{file}: the profile has fewer than two points"

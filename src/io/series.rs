@@ -10,7 +10,7 @@ use std::path::Path;
 pub struct SeriesError(pub String);
 
 fn read_text(path: &Path) -> Result<String, SeriesError> {
-    super::output::register_input(path);
+    // `text::read_text` records the path as an input.
     super::text::read_text(path, "table").map_err(|e| SeriesError(e.to_string()))
 }
 
@@ -21,7 +21,7 @@ pub fn read_two_columns(path: &Path) -> Result<(Vec<f64>, Vec<f64>), SeriesError
     two_columns(&text, &path.display().to_string())
 }
 
-fn two_columns(text: &str, name: &str) -> Result<(Vec<f64>, Vec<f64>), SeriesError> {
+pub(crate) fn two_columns(text: &str, name: &str) -> Result<(Vec<f64>, Vec<f64>), SeriesError> {
     let (mut xs, mut ys) = (Vec::new(), Vec::new());
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
