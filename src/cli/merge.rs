@@ -95,7 +95,8 @@ fn write_map(m: &PartMap, args: &Args, started: Instant) -> miette::Result<Outco
             serde_json::Number::from_f64(v)
                 .map_or(serde_json::Value::Null, serde_json::Value::Number)
         };
-        let stat = |pick: fn(&crest::metrics::HeightStats) -> f64| num(st.as_ref().map_or(nan, pick));
+        let stat =
+            |pick: fn(&crest::metrics::HeightStats) -> f64| num(st.as_ref().map_or(nan, pick));
         let j = serde_json::json!({
             "output": out.display().to_string(),
             "grid": "map",

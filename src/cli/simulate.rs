@@ -290,8 +290,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             shard: k,
             shards: n,
         };
-        let out =
-            pool.install(|| crest::pipeline::tasks::map::run_map_task_with(&task, &progress));
+        let out = pool.install(|| crest::pipeline::tasks::map::run_map_task_with(&task, &progress));
         progress.finish();
         return write_shard(&args, out?, started);
     }

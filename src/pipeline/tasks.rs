@@ -314,9 +314,9 @@ fn kind_of(v: &serde_json::Value) -> &str {
 pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
     let bad = |e: serde_json::Error| miette!("not a crest task: {e}");
     let out = match kind_of(&task) {
-        map::MAP_TILES => {
-            serde_json::to_value(map::run_map_task(&serde_json::from_value(task).map_err(bad)?)?)
-        }
+        map::MAP_TILES => serde_json::to_value(map::run_map_task(
+            &serde_json::from_value(task).map_err(bad)?,
+        )?),
         _ => serde_json::to_value(run_task(&serde_json::from_value(task).map_err(bad)?)?),
     };
     out.map_err(|e| miette!("cannot encode the task result: {e}"))

@@ -185,7 +185,10 @@ pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
             .and_then(|i| seen.get_mut(i))
             .ok_or_else(|| miette!("{file}: shard {} is out of range 1..={shards}", r.shard))?;
         if *slot {
-            return Err(miette!("{file}: shard {} of {shards} is given twice", r.shard));
+            return Err(miette!(
+                "{file}: shard {} of {shards} is given twice",
+                r.shard
+            ));
         }
         *slot = true;
         let want: Vec<usize> = (0..total).filter(|i| i % shards + 1 == r.shard).collect();
