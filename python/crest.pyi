@@ -185,12 +185,44 @@ def study_tasks(design: str) -> List[Dict[str, Any]]:
     """The tasks of a designed experiment (a ``crest study`` design file path, or its TOML
     text with ``tool`` relative to the working directory): one plain dict per run."""
 
-def run_task(task: Union[Dict[str, Any], str]) -> Dict[str, Any]:
-    """Run one task (a dict from :func:`study_tasks`, or its JSON); returns a plain dict
-    (responses, fz_mm, stepover_mm, error). Releases the GIL."""
+def map_tasks(
+    file: StrPath,
+    *,
+    tasks: int,
+    map_mm: float,
+    part: StrPath,
+    region: Optional[Tuple[float, float, float, float, float, float]] = None,
+    tool: Optional[StrPath] = None,
+    process: Optional[StrPath] = None,
+    rpm: Optional[float] = None,
+    feed_mm_min: Optional[float] = None,
+    fz_mm: Optional[float] = None,
+    feed: Optional[str] = None,
+    machine: Optional[StrPath] = None,
+    model: str = "ice",
+    dtheta_deg: float = 1.0,
+    grid_um: Optional[float] = None,
+    ap_mm: Optional[float] = None,
+    path: Optional[int] = None,
+    teeth: Optional[int] = None,
+    helix_deg: Optional[float] = None,
+    absolute: bool = False,
+) -> List[Dict[str, Any]]:
+    """The tile tasks of a part map (the options of :func:`simulate` with ``map_mm``):
+    ``tasks`` plain dicts, task k simulating cells k, k+tasks, … of the map. File paths are
+    made absolute; every worker must see the files there."""
 
-def merge(results: Iterable[Union[Dict[str, Any], str]], output: Optional[StrPath] = None) -> Dict[str, Any]:
+def run_task(task: Union[Dict[str, Any], str]) -> Dict[str, Any]:
+    """Run one task (a dict from :func:`study_tasks` or :func:`map_tasks`, or its JSON);
+    returns a plain dict (a study run: responses, fz_mm, stepover_mm, error; a map task: its
+    cells' points and heights). Releases the GIL."""
+
+def merge(
+    results: Iterable[Union[Dict[str, Any], str]], output: Optional[StrPath] = None
+) -> Union[Dict[str, Any], PartMap]:
     """Assemble every task result of one design (any order) as ``crest study`` does: a dict
     with ``title``, ``runs``, ``effects`` (as ``crest study --json``) and ``files`` (name →
     bytes of runs.csv, effects.csv and the charts, identical to ``crest study``'s); with
-    ``output`` the files are written there too."""
+    ``output`` the files are written there too. The results of one part map's
+    :func:`map_tasks` give the :class:`PartMap` of :func:`simulate`; with ``output`` (a
+    .ply path) the PLY ``crest simulate`` writes, byte for byte."""

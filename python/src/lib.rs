@@ -557,15 +557,9 @@ fn metrics<'py>(
 // Simulation
 // ------------------------------------------------------------------------------------------
 
-/// Simulate the surface a tool path leaves (as `crest simulate`): give exactly one of
-/// `window=(x0, y0, x1, y1)` (mm, WCS), `patch_at=s_mm` or `patch_near=(x, y, z)` with
-/// `patch_mm=(length, width)`, or `map_mm=spacing` (a part map; needs `part`). Returns a
-/// `HeightMap` (window, patch) or a `PartMap`. The GIL is released while it runs.
-#[pyfunction]
-#[pyo3(signature = (file, *, tool = None, window = None, patch_at = None, patch_near = None, patch_mm = None, map_mm = None, region = None, part = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+/// The request of `simulate`'s options (the grid exactly one of window, patch, map).
 #[allow(clippy::too_many_arguments)]
-fn simulate(
-    py: Python<'_>,
+fn request_of(
     file: PathBuf,
     tool: Option<PathBuf>,
     window: Option<[f64; 4]>,
@@ -589,7 +583,7 @@ fn simulate(
     teeth: Option<usize>,
     helix_deg: Option<f64>,
     absolute: bool,
-) -> PyResult<PyObject> {
+) -> PyResult<SimulateRequest> {
     let bad = |m: &str| CrestError::new_err(m.to_string());
     let given = [
         window.is_some(),
@@ -667,31 +661,73 @@ fn simulate(
         ap_mm,
         path,
     };
+    Ok(req)
+}
+
+/// Simulate the surface a tool path leaves (as `crest simulate`): give exactly one of
+/// `window=(x0, y0, x1, y1)` (mm, WCS), `patch_at=s_mm` or `patch_near=(x, y, z)` with
+/// `patch_mm=(length, width)`, or `map_mm=spacing` (a part map; needs `part`). Returns a
+/// `HeightMap` (window, patch) or a `PartMap`. The GIL is released while it runs.
+#[pyfunction]
+#[pyo3(signature = (file, *, tool = None, window = None, patch_at = None, patch_near = None, patch_mm = None, map_mm = None, region = None, part = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    py: Python<'_>,
+    file: PathBuf,
+    tool: Option<PathBuf>,
+    window: Option<[f64; 4]>,
+    patch_at: Option<f64>,
+    patch_near: Option<[f64; 3]>,
+    patch_mm: Option<[f64; 2]>,
+    map_mm: Option<f64>,
+    region: Option<[f64; 6]>,
+    part: Option<PathBuf>,
+    process: Option<PathBuf>,
+    rpm: Option<f64>,
+    feed_mm_min: Option<f64>,
+    fz_mm: Option<f64>,
+    feed: Option<&str>,
+    machine: Option<PathBuf>,
+    model: &str,
+    dtheta_deg: f64,
+    grid_um: Option<f64>,
+    ap_mm: Option<f64>,
+    path: Option<usize>,
+    teeth: Option<usize>,
+    helix_deg: Option<f64>,
+    absolute: bool,
+) -> PyResult<PyObject> {
+    let req = request_of(
+        file,
+        tool,
+        window,
+        patch_at,
+        patch_near,
+        patch_mm,
+        map_mm,
+        region,
+        part,
+        process,
+        rpm,
+        feed_mm_min,
+        fz_mm,
+        feed,
+        machine,
+        model,
+        dtheta_deg,
+        grid_um,
+        ap_mm,
+        path,
+        teeth,
+        helix_deg,
+        absolute,
+    )?;
     let run = py
         .allow_threads(|| crest::pipeline::simulate::simulate(&req, &crest::pipeline::Silent))
         .map_err(err)?;
     match run.output {
         Output::Grid(sim) => Ok(Py::new(py, HeightMap { inner: sim.map })?.into_any()),
-        Output::Map(m) => {
-            let n = m.points.len();
-            let mut points = Array2::<f64>::zeros((n, 3));
-            let mut normals = Array2::<f64>::zeros((n, 3));
-            let mut h = Array1::<f64>::zeros(n);
-            for (i, p) in m.points.iter().enumerate() {
-                for k in 0..3 {
-                    points[[i, k]] = p.point[k];
-                    normals[[i, k]] = p.normal[k];
-                }
-                h[i] = p.height_um;
-            }
-            let pm = PartMap {
-                points: points.into_pyarray(py).unbind(),
-                normals: normals.into_pyarray(py).unbind(),
-                height_um: h.into_pyarray(py).unbind(),
-                nodes_cut: m.nodes_cut,
-            };
-            Ok(Py::new(py, pm)?.into_any())
-        }
+        Output::Map(m) => Ok(Py::new(py, part_map(py, &m)?)?.into_any()),
     }
 }
 
@@ -954,18 +990,98 @@ fn study_tasks<'py>(py: Python<'py>, design: &str) -> PyResult<Bound<'py, PyAny>
     json_loads(py, &text)
 }
 
-/// Run one task of `study_tasks` (a dict, or its JSON text); returns the result as a dict
-/// (picklable). A run that fails comes back with its `error`. Releases the GIL.
+/// The tile tasks of a part map (`simulate(..., map_mm=...)` with the same options): `tasks`
+/// plain dicts (picklable), task k simulating cells k, k+tasks, … of the map. The file
+/// paths are made absolute; every worker must see the files there.
+#[pyfunction]
+#[pyo3(signature = (file, *, tasks, map_mm, part, region = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+#[allow(clippy::too_many_arguments)]
+fn map_tasks<'py>(
+    py: Python<'py>,
+    file: PathBuf,
+    tasks: usize,
+    map_mm: f64,
+    part: PathBuf,
+    region: Option<[f64; 6]>,
+    tool: Option<PathBuf>,
+    process: Option<PathBuf>,
+    rpm: Option<f64>,
+    feed_mm_min: Option<f64>,
+    fz_mm: Option<f64>,
+    feed: Option<&str>,
+    machine: Option<PathBuf>,
+    model: &str,
+    dtheta_deg: f64,
+    grid_um: Option<f64>,
+    ap_mm: Option<f64>,
+    path: Option<usize>,
+    teeth: Option<usize>,
+    helix_deg: Option<f64>,
+    absolute: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
+    let req = request_of(
+        abs(file),
+        tool.map(abs),
+        None,
+        None,
+        None,
+        None,
+        Some(map_mm),
+        region,
+        Some(abs(part)),
+        process.map(abs),
+        rpm,
+        feed_mm_min,
+        fz_mm,
+        feed,
+        machine.map(abs),
+        model,
+        dtheta_deg,
+        grid_um,
+        ap_mm,
+        path,
+        teeth,
+        helix_deg,
+        absolute,
+    )?;
+    let tasks = crest::pipeline::tasks::map::map_tasks(&req, tasks).map_err(err)?;
+    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    json_loads(py, &text)
+}
+
+/// Run one task of `study_tasks` or `map_tasks` (a dict, or its JSON text); returns the
+/// result as a dict (picklable). A study run that fails comes back with its `error`.
+/// Releases the GIL.
 #[pyfunction]
 fn run_task<'py>(py: Python<'py>, task: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     let text = json_dumps(task)?;
-    let task: crest::pipeline::tasks::Task = serde_json::from_str(&text)
+    let task: serde_json::Value = serde_json::from_str(&text)
         .map_err(|e| CrestError::new_err(format!("not a crest task: {e}")))?;
     let result = py
-        .allow_threads(|| crest::pipeline::tasks::run_task(&task))
+        .allow_threads(|| crest::pipeline::tasks::run_any(task))
         .map_err(err)?;
-    let text = serde_json::to_string(&result).map_err(|e| CrestError::new_err(e.to_string()))?;
-    json_loads(py, &text)
+    json_loads(py, &result.to_string())
+}
+
+fn part_map(py: Python<'_>, m: &crest::surface::PartMap) -> PyResult<PartMap> {
+    let n = m.points.len();
+    let mut points = Array2::<f64>::zeros((n, 3));
+    let mut normals = Array2::<f64>::zeros((n, 3));
+    let mut h = Array1::<f64>::zeros(n);
+    for (i, p) in m.points.iter().enumerate() {
+        for k in 0..3 {
+            points[[i, k]] = p.point[k];
+            normals[[i, k]] = p.normal[k];
+        }
+        h[i] = p.height_um;
+    }
+    Ok(PartMap {
+        points: points.into_pyarray(py).unbind(),
+        normals: normals.into_pyarray(py).unbind(),
+        height_um: h.into_pyarray(py).unbind(),
+        nodes_cut: m.nodes_cut,
+    })
 }
 
 /// Assemble the results of every task of one design (any order) as `crest study` does:
@@ -973,31 +1089,53 @@ fn run_task<'py>(py: Python<'py>, task: &Bound<'py, PyAny>) -> PyResult<Bound<'p
 /// `files` (name → bytes of runs.csv, effects.csv and the SVG charts, the bytes `crest
 /// study` writes). With `output`, the files are also written into that folder. Fails like
 /// `crest study` when a run failed, and when runs are missing, repeated or of another design.
+/// The results of every task of one part map (`map_tasks`) give the `PartMap` `simulate`
+/// gives; with `output` (a .ply path) its PLY is written, the bytes of `crest simulate`.
 #[pyfunction]
 #[pyo3(signature = (results, output = None))]
 fn merge<'py>(
     py: Python<'py>,
     results: &Bound<'py, PyAny>,
     output: Option<PathBuf>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<Bound<'py, PyAny>> {
+    use crest::pipeline::tasks::Merged;
     let mut parsed = Vec::new();
-    for r in results.try_iter()? {
+    for (i, r) in results.try_iter()?.enumerate() {
         let text = json_dumps(&r?)?;
-        let r: crest::pipeline::tasks::TaskResult = serde_json::from_str(&text)
+        let v: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| CrestError::new_err(format!("not a crest task result: {e}")))?;
-        parsed.push(r);
+        parsed.push((format!("result {}", i + 1), v));
     }
-    let (done, files) = py
-        .allow_threads(|| {
-            let done = crest::pipeline::tasks::merge(parsed)?;
-            let files = crest::pipeline::design::render_outputs(&done)?;
-            if let Some(dir) = &output {
-                crest::io::write_files(dir, &files)
-                    .map_err(|e| miette::miette!("cannot write into {}: {e}", dir.display()))?;
+    let merged = py
+        .allow_threads(|| -> miette::Result<_> {
+            match crest::pipeline::tasks::merge_any(parsed)? {
+                Merged::Design(done) => {
+                    let files = crest::pipeline::design::render_outputs(&done)?;
+                    if let Some(dir) = &output {
+                        crest::io::write_files(dir, &files).map_err(|e| {
+                            miette::miette!("cannot write into {}: {e}", dir.display())
+                        })?;
+                    }
+                    Ok((Merged::Design(done), files))
+                }
+                Merged::Map(m) => {
+                    if let Some(path) = &output {
+                        crest::io::write_atomic(path, |w| {
+                            crest::io::mesh::write_map_ply(&m.points, w)
+                        })
+                        .map_err(|e| miette::miette!("cannot write {}: {e}", path.display()))?;
+                    }
+                    Ok((Merged::Map(m), Vec::new()))
+                }
             }
-            Ok::<_, miette::Report>((done, files))
         })
         .map_err(err)?;
+    let (done, files) = match merged {
+        (Merged::Map(m), _) => {
+            return Ok(Py::new(py, part_map(py, &m)?)?.into_bound(py).into_any());
+        }
+        (Merged::Design(done), files) => (done, files),
+    };
     let d = PyDict::new(py);
     d.set_item("title", &done.design.title)?;
     let runs: Vec<serde_json::Value> = done
@@ -1019,7 +1157,7 @@ fn merge<'py>(
         f.set_item(name, pyo3::types::PyBytes::new(py, bytes))?;
     }
     d.set_item("files", f)?;
-    Ok(d)
+    Ok(d.into_any())
 }
 
 /// crest: predicted 5-axis ball-end machined surfaces from tool paths (Python face).
@@ -1037,6 +1175,7 @@ fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(plan_feed, m)?)?;
     m.add_function(wrap_pyfunction!(resample, m)?)?;
     m.add_function(wrap_pyfunction!(study_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(map_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(run_task, m)?)?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;
     Ok(())

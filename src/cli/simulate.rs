@@ -4,6 +4,8 @@
 //! crest simulate FILE --tool tool.toml [--process process.toml] [--rpm N] [--feed-mm-min V]
 //!     [--fz-mm F] --model dome|ice [--dtheta-deg D] --grid-um G
 //!     (--window X0,Y0,X1,Y1 | --patch-at S_MM --patch-mm L,W) -o OUT.(csv|gsf|sdf) [--json]
+//! crest simulate FILE --part PART.stl --map-mm D [--region …] -o MAP.ply
+//! crest simulate FILE --part PART.stl --map-mm D --shard K/N -o DIR   (then crest merge)
 //! ```
 //!
 //! The spindle speed and feed come from the options, else from `process.toml`, else from
@@ -157,6 +159,11 @@ pub struct Args {
     /// Print one JSON object with the grid, counts, time and height statistics.
     #[arg(long)]
     pub json: bool,
+    /// With --map-mm: simulate only shard K of N of the map's cells (1 ≤ K ≤ N: cells K,
+    /// K+N, …) and write them as JSON lines to OUT/shard-K-of-N.jsonl (OUT is then a
+    /// folder); `crest merge OUT/shard-*.jsonl -o MAP.ply` writes the single-process PLY.
+    #[arg(long, value_name = "K/N", requires = "map_mm", value_parser = crest::pipeline::tasks::parse_shard)]
+    pub shard: Option<(usize, usize)>,
 }
 
 /// Parse `n` comma-separated numbers of option `name`.
@@ -225,7 +232,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
     };
     let map = matches!(grid, GridRequest::Map { .. });
-    let ext_ok = if map {
+    let ext_ok = if args.shard.is_some() {
+        if args.view.is_some() {
+            return Err(miette!(
+                "--view draws the whole map: give it to `crest merge`'s output (crest view MAP.ply), not to a shard"
+            ));
+        }
+        true
+    } else if map {
         args.output
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
@@ -269,6 +283,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
+    if let Some((k, n)) = args.shard {
+        let task = crest::pipeline::tasks::map::MapTask {
+            kind: crest::pipeline::tasks::map::MAP_TILES.to_string(),
+            request: req,
+            shard: k,
+            shards: n,
+        };
+        let out = pool.install(|| crest::pipeline::tasks::map::run_map_task_with(&task, &progress));
+        progress.finish();
+        return write_shard(&args, out?, started);
+    }
     let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress));
     progress.finish();
     let run = run?;
@@ -367,6 +392,51 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if let Some(w) = warning {
         eprintln!("crest simulate: {w}");
         return Ok(Outcome::CheckFailed);
+    }
+    Ok(Outcome::Ok)
+}
+
+/// `crest simulate --map-mm … --shard K/N`: write the shard's cells as one JSON line.
+fn write_shard(
+    args: &Args,
+    (result, run): (crest::pipeline::tasks::map::MapResult, SimulateRun),
+    started: Instant,
+) -> miette::Result<Outcome> {
+    for w in &run.warnings {
+        eprintln!("warning: {w}");
+    }
+    let (k, n) = (result.shard, result.shards);
+    let mut text = serde_json::to_vec(&result).into_diagnostic()?;
+    text.push(b'\n');
+    let name = format!("shard-{k}-of-{n}.jsonl");
+    crest::io::write_files(&args.output, &[(name.clone(), text)])
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write into {}", args.output.display()))?;
+    let path = args.output.join(&name);
+    let elapsed = started.elapsed().as_secs_f64();
+    let points: usize = result.cells.iter().map(|c| c.points.len()).sum();
+    if args.json {
+        let j = serde_json::json!({
+            "file": args.file.display().to_string(),
+            "shard": [k, n],
+            "cells": result.cells.len(),
+            "cells_total": result.cells_total,
+            "nodes": points,
+            "nodes_cut": run.nodes_cut,
+            "warnings": run.warnings,
+            "output": path.display().to_string(),
+            "time_s": num(elapsed),
+        });
+        outln!("{j}");
+    } else {
+        outln!(
+            "{}: shard {k}/{n}, {} of {} cells ({points} part points, {} cut) in {elapsed:.1} s; wrote {}",
+            args.file.display(),
+            result.cells.len(),
+            result.cells_total,
+            run.nodes_cut,
+            path.display()
+        );
     }
     Ok(Outcome::Ok)
 }

@@ -34,7 +34,8 @@ pub use write::GcodeWriter;
 use crate::kinematics::Machine;
 
 /// Tool-centre-point control (RTCP, TCPM, TRAORI).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Rtcp {
     /// As the program says: on after `G43.4`, `TRAORI` or `M128`, off after `G49`,
     /// `TRAFOOF` or `M129`, off at the start.

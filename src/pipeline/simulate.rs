@@ -15,7 +15,8 @@ use miette::miette;
 use std::path::{Path, PathBuf};
 
 /// Which feed moves the tool.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum FeedSource {
     /// The programmed feed (FEDRAT, or the feed given).
     #[default]
@@ -45,7 +46,8 @@ pub fn resolve_feed_source(
 }
 
 /// Where to simulate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum GridRequest {
     /// A window of the WCS xy plane, mm.
     Window {
@@ -87,8 +89,9 @@ pub enum GridRequest {
     },
 }
 
-/// Everything `crest simulate` is asked.
-#[derive(Debug, Clone, PartialEq)]
+/// Everything `crest simulate` is asked (serde data: a part-map task carries it).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SimulateRequest {
     /// Tool-path file (CLSF or contact12).
     pub file: PathBuf,
@@ -407,6 +410,22 @@ pub fn simulate(
     req: &SimulateRequest,
     progress: &dyn super::Progress,
 ) -> miette::Result<SimulateRun> {
+    simulate_shard(req, None, progress)
+}
+
+/// [`simulate`], for a part map only the cells of shard `k` of `n` (`shard = Some((k, n))`:
+/// cells k, k+n, … as [`surface::map_part`] splits them; see [`super::tasks::map`]).
+/// Other grids are not split: a shard of one is refused.
+pub fn simulate_shard(
+    req: &SimulateRequest,
+    shard: Option<(usize, usize)>,
+    progress: &dyn super::Progress,
+) -> miette::Result<SimulateRun> {
+    if shard.is_some() && !matches!(req.grid, GridRequest::Map { .. }) {
+        return Err(miette!(
+            "--shard splits a part map (--map-mm) into its cells; a window or patch is one task"
+        ));
+    }
     let tiles = |done: usize, total: usize| progress.advance(done as u64, total as u64);
     let tiles: &(dyn Fn(usize, usize) + Sync) = &tiles;
     if let Some(g) = req.grid_um {
@@ -715,7 +734,7 @@ pub fn simulate(
             let region = reach.map(|r| (r.lo, r.hi));
             progress.phase("simulating the part map", "cells");
             let m = surface::map_part(
-                &samples, &cutter, &sopts, p, spacing_mm, tile, region, tiles,
+                &samples, &cutter, &sopts, p, spacing_mm, tile, region, shard, tiles,
             )
             .map_err(|e| miette!("{file}: {e}"))?;
             Output::Map(m)

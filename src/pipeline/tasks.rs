@@ -8,6 +8,11 @@
 //! them to workers as dictionaries. Floats go through JSON as their shortest round-trip
 //! decimal (serde_json's `float_roundtrip` parses them back to the same bits); a missing
 //! value (NaN) is `null`.
+//!
+//! Part maps split the same way into tile tasks ([`map`]); [`run_any`] and [`merge_any`]
+//! take a task or results of either kind by their `kind`.
+
+pub mod map;
 
 use super::design::{DesignRun, DesignTexts, finish, tool_of};
 use crate::study::design::{Design, RunResult};
@@ -289,4 +294,63 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
         })
         .collect();
     finish(design, results, &file)
+}
+
+/// What [`merge_any`] assembled: a designed experiment or a part map.
+#[derive(Debug)]
+pub enum Merged {
+    /// The finished design (`crest study`'s outputs).
+    Design(Box<DesignRun>),
+    /// The part map (`crest simulate --map-mm`'s PLY).
+    Map(crate::surface::PartMap),
+}
+
+fn kind_of(v: &serde_json::Value) -> &str {
+    v.get("kind").and_then(|k| k.as_str()).unwrap_or("")
+}
+
+/// Run one task given as JSON (a design run or a part-map shard, by its `kind`); the result
+/// as JSON.
+pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
+    let bad = |e: serde_json::Error| miette!("not a crest task: {e}");
+    let out = match kind_of(&task) {
+        map::MAP_TILES => serde_json::to_value(map::run_map_task(
+            &serde_json::from_value(task).map_err(bad)?,
+        )?),
+        _ => serde_json::to_value(run_task(&serde_json::from_value(task).map_err(bad)?)?),
+    };
+    out.map_err(|e| miette!("cannot encode the task result: {e}"))
+}
+
+/// Assemble task results given as JSON, each with where it comes from (`file:line`, for
+/// messages): all of one design ([`merge`]) or all of one part map ([`map::merge_map`]).
+pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Merged> {
+    let map = results
+        .first()
+        .is_some_and(|(_, v)| kind_of(v) == map::MAP_TILES);
+    if let Some((at, v)) = results
+        .iter()
+        .find(|(_, v)| (kind_of(v) == map::MAP_TILES) != map)
+    {
+        return Err(miette!(
+            "{at}: a result of kind '{}' among results of kind '{}': merge the results of one study or one part map",
+            kind_of(v),
+            if map { map::MAP_TILES } else { DESIGN_RUN }
+        ));
+    }
+    fn parse<T: serde::de::DeserializeOwned>(
+        results: Vec<(String, serde_json::Value)>,
+    ) -> miette::Result<Vec<T>> {
+        results
+            .into_iter()
+            .map(|(at, v)| {
+                serde_json::from_value(v).map_err(|e| miette!("{at}: not a task result: {e}"))
+            })
+            .collect()
+    }
+    if map {
+        Ok(Merged::Map(map::merge_map(parse(results)?)?))
+    } else {
+        Ok(Merged::Design(Box::new(merge(parse(results)?)?)))
+    }
 }

@@ -35,11 +35,16 @@ pub struct PartMap {
     pub tiles: usize,
     /// Points with a height.
     pub nodes_cut: usize,
+    /// The cells simulated, in order: (index among the `tiles` cells, number of its points,
+    /// which follow one another in `points`). Every cell, or one shard's.
+    pub cells: Vec<(usize, usize)>,
 }
 
 /// Map `part` at `spacing_mm` with the model and depth of `opts` (its grid is ignored),
 /// within `region` (lo, hi corners; the part's bounds when `None`), in cells of `tile_mm`.
-/// `progress(done, total)` counts cells.
+/// `progress(done, total)` counts cells. With `shard = Some((k, n))` (1 ≤ k ≤ n) only cells
+/// k, k+n, k+2n, … (1-based, in cell order) are simulated: a cell's points do not depend on
+/// the other cells, so the shards' cells put back in order are the whole map's, bit for bit.
 #[allow(clippy::too_many_arguments)]
 pub fn map_part(
     samples: &[Sample],
@@ -49,8 +54,16 @@ pub fn map_part(
     spacing_mm: f64,
     tile_mm: f64,
     region: Option<(Point3, Point3)>,
+    shard: Option<(usize, usize)>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PartMap, SurfaceError> {
+    if let Some((k, n)) = shard {
+        if k == 0 || k > n {
+            return Err(SurfaceError::InvalidOption(format!(
+                "shard {k}/{n} is not a shard K/N with 1 ≤ K ≤ N"
+            )));
+        }
+    }
     if !(spacing_mm.is_finite() && spacing_mm > 0.0 && tile_mm.is_finite() && tile_mm >= spacing_mm)
     {
         return Err(SurfaceError::InvalidOption(format!(
@@ -118,7 +131,14 @@ pub fn map_part(
     let reach = cutter.radius_mm + opts.depth_mm + 1.0;
     let mut points = Vec::new();
     let mut nodes_cut = 0;
-    for (done, (c_lo, c_hi, c)) in centres.iter().enumerate() {
+    let mut cells = Vec::new();
+    let mine: Vec<usize> = (0..centres.len())
+        .filter(|i| shard.is_none_or(|(k, n)| i % n + 1 == k))
+        .collect();
+    for (done, &cell) in mine.iter().enumerate() {
+        let (c_lo, c_hi, c) = &centres[cell];
+        let first = points.len();
+        cells.push((cell, 0));
         // A patch large enough to hold the cell's surface seen along any normal.
         let diag = (c_hi - c_lo).norm();
         let side = diag + 2.0 * spacing_mm;
@@ -129,7 +149,7 @@ pub fn map_part(
             .map(|m| m.item as usize)
             .collect();
         idx.sort_unstable();
-        progress(done + 1, centres.len());
+        progress(done + 1, mine.len());
         if idx.is_empty() {
             continue;
         }
@@ -196,10 +216,14 @@ pub fn map_part(
                 });
             }
         }
+        if let Some(last) = cells.last_mut() {
+            last.1 = points.len() - first;
+        }
     }
     Ok(PartMap {
         points,
         tiles: centres.len(),
         nodes_cut,
+        cells,
     })
 }

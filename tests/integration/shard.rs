@@ -1,6 +1,7 @@
-//! `crest study --shard K/N` and `crest merge`: a design run as three shards in three
-//! separate processes and merged gives the bytes of the single-process `crest study`;
-//! merging refuses missing, repeated and foreign runs.
+//! `crest study --shard K/N`, `crest simulate --map-mm … --shard K/N` and `crest merge`: a
+//! design (a part map) run as three shards in three separate processes and merged gives the
+//! bytes of the single-process `crest study` (`crest simulate`); merging refuses missing,
+//! repeated and foreign runs (shards).
 
 use std::path::{Path, PathBuf};
 
@@ -169,4 +170,174 @@ fn merge_refuses_missing_repeated_and_foreign_runs() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a shard K/N"));
+}
+
+/// A plane part and its path (4 × 4 mm, as `real_parts.rs` makes them), and the options of a
+/// map of a 0.6 × 0.6 mm region at 4 µm: cells of 0.512 mm, so four cells.
+fn map_job(dir: &Path) -> Vec<std::ffi::OsString> {
+    let cls = dir.join("plane.cls");
+    let stl = dir.join("plane.stl");
+    let ball = repo("samples/synth/ball-r5.toml");
+    crest()
+        .arg("synth")
+        .arg("plane")
+        .arg("--tool")
+        .arg(&ball)
+        .args([
+            "--stepover-mm",
+            "0.4",
+            "--stepover-along-surface",
+            "--size-mm",
+            "4,4",
+        ])
+        .args([
+            "--point-step-mm",
+            "0.05",
+            "--feed-mm-min",
+            "1000",
+            "--rpm",
+            "20000",
+        ])
+        .args(["--part-tol-um", "0.01", "-o"])
+        .arg(&cls)
+        .arg("--part-stl")
+        .arg(&stl)
+        .assert()
+        .success();
+    let mut v: Vec<std::ffi::OsString> = vec!["simulate".into(), cls.into(), "--tool".into()];
+    v.push(ball.into());
+    v.push("--part".into());
+    v.push(stl.into());
+    for a in [
+        "--model",
+        "dome",
+        "--grid-um",
+        "10",
+        "--fz-mm",
+        "0.05",
+        "--map-mm",
+        "0.004",
+        "--region=-0.3,-0.3,-0.5,0.3,0.3,0.5",
+    ] {
+        v.push(a.into());
+    }
+    v
+}
+
+#[test]
+fn a_part_map_in_three_processes_merges_to_the_single_process_ply() {
+    let dir = tempdir();
+    let job = map_job(dir.path());
+    let single = dir.path().join("single.ply");
+    let s = crest()
+        .args(&job)
+        .arg("-o")
+        .arg(&single)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    assert_eq!(output_json(&s)["cells"], 4);
+
+    let shards = dir.path().join("shards");
+    let children: Vec<std::process::Child> = (1..=3)
+        .map(|k| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_crest"))
+                .args(&job)
+                .arg("--shard")
+                .arg(format!("{k}/3"))
+                .arg("--threads")
+                .arg("1")
+                .arg("-o")
+                .arg(&shards)
+                .stdout(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    // Shard k holds cells k-1, k+2 (0-based) of the four.
+    for k in 1..=3usize {
+        let text = read(&shards.join(format!("shard-{k}-of-3.jsonl")));
+        let j = crate::util::json(text.trim().as_bytes());
+        assert_eq!(j["kind"], "map-tiles");
+        let cells: Vec<usize> = j["cells"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["cell"].as_u64().unwrap() as usize)
+            .collect();
+        let want: Vec<usize> = [k - 1, k + 2].into_iter().filter(|c| *c < 4).collect();
+        assert_eq!(cells, want);
+    }
+    let merged = dir.path().join("merged.ply");
+    let files: Vec<PathBuf> = (1..=3)
+        .rev()
+        .map(|k| shards.join(format!("shard-{k}-of-3.jsonl")))
+        .collect();
+    let m = crest()
+        .arg("merge")
+        .args(&files)
+        .arg("-o")
+        .arg(&merged)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let j = output_json(&m);
+    assert_eq!(j["nodes"], output_json(&s)["nodes"]);
+    assert_eq!(j["heights_um"], output_json(&s)["heights_um"]);
+    assert_eq!(bytes(&merged), bytes(&single), "the merged PLY differs");
+
+    // A missing or repeated shard, or a shard of another map, is refused.
+    let fails = |files: &[PathBuf], want: &str| {
+        let out = dir.path().join("bad.ply");
+        let o = crest()
+            .arg("merge")
+            .args(files)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(want), "wanted '{want}' in: {err}");
+        assert!(!out.exists(), "nothing is written");
+    };
+    fails(&files[..2], "1 of 3 shards are missing: 1");
+    fails(
+        &[files[0].clone(), files[0].clone()],
+        "shard 3 of 3 is given twice",
+    );
+    let other = dir.path().join("other");
+    crest()
+        .args(&job)
+        .args(["--ap-mm", "0.4", "--shard", "1/3", "-o"])
+        .arg(&other)
+        .assert()
+        .success();
+    let mut mixed = files[..2].to_vec();
+    mixed.push(other.join("shard-1-of-3.jsonl"));
+    fails(&mixed, "the results are of different part maps");
+    // A study's results do not mix with a map's.
+    let d = design(dir.path(), "six");
+    crest()
+        .arg("study")
+        .arg(&d)
+        .args(["--shard", "1/9", "-o"])
+        .arg(&other)
+        .assert()
+        .success();
+    let mut mixed = files.clone();
+    mixed.push(other.join("shard-1-of-9.jsonl"));
+    fails(&mixed, "among results of kind");
+    // --shard splits part maps only.
+    let o = crest()
+        .args(&job[..job.len() - 3])
+        .args(["--window", "0,0,0.1,0.1", "--shard", "1/2", "-o"])
+        .arg(dir.path().join("w"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
 }
