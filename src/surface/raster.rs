@@ -83,7 +83,10 @@ impl Tile {
             (reach(rect, &a, &b, &c, cull_w), lower_bound(&a, &b, &c))
         {
             // Columns one node wider than the box: the edge crossings are rounded.
-            let lc = (cols.0.max(self.i0 + 1) - 1 - self.i0, (cols.1 + 1).min(self.i0 + w - 1) - self.i0);
+            let lc = (
+                cols.0.max(self.i0 + 1) - 1 - self.i0,
+                (cols.1 + 1).min(self.i0 + w - 1) - self.i0,
+            );
             let lr = (rows.0 - self.j0, rows.1 - self.j0);
             if occluded(lc, lr, low, &z[..]) {
                 return;
