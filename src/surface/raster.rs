@@ -27,6 +27,8 @@ pub(crate) struct Tile {
 
 /// Side of the blocks of [`Tile`]'s occlusion bounds, nodes.
 const BLOCK: usize = 8;
+/// Nodes of a triangle's box from which stale block bounds are recomputed for it.
+const MIN_REFRESH_NODES: usize = 16;
 
 impl Tile {
     pub fn new(i0: usize, j0: usize, w: usize, h: usize) -> Tile {
@@ -53,32 +55,33 @@ impl Tile {
         let rect = (self.i0, self.j0, self.w, self.h);
         let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
         let w = self.w;
-        let mut occluded = |cols: (usize, usize), rows: (usize, usize), low: f64, z: &[f64]| {
-            let (bx0, bx1) = (cols.0 / BLOCK, cols.1 / BLOCK);
-            let (by0, by1) = (rows.0 / BLOCK, rows.1 / BLOCK);
-            // Bounds as they stand first; then refresh the stale ones one at a time.
-            for by in by0..=by1 {
-                for bx in bx0..=bx1 {
-                    let b = by * bw + bx;
-                    if bmax[b] > low && !dirty[b] {
-                        return false;
-                    }
-                }
-            }
-            for by in by0..=by1 {
-                for bx in bx0..=bx1 {
-                    let b = by * bw + bx;
-                    if bmax[b] > low {
-                        bmax[b] = block_max(z, w, bx, by);
-                        dirty[b] = false;
-                        if bmax[b] > low {
+        let mut occluded =
+            |cols: (usize, usize), rows: (usize, usize), low: f64, z: &[f64], refresh: bool| {
+                let (bx0, bx1) = (cols.0 / BLOCK, cols.1 / BLOCK);
+                let (by0, by1) = (rows.0 / BLOCK, rows.1 / BLOCK);
+                // Bounds as they stand first; then refresh the stale ones one at a time.
+                for by in by0..=by1 {
+                    for bx in bx0..=bx1 {
+                        let b = by * bw + bx;
+                        if bmax[b] > low && (!dirty[b] || !refresh) {
                             return false;
                         }
                     }
                 }
-            }
-            true
-        };
+                for by in by0..=by1 {
+                    for bx in bx0..=bx1 {
+                        let b = by * bw + bx;
+                        if bmax[b] > low {
+                            bmax[b] = block_max(z, w, bx, by);
+                            dirty[b] = false;
+                            if bmax[b] > low {
+                                return false;
+                            }
+                        }
+                    }
+                }
+                true
+            };
         if let (Some((cols, rows)), Some(low)) =
             (reach(rect, &a, &b, &c, cull_w), lower_bound(&a, &b, &c))
         {
@@ -88,7 +91,9 @@ impl Tile {
                 (cols.1 + 1).min(self.i0 + w - 1) - self.i0,
             );
             let lr = (rows.0 - self.j0, rows.1 - self.j0);
-            if occluded(lc, lr, low, &z[..]) {
+            // Refreshing bounds pays only for triangles that span several nodes.
+            let big = (lc.1 - lc.0 + 1) * (lr.1 - lr.0 + 1) >= MIN_REFRESH_NODES;
+            if occluded(lc, lr, low, &z[..], big) {
                 return;
             }
             for by in lr.0 / BLOCK..=lr.1 / BLOCK {
