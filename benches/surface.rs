@@ -3,7 +3,9 @@
 //! 0.2 mm, fz 0.05 mm, run-out 10 µm, ICE with Δθ = 1°; plus scaling with window area
 //! and with path length; and the N-buffer on a curved part (issue 15): the same tool and
 //! raster mapped onto a convex cylinder of radius 20 mm (the design surface an STL-like
-//! mesh), a 2 mm × 2 mm patch at 1 µm along the part's normals.
+//! mesh), a 2 mm × 2 mm patch at 1 µm along the part's normals. Issue 19: the dome model
+//! on the FreeCAD peer's 3-axis raster (ball Ø6, stepover 0.5 mm, fz 0.01 mm) on a coarse
+//! 10 µm grid, where most triangles of the revolved body are smaller than a node cell.
 
 use crest::math::{Point3, Vec3};
 use crest::part::Part;
@@ -125,6 +127,43 @@ fn bench(cr: &mut Criterion) {
             b.iter(|| black_box(run(&long, &c, 2.0, 0.002)))
         });
     }
+    // Dome model, 3-axis ball Ø6 raster (stepover 0.5 mm, one stamp per fz = 0.01 mm) over a
+    // 2 mm × 2 mm window at 10 µm (the FreeCAD peer's grid, benches/peers/freecad).
+    let mut ball = Cutter::new(Shape::Ball, 3.0, 2, 0.0);
+    ball.runout.offset_mm = 0.0;
+    let mut flat3 = Vec::new();
+    for k in 0..=6 {
+        flat3.extend(surface_common::pass(
+            &ball,
+            k,
+            Point3::new(-4.0, -0.5 + 0.5 * k as f64, 0.0),
+            Vec3::x(),
+            Vec3::z(),
+            10.0,
+            0.01,
+            0.01,
+            0.0,
+        ));
+    }
+    let dome = Options::new(
+        Model::Dome,
+        GridSpec::Window {
+            x0_mm: 0.0,
+            y0_mm: 0.0,
+            x1_mm: 2.0,
+            y1_mm: 2.0,
+        },
+        0.01,
+    );
+    g.bench_function("dome_ball_r3_2mm_10um", |b| {
+        b.iter(|| {
+            black_box(
+                simulate(&flat3, &ball, &dome, &|_, _| {})
+                    .map(|s| s.nodes_cut)
+                    .unwrap_or(0),
+            )
+        })
+    });
     // N-buffer on the design surface of a convex cylinder (B-SIM tool and raster).
     let cyl = raster_on_cylinder(&c, -1.2, 3.2, -2.2, 2.2);
     let surface = crest::synth::Surface::ConvexCylinder { radius_mm: 20.0 };

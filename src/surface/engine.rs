@@ -94,6 +94,9 @@ struct Setup<'a> {
     g: Matrix3<f64>,
     /// The texture field, when the process adds one.
     texture: Option<TextureField>,
+    /// Dome model: teeth whose revolved body repeats an earlier tooth's (no run-out), which
+    /// stamp the same triangles again; skipped unless passes are told apart by tooth.
+    dome_repeat: Vec<bool>,
 }
 
 /// Simulate the surface that `cutter` leaves along `samples`.
@@ -198,6 +201,9 @@ pub fn simulate_with(
         frame.v.transpose(),
         frame.w.transpose(),
     ]);
+    let dome_repeat = (0..cutter.teeth())
+        .map(|j| !opts.process.ploughs() && profile.body[..j].contains(&profile.body[j]))
+        .collect();
     let setup = Setup {
         samples,
         cutter_teeth: cutter.teeth(),
@@ -217,6 +223,7 @@ pub fn simulate_with(
             .texture
             .filter(|t| t.sq_mm > 0.0)
             .map(|t| TextureField::new(&t)),
+        dome_repeat,
     };
     let mut map = HeightMap::new_nan(nx, ny, d * 1e3, d * 1e3);
     map.x0_mm = x0;
@@ -244,29 +251,29 @@ pub fn simulate_with(
         strips_total += strips.0.len();
         let bins = setup.bin(&strips.0, &strips.1, t, ntx, nty, &pending);
         let mut uncertain = Vec::new();
-        let batch = (2 * rayon::current_num_threads()).max(8);
+        // Tiles go straight into the map as they finish (no batch of results is held), so
+        // a batch can be long enough to keep every thread busy to its end.
+        let batch = (16 * rayon::current_num_threads()).max(32);
         for chunk in pending.chunks(batch) {
-            let results: Vec<(usize, Vec<f64>, bool)> = chunk
-                .par_iter()
-                .map(|&tid| {
-                    let (h, unc) = setup.run_tile(tid, t, ntx, &strips.0, &bins[tid], band, last);
-                    (tid, h, unc)
-                })
-                .collect();
-            for (tid, h, unc) in results {
+            let sink = std::sync::Mutex::new((&mut map.z_um, &mut uncertain, &mut finished));
+            chunk.par_iter().for_each(|&tid| {
+                let (h, unc) = setup.run_tile(tid, t, ntx, &strips.0, &bins[tid], band, last);
                 let (i0, j0, w, hgt) = tile_rect(tid, t, ntx, nx, ny);
+                let mut g = sink.lock().unwrap_or_else(|e| e.into_inner());
+                let (z, uncertain, finished) = &mut *g;
                 for r in 0..hgt {
                     let dst = (j0 + r) * nx + i0;
-                    map.z_um[dst..dst + w].copy_from_slice(&h[r * w..(r + 1) * w]);
+                    z[dst..dst + w].copy_from_slice(&h[r * w..(r + 1) * w]);
                 }
                 if unc && !last {
                     uncertain.push(tid);
                 } else {
-                    finished += 1;
+                    **finished += 1;
                 }
-            }
+            });
             progress(finished, total);
         }
+        uncertain.sort_unstable();
         if uncertain.is_empty() || last {
             break;
         }
@@ -475,13 +482,23 @@ impl Setup<'_> {
     /// Levels whose nominal circle (widened by the run-out bound) can dip to `thr`,
     /// extended by one level on each side.
     fn candidates(&self, p: &Pose, thr: f64) -> Option<(usize, usize)> {
+        self.candidates_at(p, &[thr])[0]
+    }
+
+    /// [`Self::candidates`] for several thresholds of one pose (one search of the lowest
+    /// circle).
+    fn candidates_at<const N: usize>(
+        &self,
+        p: &Pose,
+        thr: &[f64; N],
+    ) -> [Option<(usize, usize)>; N] {
         let amp = (p.m[(2, 0)].powi(2) + p.m[(2, 1)].powi(2)).sqrt();
         let m22 = p.m[(2, 2)];
-        let lim = thr + self.profile.runout_bound;
+        let rb = self.profile.runout_bound;
         let levels = &self.profile.levels;
         let f = |i: usize| p.b.z + levels[i].z * m22 - levels[i].r * amp;
         if !self.profile.convex {
-            return scan_candidates(&f, levels.len(), lim);
+            return thr.map(|t| scan_candidates(&f, levels.len(), t + rb));
         }
         // The lowest circle: f is a linear function along the convex meridian, so it is
         // unimodal and its sublevel sets are intervals. Coarse scan, then refine.
@@ -510,18 +527,21 @@ impl Setup<'_> {
                 best = i;
             }
         }
-        if best_f > lim {
-            return None;
-        }
-        let mut lo = best;
-        while lo > 0 && f(lo - 1) <= lim {
-            lo -= 1;
-        }
-        let mut hi = best;
-        while hi + 1 < n && f(hi + 1) <= lim {
-            hi += 1;
-        }
-        Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
+        thr.map(|t| {
+            let lim = t + rb;
+            if best_f > lim {
+                return None;
+            }
+            let mut lo = best;
+            while lo > 0 && f(lo - 1) <= lim {
+                lo -= 1;
+            }
+            let mut hi = best;
+            while hi + 1 < n && f(hi + 1) <= lim {
+                hi += 1;
+            }
+            Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
+        })
     }
 
     /// The threshold of sample `k`: the band above the highest nominal the tool can reach
@@ -581,10 +601,9 @@ impl Setup<'_> {
         let mut pa = self.pose(k, 0.0, true);
         let p1 = self.pose(k, 1.0, true);
         let step = (self.samples[k + 1].position - self.samples[k].position).norm();
-        let (c0, c1) = (
-            self.candidates(&pa, thr + step),
-            self.candidates(&p1, thr + step),
-        );
+        // Candidates with the step's allowance (whole pair) and without (sub-steps).
+        let [c0, ca0] = self.candidates_at(&pa, &[thr + step, thr]);
+        let [c1, c1b] = self.candidates_at(&p1, &[thr + step, thr]);
         let Some(hi) = c0.map(|c| c.1).max(c1.map(|c| c.1)) else {
             return (strips, boxes);
         };
@@ -596,12 +615,17 @@ impl Setup<'_> {
         }
         let dth = (self.samples[k + 1].theta_rad - self.samples[k].theta_rad).abs();
         let nsub = (dth / dtheta - 1e-9).ceil().clamp(1.0, MAX_SUBSTEPS) as usize;
-        let mut ca = self.candidates(&pa, thr);
+        let mut ca = ca0;
         let mut wa: Vec<[f64; 3]> = Vec::new();
         let mut wb: Vec<[f64; 3]> = Vec::new();
         for sub in 0..nsub {
-            let pb = self.pose(k, (sub + 1) as f64 / nsub as f64, true);
-            let cb = self.candidates(&pb, thr);
+            // The last sub-step ends at the pair's end pose, already known.
+            let (pb, cb) = if sub + 1 == nsub {
+                (p1, c1b)
+            } else {
+                let pb = self.pose(k, (sub + 1) as f64 / nsub as f64, true);
+                (pb, self.candidates(&pb, thr))
+            };
             let range = match (ca, cb) {
                 (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
                 (a, b) => a.or(b),
@@ -678,6 +702,9 @@ impl Setup<'_> {
         let phi_star = -0.5 * PI - b.atan2(a);
         let mut pts: Vec<[f64; 3]> = Vec::new();
         for j in 0..self.cutter_teeth {
+            if self.dome_repeat[j] {
+                continue;
+            }
             let body = &self.profile.body[j];
             let mut lo = usize::MAX;
             let mut hi = 0;
@@ -811,7 +838,7 @@ impl Setup<'_> {
         let mut tile = Tile::new(i0, j0, w, h);
         let qc = self.tile_nominal(i0, j0, w, h);
         let cull = qc.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.0)) + band;
-        let mut cols: Vec<[f64; 3]> = Vec::new();
+        let mut cols = Scratch::default();
         let slack = if self.opts.process.ploughs() {
             self.plough_tile(&mut tile, strips, list, cull, &mut cols);
             self.opts.process.min_chip_mm
@@ -863,7 +890,7 @@ impl Setup<'_> {
         strips: &[Strip],
         list: &[u32],
         cull: f64,
-        cols: &mut Vec<[f64; 3]>,
+        cols: &mut Scratch,
     ) {
         let nt = self.cutter_teeth;
         let n = tile.w * tile.h;
@@ -983,33 +1010,45 @@ impl Setup<'_> {
         out
     }
 
-    fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Vec<[f64; 3]>) {
+    fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Scratch) {
         self.strip_triangles(s, cols, |a, b, c| tile.triangle(a, b, c, cull));
     }
 
-    /// The triangles of strip `s`, in order (`cols` is scratch space).
+    /// The triangles of strip `s`, in order (`scratch`: space for the points and the last
+    /// poses, which the strips of the other teeth at the same step share).
     fn strip_triangles(
         &self,
         s: &Strip,
-        cols: &mut Vec<[f64; 3]>,
+        scratch: &mut Scratch,
         mut tri: impl FnMut([f64; 3], [f64; 3], [f64; 3]),
     ) {
         let k = s.k as usize;
         let (lo, hi) = (s.lo as usize, s.hi as usize);
         let j = s.tooth as usize;
+        let Scratch { pts: cols, poses } = scratch;
         cols.clear();
+        let mut pose = |c: i64, n: u32, with_angle: bool| {
+            let key = (s.k, c, n, with_angle);
+            if let Some((_, p)) = poses.iter().find(|(q, _)| *q == key) {
+                return *p;
+            }
+            let p = self.pose(k, c as f64 / n as f64, with_angle);
+            poses.rotate_right(1);
+            poses[0] = (key, p);
+            p
+        };
         let ncols = match self.opts.model {
             Model::Ice { .. } => {
                 let edge = &self.profile.edge[j][lo..=hi];
                 for c in [s.a, s.b] {
-                    let p = self.pose(k, c as f64 / s.n as f64, true);
+                    let p = pose(c, s.n, true);
                     cols.extend(edge.iter().map(|e| p.apply(e)));
                 }
                 2
             }
             Model::Dome => {
                 let body = &self.profile.body[j][lo..=hi];
-                let base = self.pose(k, 0.0, false);
+                let base = pose(0, 1, false);
                 let step = TAU / s.n as f64;
                 for m in s.a..=s.b {
                     let p = base.rotated(m as f64 * step);
@@ -1026,6 +1065,26 @@ impl Setup<'_> {
                 tri(a[i], a[i + 1], b[i + 1]);
                 tri(a[i], b[i + 1], b[i]);
             }
+        }
+    }
+}
+
+/// Scratch space of [`Setup::strip_triangles`]: strip points and the last poses used.
+struct Scratch {
+    pts: Vec<[f64; 3]>,
+    /// (sample, step, steps, with angle) and the pose, most recent first.
+    poses: [((u32, i64, u32, bool), Pose); 2],
+}
+
+impl Default for Scratch {
+    fn default() -> Scratch {
+        let none = Pose {
+            m: Matrix3::zeros(),
+            b: Vec3::zeros(),
+        };
+        Scratch {
+            pts: Vec::new(),
+            poses: [((u32::MAX, 0, 0, false), none); 2],
         }
     }
 }

@@ -12,7 +12,7 @@
 //! nearest points and to the slopes their normals give. Heights are then bilinear in the
 //! coarse grid, which is far below the chord tolerance for any smooth surface.
 
-use crate::math::{Point3, Vec3};
+use crate::math::{Point3, Vec3, ceil_fast, floor_fast};
 use crate::resample::Sample;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::{SMatrix, SVector};
@@ -147,9 +147,9 @@ impl Nominal {
     /// coordinates, possibly outside the grid).
     pub fn local_max(&self, x: f64, y: f64, radius: f64) -> f64 {
         let s = self.stride as f64;
-        let lo = |v: f64, n: usize| (((v - radius) / s).floor().max(0.0) as usize).min(n - 1);
+        let lo = |v: f64, n: usize| (floor_fast((v - radius) / s).max(0.0) as usize).min(n - 1);
         let hi = |v: f64, n: usize| {
-            let h = ((v + radius) / s).ceil();
+            let h = ceil_fast((v + radius) / s);
             if h < 0.0 { 0 } else { (h as usize).min(n - 1) }
         };
         let (i0, i1) = (lo(x, self.cnx), hi(x, self.cnx));
@@ -171,7 +171,7 @@ impl Nominal {
     /// it, so a triangle with a vertex at (x, y) and any extent up to a cell is covered.
     pub fn cell_bound(&self, x: f64, y: f64) -> f64 {
         let s = self.stride as f64;
-        let c = |v: f64, n: usize| ((v / s).floor().max(0.0) as usize).min(n - 1);
+        let c = |v: f64, n: usize| (floor_fast(v / s).max(0.0) as usize).min(n - 1);
         let (i, j) = (c(x, self.cnx), c(y, self.cny));
         let mut m = f64::NEG_INFINITY;
         for jj in j.saturating_sub(1)..=(j + 2).min(self.cny - 1) {

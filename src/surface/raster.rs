@@ -5,6 +5,8 @@
 //! its edges (with a 1e-9 node tolerance), so triangles that share an edge leave no gap:
 //! the swept surface is covered whatever the grid.
 
+use crate::math::{ceil_fast, floor_fast};
+
 /// A tile of the z-buffer: columns `[i0, i0 + w)`, rows `[j0, j0 + h)`, row-major.
 #[derive(Debug, Clone)]
 pub(crate) struct Tile {
@@ -14,25 +16,92 @@ pub(crate) struct Tile {
     pub h: usize,
     /// Lowest height reached at each node, mm (`+∞` = not reached).
     pub z: Vec<f64>,
+    /// Per block of `BLOCK × BLOCK` nodes: an upper bound of `z` there (exact when it was
+    /// last recomputed; `z` only decreases), and whether a triangle has been drawn over the
+    /// block since.
+    bmax: Vec<f64>,
+    dirty: Vec<bool>,
+    /// Blocks per row.
+    bw: usize,
 }
+
+/// Side of the blocks of [`Tile`]'s occlusion bounds, nodes.
+const BLOCK: usize = 8;
+/// Nodes of a triangle's box from which stale block bounds are recomputed for it.
+const MIN_REFRESH_NODES: usize = 16;
 
 impl Tile {
     pub fn new(i0: usize, j0: usize, w: usize, h: usize) -> Tile {
+        let bw = w.div_ceil(BLOCK);
+        let nb = bw * h.div_ceil(BLOCK);
         Tile {
             i0,
             j0,
             w,
             h,
             z: vec![f64::INFINITY; w * h],
+            bmax: vec![f64::INFINITY; nb],
+            dirty: vec![false; nb],
+            bw,
         }
     }
 
     /// Rasterise the triangle `a`, `b`, `c` ([X, Y, W]) unless its lowest vertex is above
     /// `cull_w`; each covered node keeps the minimum of its height and the triangle's.
+    /// A triangle that lies above every node it could reach (by the block bounds) is
+    /// skipped: it would lower none of them.
     #[inline]
     pub fn triangle(&mut self, a: [f64; 3], b: [f64; 3], c: [f64; 3], cull_w: f64) {
         let rect = (self.i0, self.j0, self.w, self.h);
-        let z = &mut self.z;
+        let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
+        let w = self.w;
+        let mut occluded =
+            |cols: (usize, usize), rows: (usize, usize), low: f64, z: &[f64], refresh: bool| {
+                let (bx0, bx1) = (cols.0 / BLOCK, cols.1 / BLOCK);
+                let (by0, by1) = (rows.0 / BLOCK, rows.1 / BLOCK);
+                // Bounds as they stand first; then refresh the stale ones one at a time.
+                for by in by0..=by1 {
+                    for bx in bx0..=bx1 {
+                        let b = by * bw + bx;
+                        if bmax[b] > low && (!dirty[b] || !refresh) {
+                            return false;
+                        }
+                    }
+                }
+                for by in by0..=by1 {
+                    for bx in bx0..=bx1 {
+                        let b = by * bw + bx;
+                        if bmax[b] > low {
+                            bmax[b] = block_max(z, w, bx, by);
+                            dirty[b] = false;
+                            if bmax[b] > low {
+                                return false;
+                            }
+                        }
+                    }
+                }
+                true
+            };
+        if let (Some((cols, rows)), Some(low)) =
+            (reach(rect, &a, &b, &c, cull_w), lower_bound(&a, &b, &c))
+        {
+            // Columns one node wider than the box: the edge crossings are rounded.
+            let lc = (
+                cols.0.max(self.i0 + 1) - 1 - self.i0,
+                (cols.1 + 1).min(self.i0 + w - 1) - self.i0,
+            );
+            let lr = (rows.0 - self.j0, rows.1 - self.j0);
+            // Refreshing bounds pays only for triangles that span several nodes.
+            let big = (lc.1 - lc.0 + 1) * (lr.1 - lr.0 + 1) >= MIN_REFRESH_NODES;
+            if occluded(lc, lr, low, &z[..], big) {
+                return;
+            }
+            for by in lr.0 / BLOCK..=lr.1 / BLOCK {
+                for bx in lc.0 / BLOCK..=lc.1 / BLOCK {
+                    dirty[by * bw + bx] = true;
+                }
+            }
+        }
         cover(rect, a, b, c, cull_w, |i, wv| {
             if wv < z[i] {
                 z[i] = wv;
@@ -40,6 +109,74 @@ impl Tile {
         });
     }
 }
+
+/// The largest height of block (bx, by) of a tile `w` nodes wide.
+fn block_max(z: &[f64], w: usize, bx: usize, by: usize) -> f64 {
+    let h = z.len() / w;
+    let (c0, c1) = (bx * BLOCK, ((bx + 1) * BLOCK).min(w));
+    let mut m = f64::NEG_INFINITY;
+    for r in by * BLOCK..((by + 1) * BLOCK).min(h) {
+        for &v in &z[r * w + c0..r * w + c1] {
+            m = m.max(v);
+        }
+    }
+    m
+}
+
+/// The node columns and rows of the tile that [`cover`] could reach with this triangle
+/// (its bounding box widened by the node tolerance), or `None` when it reaches none.
+#[inline]
+fn reach(
+    rect: (usize, usize, usize, usize),
+    a: &[f64; 3],
+    b: &[f64; 3],
+    c: &[f64; 3],
+    cull_w: f64,
+) -> Option<((usize, usize), (usize, usize))> {
+    let (i0, j0, w, h) = rect;
+    if a[2].min(b[2]).min(c[2]) > cull_w {
+        return None;
+    }
+    let xmin = a[0].min(b[0]).min(c[0]);
+    let xmax = a[0].max(b[0]).max(c[0]);
+    let ymin = a[1].min(b[1]).min(c[1]);
+    let ymax = a[1].max(b[1]).max(c[1]);
+    let (tx0, ty0) = (i0 as f64, j0 as f64);
+    let tx1 = (i0 + w) as f64 - 1.0;
+    let ty1 = (j0 + h) as f64 - 1.0;
+    let c0 = ceil_fast(xmin - EPS).max(tx0);
+    let c1 = floor_fast(xmax + EPS).min(tx1);
+    let r0 = ceil_fast(ymin - EPS).max(ty0);
+    let r1 = floor_fast(ymax + EPS).min(ty1);
+    // (Also false for NaN.)
+    if c0 <= c1 && r0 <= r1 {
+        Some(((c0 as usize, c1 as usize), (r0 as usize, r1 as usize)))
+    } else {
+        None
+    }
+}
+
+/// A lower bound of every height [`cover`] gives for the triangle (its lowest vertex less
+/// the node tolerance along the plane's slope and the rounding of the plane's evaluation),
+/// or `None` for a triangle seen edge-on (which covers nothing).
+#[inline]
+fn lower_bound(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> Option<f64> {
+    let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let det = e1[0] * e2[1] - e1[1] * e2[0];
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let gx = (e1[2] * e2[1] - e1[1] * e2[2]) / det;
+    let gy = (e1[0] * e2[2] - e1[2] * e2[0]) / det;
+    let low = a[2].min(b[2]).min(c[2]);
+    let margin = 1e-9 * (1.0 + low.abs()) + 1e-6 * (gx.abs() + gy.abs());
+    let v = low - margin;
+    v.is_finite().then_some(v)
+}
+
+/// Node tolerance of [`cover`]'s edges.
+const EPS: f64 = 1e-9;
 
 /// Every node of the tile rectangle `(i0, j0, w, h)` that the triangle covers, with the
 /// triangle's height there: `f(index in the tile, W)`, rows in order, columns ascending.
@@ -58,7 +195,6 @@ pub(crate) fn cover(
         if a[2].min(b[2]).min(c[2]) > cull_w {
             return;
         }
-        const EPS: f64 = 1e-9;
         let xmin = a[0].min(b[0]).min(c[0]);
         let xmax = a[0].max(b[0]).max(c[0]);
         let ymin = a[1].min(b[1]).min(c[1]);
@@ -70,6 +206,18 @@ pub(crate) fn cover(
         if xmax < tx0 - EPS || xmin > tx1 + EPS || ymax < ty0 - EPS || ymin > ty1 + EPS {
             return;
         }
+        let ry0 = ceil_fast(ymin - EPS).max(ty0) as usize;
+        let ry1 = floor_fast(ymax + EPS).min(ty1);
+        if ry1 < ry0 as f64 {
+            return;
+        }
+        let ry1 = ry1 as usize;
+        // No node column within reach (a triangle smaller than the node spacing): the edge
+        // crossings below lie within [xmin, xmax] up to their rounding, `slack`.
+        let slack = EPS + 1e-6 + 4.0 * f64::EPSILON * xmin.abs().max(xmax.abs());
+        if ceil_fast(xmin - slack) > floor_fast(xmax + slack) {
+            return;
+        }
         // Plane W = a.W + gx (X − a.X) + gy (Y − a.Y).
         let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
         let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
@@ -79,12 +227,6 @@ pub(crate) fn cover(
         }
         let gx = (e1[2] * e2[1] - e1[1] * e2[2]) / det;
         let gy = (e1[0] * e2[2] - e1[2] * e2[0]) / det;
-        let ry0 = (ymin - EPS).ceil().max(ty0) as usize;
-        let ry1 = (ymax + EPS).floor().min(ty1);
-        if ry1 < ry0 as f64 {
-            return;
-        }
-        let ry1 = ry1 as usize;
         let verts = [a, b, c];
         for row in ry0..=ry1 {
             let y = row as f64;
@@ -114,8 +256,8 @@ pub(crate) fn cover(
             if lo > hi {
                 continue;
             }
-            let c0 = (lo - EPS).ceil().max(tx0);
-            let c1 = (hi + EPS).floor().min(tx1);
+            let c0 = ceil_fast(lo - EPS).max(tx0);
+            let c1 = floor_fast(hi + EPS).min(tx1);
             if c1 < c0 {
                 continue;
             }
