@@ -272,10 +272,8 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "# {}\n", r.title);
     let _ = writeln!(
         s,
-        "Made by `{}` (crest {}). Regenerate from the repository root with\n\n```sh\ncargo run --release -- {}\n```\n",
-        r.command,
-        r.version,
-        r.command.strip_prefix("crest ").unwrap_or(&r.command)
+        "Made by crest {}. Regenerate, from the directory it was made in, with\n\n```sh\n{}\n```\n",
+        r.version, r.command
     );
     let _ = writeln!(
         s,
@@ -413,10 +411,9 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "<h1>{}</h1>", esc(&r.title));
     let _ = writeln!(
         s,
-        "<p>Made by <code>{}</code> (crest {}). Regenerate from the repository root with</p>\n<pre>cargo run --release -- {}</pre>",
-        esc(&r.command),
+        "<p>Made by crest {}. Regenerate, from the directory it was made in, with</p>\n<pre>{}</pre>",
         esc(&r.version),
-        esc(r.command.strip_prefix("crest ").unwrap_or(&r.command))
+        esc(&r.command)
     );
     let _ = writeln!(
         s,

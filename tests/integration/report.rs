@@ -672,9 +672,16 @@ fn committed_report_is_regenerated_by_its_command() {
     // The command written at the top of reports/marin2023/report.md, run into a temporary
     // directory, reproduces the committed files (apart from the output directory's name).
     let md = read(&repo("reports/marin2023/report.md"));
-    let cmd = "cargo run --release -- report --measured samples/measured/marin2023-table2.csv \
+    let cmd = "crest report --measured samples/measured/marin2023-table2.csv \
                --study samples/studies/marin2023.toml -o reports/marin2023 --tolerance-pct 20";
-    assert!(md.contains(cmd), "report.md does not document `{cmd}`");
+    assert!(
+        md.contains(&format!("```sh\n{cmd}\n```")),
+        "report.md does not document `{cmd}`"
+    );
+    assert!(
+        !md.contains("cargo run"),
+        "report.md must give the `crest` command a user has, not cargo's"
+    );
     let dir = tempdir();
     let out = dir.path().join("marin2023");
     crest()
