@@ -63,8 +63,7 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
         ..Default::default()
     };
     let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
-    let (cutter, tool_source, mut warnings) =
-        super::inputs::resolve_cutter(
+    let (cutter, tool_source, mut warnings) = super::inputs::resolve_cutter(
         req.tool
             .clone()
             .map(super::inputs::ToolSource::File)
