@@ -47,7 +47,8 @@ class Cutter:
 
 class HeightMap:
     """Heights in µm on a regular grid: ``z_um[row, col]``, rows along y ascending, NaN where
-    no tooth reached; node (0, 0) at ``origin_mm`` in the grid's frame."""
+    no tooth reached; node (0, 0) at ``origin_mm`` in the grid's frame. Picklable (exact
+    round trip)."""
 
     def __init__(
         self,
@@ -94,7 +95,16 @@ class HeightMap:
         """Parameters of this map; see :func:`metrics`."""
 
 class PartMap:
-    """A simulated part map: points on the design surface and heights along their normals."""
+    """A simulated part map: points on the design surface and heights along their normals.
+    Picklable (exact round trip)."""
+
+    def __init__(
+        self,
+        points: npt.NDArray[np.float64],
+        normals: npt.NDArray[np.float64],
+        height_um: npt.NDArray[np.float64],
+        nodes_cut: int = 0,
+    ) -> None: ...
 
     points: npt.NDArray[np.float64]
     """(N, 3) part points, mm."""
@@ -131,7 +141,7 @@ def metrics(
 def simulate(
     file: StrPath,
     *,
-    tool: Optional[StrPath] = None,
+    tool: Union[Cutter, StrPath, None] = None,
     window: Optional[Tuple[float, float, float, float]] = None,
     patch_at: Optional[float] = None,
     patch_near: Optional[Tuple[float, float, float]] = None,
@@ -156,7 +166,8 @@ def simulate(
 ) -> Union[HeightMap, PartMap]:
     """Simulate the surface a tool path leaves, as ``crest simulate`` with the same options:
     exactly one of ``window`` (mm, WCS), ``patch_at``/``patch_near`` with ``patch_mm``, or
-    ``map_mm`` (a part map; needs ``part``). Releases the GIL."""
+    ``map_mm`` (a part map; needs ``part``). ``tool`` is a :class:`Cutter` or the path of a
+    ``tool.toml`` (default: the file's TLDATA with ``teeth``). Releases the GIL."""
 
 def resample(
     file: StrPath,
@@ -192,7 +203,7 @@ def map_tasks(
     map_mm: float,
     part: StrPath,
     region: Optional[Tuple[float, float, float, float, float, float]] = None,
-    tool: Optional[StrPath] = None,
+    tool: Union[Cutter, StrPath, None] = None,
     process: Optional[StrPath] = None,
     rpm: Optional[float] = None,
     feed_mm_min: Optional[float] = None,

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crest::pipeline::ToolSource;
 use crest::pipeline::simulate::{FeedSource, GridRequest, Output, SimulateRequest};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyReadonlyArray2};
@@ -414,6 +415,19 @@ impl HeightMap {
         )
     }
 
+    /// Pickling: the constructor and its arguments (the heights as a numpy array, which
+    /// pickles its float64 values bit for bit).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let m = &this.inner;
+        let z = this.z_um(py)?;
+        let args = (z, m.dx_um, m.dy_um, m.x0_mm, m.y0_mm).into_pyobject(py)?;
+        Ok((py.get_type::<HeightMap>().into_any(), args))
+    }
+
     fn __repr__(&self) -> String {
         let m = &self.inner;
         format!(
@@ -439,6 +453,52 @@ struct PartMap {
     normals: Py<numpy::PyArray2<f64>>,
     height_um: Py<numpy::PyArray1<f64>>,
     nodes_cut: usize,
+}
+
+#[pymethods]
+impl PartMap {
+    /// A part map from its arrays: points (N×3, mm), normals (N×3), heights (N, µm).
+    #[new]
+    #[pyo3(signature = (points, normals, height_um, nodes_cut = 0))]
+    fn new(
+        points: Bound<'_, numpy::PyArray2<f64>>,
+        normals: Bound<'_, numpy::PyArray2<f64>>,
+        height_um: Bound<'_, numpy::PyArray1<f64>>,
+        nodes_cut: usize,
+    ) -> PyResult<PartMap> {
+        use numpy::PyUntypedArrayMethods;
+        let n = height_um.len();
+        for (name, a) in [("points", &points), ("normals", &normals)] {
+            if a.shape() != [n, 3] {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "{name} must have shape ({n}, 3) to match height_um, got {:?}",
+                    a.shape()
+                )));
+            }
+        }
+        Ok(PartMap {
+            points: points.unbind(),
+            normals: normals.unbind(),
+            height_um: height_um.unbind(),
+            nodes_cut,
+        })
+    }
+
+    /// Pickling: the constructor and its arrays.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let args = (
+            this.points.bind(py).clone(),
+            this.normals.bind(py).clone(),
+            this.height_um.bind(py).clone(),
+            this.nodes_cut,
+        )
+            .into_pyobject(py)?;
+        Ok((py.get_type::<PartMap>().into_any(), args))
+    }
 }
 
 // ------------------------------------------------------------------------------------------
@@ -557,11 +617,31 @@ fn metrics<'py>(
 // Simulation
 // ------------------------------------------------------------------------------------------
 
+/// Where `tool=` comes from: a `Cutter` carries its tool.toml text (and where it came from);
+/// anything else is the path of a tool.toml.
+fn tool_source(tool: Option<Bound<'_, PyAny>>) -> PyResult<Option<ToolSource>> {
+    let Some(t) = tool else { return Ok(None) };
+    Ok(Some(match t.downcast::<Cutter>() {
+        Ok(c) => {
+            let c = c.get();
+            ToolSource::Text {
+                name: c.source.clone(),
+                text: c.toml.clone(),
+            }
+        }
+        Err(_) => ToolSource::File(t.extract::<PathBuf>().map_err(|_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "tool must be a crest.Cutter or the path of a tool.toml",
+            )
+        })?),
+    }))
+}
+
 /// The request of `simulate`'s options (the grid exactly one of window, patch, map).
 #[allow(clippy::too_many_arguments)]
 fn request_of(
     file: PathBuf,
-    tool: Option<PathBuf>,
+    tool: Option<ToolSource>,
     window: Option<[f64; 4]>,
     patch_at: Option<f64>,
     patch_near: Option<[f64; 3]>,
@@ -666,15 +746,16 @@ fn request_of(
 
 /// Simulate the surface a tool path leaves (as `crest simulate`): give exactly one of
 /// `window=(x0, y0, x1, y1)` (mm, WCS), `patch_at=s_mm` or `patch_near=(x, y, z)` with
-/// `patch_mm=(length, width)`, or `map_mm=spacing` (a part map; needs `part`). Returns a
-/// `HeightMap` (window, patch) or a `PartMap`. The GIL is released while it runs.
+/// `patch_mm=(length, width)`, or `map_mm=spacing` (a part map; needs `part`). `tool` is a
+/// `Cutter` or the path of a `tool.toml` (default: the file's TLDATA with `teeth`). Returns
+/// a `HeightMap` (window, patch) or a `PartMap`. The GIL is released while it runs.
 #[pyfunction]
 #[pyo3(signature = (file, *, tool = None, window = None, patch_at = None, patch_near = None, patch_mm = None, map_mm = None, region = None, part = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
     file: PathBuf,
-    tool: Option<PathBuf>,
+    tool: Option<Bound<'_, PyAny>>,
     window: Option<[f64; 4]>,
     patch_at: Option<f64>,
     patch_near: Option<[f64; 3]>,
@@ -699,7 +780,7 @@ fn simulate(
 ) -> PyResult<PyObject> {
     let req = request_of(
         file,
-        tool,
+        tool_source(tool)?,
         window,
         patch_at,
         patch_near,
@@ -1003,7 +1084,7 @@ fn map_tasks<'py>(
     map_mm: f64,
     part: PathBuf,
     region: Option<[f64; 6]>,
-    tool: Option<PathBuf>,
+    tool: Option<Bound<'py, PyAny>>,
     process: Option<PathBuf>,
     rpm: Option<f64>,
     feed_mm_min: Option<f64>,
@@ -1022,7 +1103,10 @@ fn map_tasks<'py>(
     let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
     let req = request_of(
         abs(file),
-        tool.map(abs),
+        tool_source(tool)?.map(|t| match t {
+            ToolSource::File(p) => ToolSource::File(abs(p)),
+            text => text,
+        }),
         None,
         None,
         None,

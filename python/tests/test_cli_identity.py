@@ -209,3 +209,67 @@ def test_resample_is_the_cli_csv(cli, tmp_path):
         assert np.all((diff <= half * (1 + 1e-9)) | (np.isnan(printed) & np.isnan(ours[name]))), name
     with pytest.raises(crest.CrestError, match="out of range"):
         crest.resample(cls, mode="fz", fz_mm=0.05, teeth=4, path=9)
+
+
+def test_simulate_takes_a_cutter_and_writes_the_bytes_of_crest_simulate(cli, tmp_path):
+    # The same tool as a Cutter object (read from the file, or built from keywords) and as
+    # the tool.toml path given to the CLI: the same GSF bytes.
+    cutter = crest.Cutter.from_toml(TORUS)
+    args = dict(model="ice", dtheta_deg=2.0, grid_um=10.0, window=WINDOW)
+    ours = tmp_path / "py.gsf"
+    crest.simulate(TRIAL3, tool=cutter, **args).to_gsf(ours)
+    theirs = tmp_path / "cli.gsf"
+    p = cli(
+        "simulate", TRIAL3, "--tool", TORUS, "--model", "ice", "--dtheta-deg", "2",
+        "--grid-um", "10", "--window", ",".join(map(str, WINDOW)), "-o", theirs,
+    )
+    assert p.returncode == 0, p.stderr
+    assert ours.read_bytes() == theirs.read_bytes()
+    by_path = tmp_path / "path.gsf"
+    crest.simulate(TRIAL3, tool=str(TORUS), **args).to_gsf(by_path)
+    assert by_path.read_bytes() == theirs.read_bytes()
+    # A cutter built from keywords (two teeth: another surface than the file's tool).
+    two = crest.Cutter(shape="torus", radius_mm=5.0, corner_radius_mm=1.5, teeth=2, helix_deg=0.0)
+    toml = tmp_path / "two.toml"
+    toml.write_text(two.toml)
+    kw = tmp_path / "kw.gsf"
+    crest.simulate(TRIAL3, tool=two, **args).to_gsf(kw)
+    assert kw.read_bytes() != theirs.read_bytes()
+    p = cli(
+        "simulate", TRIAL3, "--tool", toml, "--model", "ice", "--dtheta-deg", "2",
+        "--grid-um", "10", "--window", ",".join(map(str, WINDOW)), "-o", tmp_path / "kw-cli.gsf",
+    )
+    assert p.returncode == 0, p.stderr
+    assert kw.read_bytes() == (tmp_path / "kw-cli.gsf").read_bytes()
+    with pytest.raises(TypeError, match="Cutter or the path"):
+        crest.simulate(TRIAL3, tool=5, **args)
+
+
+def test_height_maps_pickle_exactly(window_map, tmp_path):
+    z = window_map.z_um.copy()
+    z[0, 0] = np.nan  # NaN (not reached) survives too
+    m = crest.HeightMap(z, 10.0, 7.5, x0_mm=0.1 + 0.2, y0_mm=-1e-17)
+    back = pickle.loads(pickle.dumps(m))
+    assert isinstance(back, crest.HeightMap)
+    assert back.z_um.tobytes() == m.z_um.tobytes()
+    assert (back.nx, back.ny, back.dx_um, back.dy_um, back.origin_mm) == (
+        m.nx, m.ny, m.dx_um, m.dy_um, m.origin_mm,
+    )
+    m.to_gsf(tmp_path / "a.gsf")
+    back.to_gsf(tmp_path / "b.gsf")
+    assert (tmp_path / "a.gsf").read_bytes() == (tmp_path / "b.gsf").read_bytes()
+    w = pickle.loads(pickle.dumps(window_map, protocol=pickle.HIGHEST_PROTOCOL))
+    assert w.z_um.tobytes() == window_map.z_um.tobytes()
+
+
+def test_part_maps_pickle_exactly():
+    rng = np.random.default_rng(1)
+    pts, nrm, h = rng.normal(size=(5, 3)), rng.normal(size=(5, 3)), rng.normal(size=5)
+    h[2] = np.nan
+    pm = crest.PartMap(pts, nrm, h, nodes_cut=4)
+    back = pickle.loads(pickle.dumps(pm))
+    for name in ("points", "normals", "height_um"):
+        assert getattr(back, name).tobytes() == getattr(pm, name).tobytes(), name
+    assert back.nodes_cut == 4
+    with pytest.raises(ValueError, match="shape"):
+        crest.PartMap(pts[:4], nrm, h)

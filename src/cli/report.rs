@@ -13,13 +13,15 @@ use std::path::PathBuf;
 /// Options of `crest report`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Measured table (CSV): lead_deg,side,sample,Ra_um,Rz_um (one row per case and sample).
+    /// Measured table (CSV): lead_deg,side,sample,Ra_um,Rz_um (one row per case and sample);
+    /// optional Sa_um, Sz_um, Ra_stepover_um, Rz_stepover_um (docs/config.md).
     #[arg(long, value_name = "TABLE.csv")]
     pub measured: PathBuf,
     /// Study (TOML): tool file, run-out, fz, cases (lead, side) and model.
     #[arg(long, value_name = "STUDY.toml")]
     pub study: PathBuf,
-    /// Output directory (created if needed): report.md, report.html, rz.svg, ra.svg.
+    /// Output directory (created if needed): report.md, report.html, rz.svg, ra.svg (and a plot
+    /// per other roughness column of the table).
     #[arg(short = 'o', long = "output", value_name = "DIR")]
     pub output: PathBuf,
     /// A case passes when every simulated parameter is within this percentage of the measured mean.

@@ -259,7 +259,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let req = SimulateRequest {
         file: args.file.clone(),
-        tool: args.tool.clone(),
+        tool: args.tool.clone().map(crest::pipeline::ToolSource::File),
         teeth: args.teeth,
         helix_deg: args.helix_deg,
         part: args.part.clone(),

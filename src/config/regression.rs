@@ -8,6 +8,7 @@
 //! fz_mm = 0.05
 //! rule = "paper"                                # or "exact" (the default)
 //! ap_mm = 0.4
+//! stepover_mm = 0.3                             # optional: for Sa/Sz and stepover Ra/Rz columns
 //! [runout]                                      # optional: replaces the tool's [runout]
 //! tooth_radius_deviation_um = [-10, -15, -24, -25]
 //! [simulate]                                    # optional: settings of model = "simulate"
@@ -97,6 +98,8 @@ struct StudyFile {
     #[serde(default)]
     cutting_speed_m_min: Option<f64>,
     #[serde(default)]
+    stepover_mm: Option<Spanned<f64>>,
+    #[serde(default)]
     runout: Option<Spanned<RunoutFile>>,
     #[serde(default)]
     simulate: Option<SimulateFile>,
@@ -130,6 +133,19 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
             format!("ap_mm must be a non-negative number, found {ap}"),
         ));
     }
+    let stepover_mm = match &s.stepover_mm {
+        None => None,
+        Some(v) => {
+            let ae = *v.get_ref();
+            if !(ae.is_finite() && ae > 0.0) {
+                return Err(at(
+                    v.span().start,
+                    format!("stepover_mm must be a positive number, found {ae}"),
+                ));
+            }
+            Some(ae)
+        }
+    };
     let simulate = match &s.simulate {
         None => None,
         Some(sim) => {
@@ -233,6 +249,15 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
                         format!("case {n}: surface_radius_mm is given but side is plane"),
                     ));
                 }
+                if !cs.side.is_curved() {
+                    return Err(at(
+                        r.span().start,
+                        format!(
+                            "case {n}: surface_radius_mm is given but side `{}` is a plain label; the curvature correction needs side = \"concave\" or \"convex\"",
+                            cs.side.name()
+                        ),
+                    ));
+                }
                 Some(rs)
             }
             None => None,
@@ -253,7 +278,7 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
         }
         cases.push(StudyCase {
             lead_deg: lead,
-            side: cs.side,
+            side: cs.side.clone(),
             surface_radius_mm,
             fz_mm,
             model: cs.model,
@@ -299,6 +324,7 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
         rule: s.rule,
         ap_mm: ap,
         cutting_speed_m_min: s.cutting_speed_m_min,
+        stepover_mm,
         runout,
         simulate,
         notes: s.notes,

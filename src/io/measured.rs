@@ -1,7 +1,8 @@
 //! The measured-table reader: CSV with one row per case and sample (`lead_deg,side,sample,
-//! Ra_um,Rz_um`, like 002 Table 2), every bad cell named by file, line and column.
+//! Ra_um,Rz_um`, like 002 Table 2; optionally `Sa_um`, `Sz_um`, `Ra_stepover_um`,
+//! `Rz_stepover_um`), every bad cell named by file, line and column.
 
-use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Side};
+use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Param, Side};
 use std::collections::BTreeMap;
 
 /// Why a measured table was rejected.
@@ -33,7 +34,7 @@ pub enum MeasuredError {
     },
     /// The header lacks required columns.
     #[error(
-        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and at least one of Ra_um, Rz_um"
+        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and at least one of Ra_um, Rz_um, Sa_um, Sz_um, Ra_stepover_um, Rz_stepover_um"
     )]
     MissingColumns {
         /// File name as given.
@@ -45,7 +46,17 @@ pub enum MeasuredError {
     },
 }
 
-const KNOWN_COLUMNS: [&str; 5] = ["lead_deg", "side", "sample", "Ra_um", "Rz_um"];
+const KNOWN_COLUMNS: [&str; 9] = [
+    "lead_deg",
+    "side",
+    "sample",
+    "Ra_um",
+    "Rz_um",
+    "Sa_um",
+    "Sz_um",
+    "Ra_stepover_um",
+    "Rz_stepover_um",
+];
 
 /// The 1-based line where a record starts: the csv crate may place a record that follows
 /// blank or comment lines at the first of them, so skip those from its byte offset.
@@ -90,8 +101,10 @@ fn field_column(raw: &str, index: usize) -> usize {
 /// Parse a measured table from CSV text. `file` names the file in error messages.
 ///
 /// Lines starting with `#` are comments. The header must hold `lead_deg`, `side`,
-/// `sample` and at least one of `Ra_um`, `Rz_um`, in any order; other columns are errors
-/// (a misspelt unit must not be ignored). `side` is `concave`, `convex` or `plane`.
+/// `sample` and at least one of `Ra_um`, `Rz_um` (feed-direction profile), `Sa_um`, `Sz_um`
+/// (areal), `Ra_stepover_um`, `Rz_stepover_um` (stepover-direction profile), in any order;
+/// other columns are errors (a misspelt unit must not be ignored). `side` is `concave`, `convex` or `plane` (these
+/// carry curvature) or any other non-empty label (a plain grouping label).
 /// Roughness values must be finite and non-negative; each (lead, side, sample) appears once.
 pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredError> {
     let raw_lines: Vec<&str> = text.lines().collect();
@@ -158,8 +171,10 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     let columns = Columns {
         ra: index.contains_key("Ra_um"),
         rz: index.contains_key("Rz_um"),
+        extra: [Param::Sz, Param::Sa, Param::RzStepover, Param::RaStepover]
+            .map(|p| index.contains_key(p.column())),
     };
-    if !columns.ra && !columns.rz {
+    if !Param::ALL.into_iter().any(|p| columns.has(p)) {
         missing.push("Ra_um or Rz_um");
     }
     if !missing.is_empty() {
@@ -234,11 +249,12 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
             ));
         }
         let (si, s) = cell("side");
+        // concave, convex and plane carry curvature; any other label only groups rows.
         let side = Side::parse(s).ok_or_else(|| {
             bad(
                 "side",
                 si,
-                format!("expected concave, convex or plane, found `{s}`"),
+                "empty side label (concave, convex, plane or any other label)".to_string(),
             )
         })?;
         let (pi, sample) = cell("sample");
@@ -255,6 +271,16 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         } else {
             None
         };
+        let mut extra_um = [None; 4];
+        for (v, p) in
+            extra_um
+                .iter_mut()
+                .zip([Param::Sz, Param::Sa, Param::RzStepover, Param::RaStepover])
+        {
+            if columns.has(p) {
+                *v = Some(number(p.column(), true)?);
+            }
+        }
         if let Some(prev) = rows
             .iter()
             .find(|r| r.lead_deg == lead_deg && r.side == side && r.sample == sample)
@@ -275,6 +301,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
             sample: sample.to_string(),
             ra_um,
             rz_um,
+            extra_um,
             line,
         });
     }

@@ -63,8 +63,16 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
         ..Default::default()
     };
     let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
-    let (cutter, tool_source, mut warnings) =
-        super::inputs::resolve_cutter(req.tool.as_deref(), &program, &req.file, req.teeth, None)?;
+    let (cutter, tool_source, mut warnings) = super::inputs::resolve_cutter(
+        req.tool
+            .clone()
+            .map(super::inputs::ToolSource::File)
+            .as_ref(),
+        &program,
+        &req.file,
+        req.teeth,
+        None,
+    )?;
     // A cutting posture: one a cutting move ends at (the posture a run starts from is
     // where the tool comes from, often above the part).
     let is_cut =

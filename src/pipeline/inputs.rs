@@ -7,7 +7,7 @@ use crate::io::text::read_text;
 use crate::kinematics::Machine;
 use crate::tool::Cutter;
 use miette::{NamedSource, SourceSpan};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A rejected `tool.toml`, with the file name, line and column, and the offending text.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
@@ -43,6 +43,48 @@ impl ToolFileError {
 pub fn load_tool(path: &Path) -> miette::Result<Cutter> {
     let text = read_text(path, "tool file")?;
     tool_from_text(&text, &path.display().to_string())
+}
+
+/// Where a run's `tool.toml` comes from: a file on disk, or its text already in memory (the
+/// Python package's `Cutter`), `name` naming it in messages.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum ToolSource {
+    /// A `tool.toml` file.
+    File(PathBuf),
+    /// `tool.toml` text, named `name` in messages.
+    Text {
+        /// Where the text came from (a path or a description).
+        name: String,
+        /// The `tool.toml` text.
+        text: String,
+    },
+}
+
+impl ToolSource {
+    /// The name messages give it: the path as given, or the text's name.
+    pub fn name(&self) -> String {
+        match self {
+            ToolSource::File(p) => p.display().to_string(),
+            ToolSource::Text { name, .. } => name.clone(),
+        }
+    }
+
+    /// The cutter it describes.
+    pub fn load(&self) -> miette::Result<Cutter> {
+        match self {
+            ToolSource::File(p) => load_tool(p),
+            ToolSource::Text { name, text } => tool_from_text(text, name),
+        }
+    }
+
+    /// The minimum chip thickness its `edge_radius_um` gives (mm), or None.
+    pub fn min_chip(&self) -> miette::Result<Option<f64>> {
+        match self {
+            ToolSource::File(p) => tool_min_chip(Some(p)),
+            ToolSource::Text { name, text } => crate::config::load_tool_min_chip(text)
+                .map_err(|e| ToolFileError::new(name, text, &e).into()),
+        }
+    }
 }
 
 /// Read `tool.toml` text that came from `file`.
@@ -103,7 +145,7 @@ pub const TLDATA_HELIX_DEG: f64 = 30.0;
 /// Returns the cutter, a one-line description of where it came from, and warnings (a
 /// `tool.toml` whose radii disagree with the file's TLDATA).
 pub fn resolve_cutter(
-    tool: Option<&Path>,
+    tool: Option<&ToolSource>,
     program: &crate::toolpath::Program,
     file: &Path,
     teeth: Option<usize>,
@@ -111,8 +153,8 @@ pub fn resolve_cutter(
 ) -> miette::Result<(Cutter, String, Vec<String>)> {
     use crate::tool::Shape;
     let tldata = program.paths.iter().find_map(|p| p.tool.clone());
-    if let Some(path) = tool {
-        let cutter = load_tool(path)?;
+    if let Some(source) = tool {
+        let cutter = source.load()?;
         let mut warnings = Vec::new();
         if let Some(t) = &tldata {
             let r = 0.5 * t.diameter_mm;
@@ -122,7 +164,7 @@ pub fn resolve_cutter(
             {
                 warnings.push(format!(
                     "{} has R {} mm, corner radius {} mm, but {}'s TLDATA says D {} mm (R {r} mm), corner radius {} mm: the simulated surface will not be the one the path was computed for",
-                    path.display(),
+                    source.name(),
                     cutter.radius_mm,
                     cutter.corner_radius_mm(),
                     file.display(),
@@ -131,7 +173,7 @@ pub fn resolve_cutter(
                 ));
             }
         }
-        return Ok((cutter, format!("{}", path.display()), warnings));
+        return Ok((cutter, source.name(), warnings));
     }
     let Some(t) = tldata else {
         return Err(miette::miette!(

@@ -6,7 +6,7 @@
 pub mod inputs;
 
 pub use inputs::{
-    ToolFileError, load_machine, load_process, load_tool, tool_from_text, tool_min_chip,
+    ToolFileError, ToolSource, load_machine, load_process, load_tool, tool_from_text, tool_min_chip,
 };
 pub use progress::{Progress, Silent};
 pub mod contact;

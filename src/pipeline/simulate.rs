@@ -95,8 +95,8 @@ pub enum GridRequest {
 pub struct SimulateRequest {
     /// Tool-path file (CLSF or contact12).
     pub file: PathBuf,
-    /// Cutter description (`tool.toml`); the file's TLDATA when `None`.
-    pub tool: Option<PathBuf>,
+    /// Cutter description (`tool.toml` file or text); the file's TLDATA when `None`.
+    pub tool: Option<super::inputs::ToolSource>,
     /// Teeth of a tool taken from TLDATA.
     pub teeth: Option<usize>,
     /// Helix angle of a tool taken from TLDATA, degrees.
@@ -490,7 +490,7 @@ pub fn simulate_shard(
     progress.phase(&format!("reading {}", req.file.display()), "");
     let mut program = crate::io::toolpath::read_program_with(&req.file, read)?;
     let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
-        req.tool.as_deref(),
+        req.tool.as_ref(),
         &program,
         &req.file,
         req.teeth,
@@ -705,7 +705,10 @@ pub fn simulate_shard(
         grid_um * 1e-3,
     );
     sopts.depth_mm = ap_mm;
-    sopts.process = process.effects(super::tool_min_chip(req.tool.as_deref())?);
+    sopts.process = process.effects(match &req.tool {
+        Some(t) => t.min_chip()?,
+        None => None,
+    });
     let reference_arg = match (&part, reference) {
         (Some(p), ReferenceSource::Part) => Reference::Part(p),
         _ => Reference::Contacts,

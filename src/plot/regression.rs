@@ -13,10 +13,15 @@ fn band_of(r: &Regression, c: &CaseResult, parameter: &str) -> Option<Band> {
         .as_ref()?
         .iter()
         .find(|b| b.lead_deg == c.lead_deg && b.side == c.side)?;
-    Some(if parameter == "Rz" { b.rz } else { b.ra })
+    match parameter {
+        "Rz" => Some(b.rz),
+        "Ra" => Some(b.ra),
+        _ => None,
+    }
 }
 
-/// Draw the figure of one parameter (`Rz` or `Ra`) as an SVG string.
+/// Draw the figure of one parameter (a [`crate::study::measured::Param`] label: `Rz`, `Ra`,
+/// `Sz`, `Sa`, `Rz stepover`, `Ra stepover`) as an SVG string.
 pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
     let mut svg = String::new();
     {
@@ -36,7 +41,7 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
     use plotters::prelude::*;
     super::init_fonts();
     let font = super::FONT;
-    let mut sides: Vec<Side> = r.cases.iter().map(|c| c.side).collect();
+    let mut sides: Vec<Side> = r.cases.iter().map(|c| c.side.clone()).collect();
     sides.sort();
     sides.dedup();
     let pts: Vec<(&CaseResult, &Comparison)> = r
@@ -52,13 +57,9 @@ fn draw_plot<DB: plotters::prelude::DrawingBackend>(
     if pts.is_empty() {
         return Err(format!("no {parameter} values to plot"));
     }
-    let samples = |c: &CaseResult| -> Vec<f64> {
-        if parameter == "Rz" {
-            c.measured.rz_values_um.clone()
-        } else {
-            c.measured.ra_values_um.clone()
-        }
-    };
+    let param = crate::study::measured::Param::from_label(parameter)
+        .ok_or_else(|| format!("no parameter {parameter}"))?;
+    let samples = |c: &CaseResult| -> Vec<f64> { c.measured.values(param).to_vec() };
     let mut ymax: f64 = 0.0;
     for (c, k) in &pts {
         ymax = ymax

@@ -3,7 +3,7 @@
 //! numbers come from [`crate::study::regression`], the plots from [`crate::plot::regression`].
 
 use crate::math::trim_decimals;
-use crate::study::measured::Stat;
+use crate::study::measured::{Param, Stat};
 use crate::study::regression::{CaseResult, CrestPrediction, PROFILE_STEP_MM, Regression};
 use crate::surface::ModelKind;
 use std::fmt::Write as _;
@@ -155,7 +155,7 @@ fn findings(r: &Regression) -> Vec<String> {
             fmt_g(r.tolerance_pct)
         ));
     }
-    for p in ["Rz", "Ra"] {
+    for p in Param::ALL.map(Param::label) {
         if let Some((lo, hi)) = ratio_range(r, p) {
             let under = r
                 .cases
@@ -239,6 +239,24 @@ fn method_text(r: &Regression) -> Vec<String> {
             fmt_g(r.tolerance_pct)
         ),
     ];
+    let extra = r
+        .cases
+        .iter()
+        .flat_map(|c| c.comparisons.iter())
+        .any(|k| Param::from_label(&k.parameter).is_some_and(Param::is_extra));
+    if extra {
+        v.push(format!(
+            "Stepover direction and areal parameters (columns Sz_um, Sa_um, Rz_stepover_um, \
+             Ra_stepover_um of the table): across the passes a ball end leaves arcs of radius R \
+             spaced the stepover ae = {} mm (on a plane), whose Rz and Ra are computed as above \
+             with λc chosen from RSm = ae. The areal surface is z(x, y) = f(x) + g(y), f the \
+             case model's feed-direction profile and g that scallop profile (the lower envelope \
+             of the tool's marks to second order); Sz and Sa are computed on it \
+             (`crest::metrics::height_stats`: mean plane removed, no filter) over the 5λc of f \
+             and one period of g.",
+            r.stepover_mm.map_or("?".to_string(), fmt_g)
+        ));
+    }
     if let Some(z) = r.cases.iter().find_map(|c| c.zmap.as_ref()) {
         v.push(format!(
             "Simulate model: one straight pass along +x over the plane z = 0, tool axis tilted by \
@@ -272,10 +290,8 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "# {}\n", r.title);
     let _ = writeln!(
         s,
-        "Made by `{}` (crest {}). Regenerate from the repository root with\n\n```sh\ncargo run --release -- {}\n```\n",
-        r.command,
-        r.version,
-        r.command.strip_prefix("crest ").unwrap_or(&r.command)
+        "Made by crest {}. Regenerate, from the directory it was made in, with\n\n```sh\n{}\n```\n",
+        r.version, r.command
     );
     let _ = writeln!(
         s,
@@ -413,10 +429,9 @@ pub fn render_html(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "<h1>{}</h1>", esc(&r.title));
     let _ = writeln!(
         s,
-        "<p>Made by <code>{}</code> (crest {}). Regenerate from the repository root with</p>\n<pre>cargo run --release -- {}</pre>",
-        esc(&r.command),
+        "<p>Made by crest {}. Regenerate, from the directory it was made in, with</p>\n<pre>{}</pre>",
         esc(&r.version),
-        esc(r.command.strip_prefix("crest ").unwrap_or(&r.command))
+        esc(&r.command)
     );
     let _ = writeln!(
         s,
@@ -517,11 +532,13 @@ pub use super::calibration::{calibration_csv, calibration_json};
 /// What the simulated column holds in a calibrated report.
 const LOO_NOTE: &str = "With --free, the simulated column (and the plots) hold each case's leave-one-out prediction: the model refitted without that case. The model table below shows the model fitted on every case.";
 
-/// Every file of a report, rendered in memory: `rz.svg` and `ra.svg` (for the parameters the
-/// table has), `report.html` and `report.md`, as `(file name, bytes)`.
+/// Every file of a report, rendered in memory: `rz.svg` and `ra.svg`, and `sz.svg`, `sa.svg`,
+/// `rz-stepover.svg`, `ra-stepover.svg` (for the parameters the table has), `report.html` and
+/// `report.md`, as `(file name, bytes)`.
 pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, String> {
     let mut plots: Vec<(String, String, String)> = Vec::new(); // (file, caption, svg)
-    for (param, file) in [("Rz", "rz.svg"), ("Ra", "ra.svg")] {
+    for p in Param::ALL {
+        let (param, file) = (p.label(), format!("{}.svg", p.file_stem()));
         if reg
             .cases
             .iter()
@@ -532,7 +549,7 @@ pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, String> {
             let caption = format!(
                 "{param}: measured mean ± σ and samples against simulated, per lead angle and side"
             );
-            plots.push((file.to_string(), caption, svg));
+            plots.push((file, caption, svg));
         }
     }
     let md_plots: Vec<(String, String)> = plots

@@ -579,7 +579,7 @@ pub fn calibrate(
                 .unwrap_or(f64::NAN);
             CalibratedCase {
                 lead_deg: c.lead_deg,
-                side: c.side,
+                side: c.side.clone(),
                 parameter: if t.rz { "Rz" } else { "Ra" }.to_string(),
                 measured_um: t.mean,
                 sigma_um: sd,

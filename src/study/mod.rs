@@ -16,3 +16,4 @@ pub mod montecarlo;
 pub mod regression;
 pub mod run;
 pub mod runout;
+pub mod stepover;

@@ -263,7 +263,7 @@ pub fn case_bands(
         .enumerate()
         .map(|(i, c)| CaseBands {
             lead_deg: c.lead_deg,
-            side: c.side,
+            side: c.side.clone(),
             rz: b[2 * i],
             ra: b[2 * i + 1],
             deterministic_um: det[i],

@@ -17,7 +17,7 @@
 //! The writers ([`crate::report::regression`], [`crate::plot::regression`]) render a
 //! [`Regression`]; everything here is pure.
 
-use super::measured::{MeasuredCase, MeasuredTable, Side, Stat, summarize};
+use super::measured::{MeasuredCase, MeasuredTable, Param, Side, Stat, summarize};
 use crate::math::trim_decimals;
 use crate::surface::{ModelKind, Process};
 use crate::tool::{Cutter, Rule, Runout, crest_height_mm};
@@ -108,6 +108,9 @@ pub struct Study {
     pub ap_mm: f64,
     /// Nominal cutting speed, m/min (informative).
     pub cutting_speed_m_min: Option<f64>,
+    /// Distance between adjacent passes, mm: needed to predict the areal (Sa, Sz) and the
+    /// stepover-direction (Rz, Ra) columns of a measured table.
+    pub stepover_mm: Option<f64>,
     /// Run-out; when present it replaces the tool file's `[runout]` table entirely.
     pub runout: Option<Runout>,
     /// Settings of the `simulate` model.
@@ -161,6 +164,10 @@ pub struct CrestPrediction {
     pub ra_um: f64,
     /// Sampling length λc used for the profile, mm.
     pub sampling_length_mm: f64,
+    /// The evaluated feed-direction profile, µm, evenly spaced over 5λc (for the areal
+    /// estimate of [`super::stepover`]; not printed).
+    #[serde(skip)]
+    pub profile_um: Vec<f64>,
     /// R_ef,max of the nominal tool for the lead and ap (002 Table 3), mm.
     pub effective_radius_mm: f64,
     /// Radius of the generating point (R sin β for a ball), mm.
@@ -170,7 +177,8 @@ pub struct CrestPrediction {
 }
 
 /// A periodic feed-direction profile: period `period_mm`, one height (mm) per position in
-/// the period. Returns (Rz µm, Ra µm, λc mm, peak-to-valley over one period µm).
+/// the period. Returns (Rz µm, Ra µm, λc mm, peak-to-valley over one period µm, the
+/// evaluated profile in µm).
 ///
 /// The period is sampled in an even number of steps of at most [`PROFILE_STEP_MM`] (so
 /// that the crest between two evenly spaced marks is a sample), and the profile repeated
@@ -179,7 +187,7 @@ fn periodic_roughness(
     period_mm: f64,
     rsm_mm: f64,
     height_mm: &dyn Fn(f64) -> f64,
-) -> (f64, f64, f64, f64) {
+) -> (f64, f64, f64, f64, Vec<f64>) {
     let lc = crate::metrics::sampling_length_mm(rsm_mm);
     let total = 5.0 * lc;
     let mut steps = 2.0 * (0.5 * period_mm / PROFILE_STEP_MM).ceil().max(1.0);
@@ -195,7 +203,7 @@ fn periodic_roughness(
     let n = (total / dx).round().max(1.0) as usize;
     let heights: Vec<f64> = (0..=n).map(|i| (one[i % m] - lo) * 1e3).collect();
     let (rz, ra) = crate::metrics::rz_ra(&heights);
-    (rz, ra, lc, (hi - lo) * 1e3)
+    (rz, ra, lc, (hi - lo) * 1e3, heights)
 }
 
 /// Rz and Ra (µm) of the periodic profile of circular arcs of radius `radius_mm` whose
@@ -216,7 +224,7 @@ pub fn profile_roughness(radius_mm: f64, spacing_mm: f64) -> (f64, f64, f64) {
         };
         crest_height_mm(radius_mm, 2.0 * d)
     };
-    let (rz, ra, lc, _) = periodic_roughness(spacing_mm, spacing_mm, &arc);
+    let (rz, ra, lc, _, _) = periodic_roughness(spacing_mm, spacing_mm, &arc);
     (rz, ra, lc)
 }
 
@@ -277,8 +285,13 @@ pub fn crest_model_with(
         crate::tool::analyse(cutter, lead_deg, ap_mm, fz_mm, rule).map_err(|e| e.to_string())?;
     let r = cutter.radius_mm;
     let is_ball = matches!(cutter.shape, crate::tool::Shape::Ball);
-    let arc_radius = match (side, surface_radius_mm) {
+    let arc_radius = match (&side, surface_radius_mm) {
         (Side::Plane, _) | (_, None) => r,
+        (Side::Other(label), Some(_)) => {
+            return Err(format!(
+                "side `{label}` is a plain label: a surface radius needs side concave or convex"
+            ));
+        }
         (_, Some(_)) if !is_ball => {
             return Err("the curvature correction needs a ball-end tool".to_string());
         }
@@ -321,7 +334,7 @@ pub fn crest_model_with(
         Rule::Paper => fz_eff,
         Rule::Exact => cutter.teeth() as f64 * fz_mm,
     };
-    let (rz, ra, lc, crest_mm) = if process.is_off() {
+    let (rz, ra, lc, crest_mm, profile_um) = if process.is_off() {
         geometric_roughness(rule, &profile, fz_eff, period, &marks, &a, arc_radius == r)
     } else {
         processed_roughness(&profile, fz_eff, period, &marks, process)
@@ -344,6 +357,7 @@ pub fn crest_model_with(
         rz_um: rz,
         ra_um: ra,
         sampling_length_mm: lc,
+        profile_um,
         effective_radius_mm: a.effective_radius_mm,
         contact_radius_mm: a.contact_radius_mm,
         cutting_speed_ratio: a.cutting_speed_ratio,
@@ -363,7 +377,7 @@ fn mark_height(profile: &crate::tool::FeedProfile, d: f64, x: f64) -> f64 {
     h - d
 }
 
-/// The geometric profile's (Rz, Ra, λc, crest): the envelope of the marks.
+/// The geometric profile's (Rz, Ra, λc, crest, profile µm): the envelope of the marks.
 fn geometric_roughness(
     rule: Rule,
     profile: &crate::tool::FeedProfile,
@@ -372,7 +386,7 @@ fn geometric_roughness(
     marks: &[(f64, f64)],
     a: &crate::tool::Analysis,
     plane: bool,
-) -> (f64, f64, f64, f64) {
+) -> (f64, f64, f64, f64, Vec<f64>) {
     match rule {
         Rule::Paper => {
             let h = |u: f64| {
@@ -380,13 +394,13 @@ fn geometric_roughness(
                     .map(|k| profile.height(u - f64::from(k) * fz_eff))
                     .fold(f64::INFINITY, f64::min)
             };
-            let (rz, ra, lc, p2v) = periodic_roughness(fz_eff, fz_eff, &h);
+            let (rz, ra, lc, p2v, um) = periodic_roughness(fz_eff, fz_eff, &h);
             let crest = if plane {
                 a.crest_height_corrected_mm
             } else {
                 p2v * 1e-3
             };
-            (rz, ra, lc, crest)
+            (rz, ra, lc, crest, um)
         }
         Rule::Exact => {
             let h = |u: f64| {
@@ -398,13 +412,13 @@ fn geometric_roughness(
                 }
                 best
             };
-            let (rz, ra, lc, p2v) = periodic_roughness(period, fz_eff, &h);
+            let (rz, ra, lc, p2v, um) = periodic_roughness(period, fz_eff, &h);
             let crest = if plane {
                 a.crest_height_exact_mm
             } else {
                 p2v * 1e-3
             };
-            (rz, ra, lc, crest)
+            (rz, ra, lc, crest, um)
         }
     }
 }
@@ -412,7 +426,7 @@ fn geometric_roughness(
 /// Run-in periods before the evaluated profile of the processed model.
 const RUN_IN_PERIODS: f64 = 20.0;
 
-/// The processed profile's (Rz, Ra, λc, peak-to-valley): marks in cutting order (the tool
+/// The processed profile's (Rz, Ra, λc, peak-to-valley, profile µm): marks in cutting order (the tool
 /// moves +x, so by position) through the chip rule, texture added, over 5λc after the
 /// run-in; sampled every ≤ [`PROFILE_STEP_MM`].
 fn processed_roughness(
@@ -421,7 +435,7 @@ fn processed_roughness(
     period: f64,
     marks: &[(f64, f64)],
     process: &Process,
-) -> (f64, f64, f64, f64) {
+) -> (f64, f64, f64, f64, Vec<f64>) {
     let lc = crate::metrics::sampling_length_mm(fz_eff);
     let total = 5.0 * lc;
     let steps_per_period = 2.0 * (0.5 * period / PROFILE_STEP_MM).ceil().max(1.0);
@@ -453,7 +467,7 @@ fn processed_roughness(
     let hi = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let um: Vec<f64> = heights.iter().map(|h| (h - lo) * 1e3).collect();
     let (rz, ra) = crate::metrics::rz_ra(&um);
-    (rz, ra, lc, hi - lo)
+    (rz, ra, lc, hi - lo, um)
 }
 
 /// What the `simulate` model predicts for one case.
@@ -588,6 +602,8 @@ pub struct CasePrediction {
     pub rz_um: f64,
     /// Ra of the case's model, µm.
     pub ra_um: f64,
+    /// The case model's evaluated feed-direction profile, µm (evenly spaced).
+    pub profile_um: Vec<f64>,
     /// The crest model (always computed).
     pub crest: CrestPrediction,
     /// The z-map, for `model = "simulate"`.
@@ -611,7 +627,7 @@ pub fn predict_case(
         study.ap_mm,
         fz,
         study.rule,
-        c.side,
+        c.side.clone(),
         c.surface_radius_mm,
         process,
     )?;
@@ -634,13 +650,14 @@ pub fn predict_case(
             )?)
         }
     };
-    let (rz_um, ra_um) = match &zmap {
-        Some(z) => (z.rz_um, z.ra_um),
-        None => (crest.rz_um, crest.ra_um),
+    let (rz_um, ra_um, profile_um) = match &zmap {
+        Some(z) => (z.rz_um, z.ra_um, z.map.row(z.map.ny / 2).to_vec()),
+        None => (crest.rz_um, crest.ra_um, crest.profile_um.clone()),
     };
     Ok(CasePrediction {
         rz_um,
         ra_um,
+        profile_um,
         crest,
         zmap,
     })
@@ -734,6 +751,9 @@ pub struct Regression {
     pub ap_mm: f64,
     /// Nominal cutting speed, m/min.
     pub cutting_speed_m_min: Option<f64>,
+    /// Stepover of the study, mm (for the areal and stepover-direction columns).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stepover_mm: Option<f64>,
     /// Tolerance, percent of the measured mean.
     pub tolerance_pct: f64,
     /// The command that made the report.
@@ -833,7 +853,6 @@ pub fn regress(
         let p = predict_case(study, cutter, c, &study.process, 0.0)
             .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
         let (sim_rz, sim_ra) = (p.rz_um, p.ra_um);
-        let (prediction, zmap) = (p.crest, p.zmap);
         let mut comparisons = Vec::new();
         if let Some(rz) = m.rz {
             comparisons.push(Comparison::new("Rz", rz, sim_rz, tolerance_pct));
@@ -841,10 +860,40 @@ pub fn regress(
         if let Some(ra) = m.ra {
             comparisons.push(Comparison::new("Ra", ra, sim_ra, tolerance_pct));
         }
+        // Areal and stepover-direction columns, when the table has them.
+        let extra: Vec<(Param, Stat)> = Param::ALL
+            .into_iter()
+            .filter(|p| p.is_extra())
+            .filter_map(|p| m.stat(p).map(|s| (p, s)))
+            .collect();
+        if !extra.is_empty() {
+            let Some(ae) = study.stepover_mm else {
+                return Err(err(format!(
+                    "the measured table ({}) has {} but the study gives no stepover_mm (the distance between passes) to predict it",
+                    provenance.measured_file,
+                    extra
+                        .iter()
+                        .map(|(p, _)| p.column())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            };
+            let across = super::stepover::predict(cutter, ae, &p.profile_um)
+                .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
+            for (param, stat) in extra {
+                comparisons.push(Comparison::new(
+                    param.label(),
+                    stat,
+                    across.value(param),
+                    tolerance_pct,
+                ));
+            }
+        }
+        let (prediction, zmap) = (p.crest, p.zmap);
         let pass = comparisons.iter().all(|c| c.pass);
         cases.push(CaseResult {
             lead_deg: c.lead_deg,
-            side: c.side,
+            side: c.side.clone(),
             surface_radius_mm: c.surface_radius_mm,
             model,
             fz_mm: fz,
@@ -867,6 +916,7 @@ pub fn regress(
         runout: describe_runout(cutter),
         ap_mm: study.ap_mm,
         cutting_speed_m_min: study.cutting_speed_m_min,
+        stepover_mm: study.stepover_mm,
         tolerance_pct,
         command: provenance.command,
         version: env!("CARGO_PKG_VERSION").to_string(),

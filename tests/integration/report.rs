@@ -69,7 +69,7 @@ fn table_has_two_samples_per_case() {
     let cases = summarize(&table);
     assert_eq!(cases.len(), 6);
     for (c, (lead, side)) in cases.iter().zip(COLS) {
-        assert_eq!((c.lead_deg, c.side), (lead, side));
+        assert_eq!((c.lead_deg, c.side.clone()), (lead, side));
         assert_eq!(c.samples, ["S1", "S2"]);
     }
     // Two printed cells, read back exactly.
@@ -558,10 +558,17 @@ fn bad_csv_names_file_line_column_and_problem() {
         ),
         &["num.csv:5:14", "Ra_um", "expected a number", "abc"],
     );
+    // Any side label is accepted (issue 20); only an empty one is an error, and a label the
+    // study has no case for is the study's error.
     assert_bad(
         &study,
-        &t("side.csv", &format!("{h}5,sideways,S1,0.3,2\n")),
-        &["side.csv:2:3", "side", "sideways"],
+        &t("side.csv", &format!("{h}5,,S1,0.3,2\n")),
+        &["side.csv:2:3", "side", "empty side label"],
+    );
+    assert_bad(
+        &study,
+        &t("sideways.csv", &format!("{h}5,sideways,S1,0.3,2\n")),
+        &["study.toml", "lead 5°, sideways", "no such [[case]]"],
     );
     assert_bad(
         &study,
@@ -672,9 +679,16 @@ fn committed_report_is_regenerated_by_its_command() {
     // The command written at the top of reports/marin2023/report.md, run into a temporary
     // directory, reproduces the committed files (apart from the output directory's name).
     let md = read(&repo("reports/marin2023/report.md"));
-    let cmd = "cargo run --release -- report --measured samples/measured/marin2023-table2.csv \
+    let cmd = "crest report --measured samples/measured/marin2023-table2.csv \
                --study samples/studies/marin2023.toml -o reports/marin2023 --tolerance-pct 20";
-    assert!(md.contains(cmd), "report.md does not document `{cmd}`");
+    assert!(
+        md.contains(&format!("```sh\n{cmd}\n```")),
+        "report.md does not document `{cmd}`"
+    );
+    assert!(
+        !md.contains("cargo run"),
+        "report.md must give the `crest` command a user has, not cargo's"
+    );
     let dir = tempdir();
     let out = dir.path().join("marin2023");
     crest()
@@ -692,4 +706,145 @@ fn committed_report_is_regenerated_by_its_command() {
             "reports/marin2023/{f} is stale: rerun `{cmd}`"
         );
     }
+}
+
+/// A study of two cases on a plane with stepover, labelled with free side labels.
+fn labelled_study(dir: &Path, stepover: bool) -> PathBuf {
+    write(
+        dir,
+        "tool.toml",
+        "shape = \"ball\"\nradius_mm = 5.0\nteeth = 4\nhelix_deg = 30.0\n",
+    );
+    let text = format!(
+        "title = \"labels\"\ntool = \"tool.toml\"\nfz_mm = 0.05\nrule = \"paper\"\nap_mm = 0.4\n{}\
+         [runout]\ntooth_radius_deviation_um = [-10, -15, -24, -25]\n\
+         [[case]]\nlead_deg = 15\nside = \"blade tip\"\n\
+         [[case]]\nlead_deg = 15\nside = \"Flat\"\n",
+        if stepover { "stepover_mm = 0.3\n" } else { "" }
+    );
+    write(dir, "study.toml", text)
+}
+
+#[test]
+fn any_side_label_groups_cases_and_names_them() {
+    let dir = tempdir();
+    let study = labelled_study(dir.path(), false);
+    let table = write(
+        dir.path(),
+        "t.csv",
+        "lead_deg,side,sample,Rz_um\n15, blade tip ,S1,1.0\n15,blade tip,S2,1.1\n15,plane,S1,1.0\n",
+    );
+    let parsed = parse_measured(&read(&table), "t.csv").unwrap();
+    let cases = summarize(&parsed);
+    assert_eq!(cases.len(), 2);
+    assert_eq!(cases[0].side, Side::Other("blade tip".to_string()));
+    assert_eq!(cases[0].samples, ["S1", "S2"]);
+    // `flat` and `plane` (any case) keep their meaning: the plane.
+    assert_eq!(cases[1].side, Side::Plane);
+    assert_eq!(Side::parse("Flat"), Some(Side::Plane));
+    let out = dir.path().join("out");
+    run_report(&study, &table, &out, &["--tolerance-pct", "20"]).code(0);
+    let md = read(&out.join("report.md"));
+    assert!(
+        md.contains("| 15 | blade tip | Rz | 1.0500 ± 0.0707 | 1.0001 |"),
+        "{md}"
+    );
+    assert!(
+        md.contains("| 15 | plane | Rz | 1.0000 (n = 1) | 1.0001 |"),
+        "{md}"
+    );
+    assert!(read(&out.join("rz.svg")).contains("measured blade tip"));
+    // A label carries no curvature: a surface radius on it is an error naming the line.
+    let curved = write(
+        dir.path(),
+        "curved.toml",
+        read(&study).replace(
+            "side = \"blade tip\"\n",
+            "side = \"blade tip\"\nsurface_radius_mm = 20\n",
+        ),
+    );
+    assert_bad(
+        &curved,
+        &table,
+        &["curved.toml:", "blade tip", "concave", "convex"],
+    );
+}
+
+#[test]
+fn areal_and_stepover_columns_are_compared_when_the_table_has_them() {
+    let dir = tempdir();
+    let study = labelled_study(dir.path(), true);
+    let table = write(
+        dir.path(),
+        "t.csv",
+        "# Ra/Rz along the feed, Sa/Sz areal, Ra/Rz across the passes\n\
+         lead_deg,side,sample,Rz_um,Ra_um,Sz_um,Sa_um,Rz_stepover_um,Ra_stepover_um\n\
+         15,blade tip,S1,1.0,0.26,3.3,0.6,2.25,0.58\n\
+         15,flat,S1,1.0,0.26,3.3,0.6,2.25,0.58\n",
+    );
+    let out = dir.path().join("out");
+    let a = run_report(&study, &table, &out, &["--tolerance-pct", "50", "--json"]).code(0);
+    let v: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&a.get_output().stdout).trim()).unwrap();
+    let k = v["cases"][0]["comparisons"].as_array().unwrap();
+    let names: Vec<&str> = k.iter().map(|c| c["parameter"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        ["Rz", "Ra", "Sz", "Sa", "Rz stepover", "Ra stepover"]
+    );
+    let sim = |i: usize| k[i]["simulated_um"].as_f64().unwrap();
+    // Across the passes: arcs of R 5 mm spaced 0.3 mm (crest 2.2511 µm), as along the feed.
+    let hc = 5.0 - (25.0f64 - 0.15 * 0.15).sqrt();
+    let (rz_across, ra_across, _) = profile_roughness(5.0, 0.3);
+    assert_relative_eq!(sim(4), rz_across, max_relative = 1e-12);
+    assert_relative_eq!(sim(5), ra_across, max_relative = 1e-12);
+    assert_relative_eq!(sim(4), hc * 1e3, max_relative = 1e-4);
+    // The areal surface f(x) + g(y): Sz adds the two crests (1.0001 + 2.2511 µm).
+    assert_relative_eq!(sim(2), sim(0) + hc * 1e3, max_relative = 1e-3);
+    assert!(sim(3) > sim(5) && sim(3) < sim(1) + sim(5), "Sa {}", sim(3));
+    for f in ["rz", "ra", "sz", "sa", "rz-stepover", "ra-stepover"] {
+        assert!(out.join(format!("{f}.svg")).exists(), "{f}.svg");
+    }
+    let md = read(&out.join("report.md"));
+    assert!(
+        md.contains("| 15 | blade tip | Rz stepover | 2.2500 (n = 1) |"),
+        "{md}"
+    );
+    assert!(md.contains("stepover ae = 0.3 mm"));
+    // Without stepover_mm the study cannot predict them: an error naming the columns.
+    let no_ae = labelled_study(dir.path(), false);
+    assert_bad(
+        &no_ae,
+        &table,
+        &[
+            "study.toml",
+            "Sz_um, Sa_um, Rz_stepover_um, Ra_stepover_um",
+            "stepover_mm",
+        ],
+    );
+}
+
+#[test]
+fn tables_without_the_new_columns_give_the_same_report() {
+    // The committed report is regenerated byte for byte elsewhere; here a table with only
+    // Sa, and one without, give the same feed-direction rows and no stepover text.
+    let dir = tempdir();
+    let study = labelled_study(dir.path(), true);
+    let plain = write(
+        dir.path(),
+        "p.csv",
+        "lead_deg,side,sample,Rz_um\n15,blade tip,S1,1.0\n15,plane,S1,1.0\n",
+    );
+    let out = dir.path().join("out");
+    run_report(&study, &plain, &out, &[]).code(0);
+    let md = read(&out.join("report.md"));
+    assert!(!md.contains("stepover") && !out.join("sa.svg").exists());
+    let sa = write(
+        dir.path(),
+        "sa.csv",
+        "lead_deg,side,sample,Sa_um\n15,blade tip,S1,0.6\n15,plane,S1,0.6\n",
+    );
+    let out2 = dir.path().join("out2");
+    run_report(&study, &sa, &out2, &["--tolerance-pct", "50"]).code(0);
+    assert!(out2.join("sa.svg").exists() && !out2.join("rz.svg").exists());
 }
