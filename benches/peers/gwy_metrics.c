@@ -1,7 +1,7 @@
 /* gwy_metrics: the 8 areal parameters Sa Sq Sp Sv Sz Ssk Sku Sdr of a Gwyddion Simple Field
  * (.gsf) computed by Gwyddion's libgwyprocess, the peer of `crest metrics FILE --params
  * Sa,Sq,Sp,Sv,Sz,Ssk,Sku,Sdr` (issue 19). Build: `make -C benches/peers` (needs Debian's
- * libgwyddion20-dev; pkg-config gwyddion).
+ * libgwyddion20-dev and libglib2.0-dev).
  *
  * Usage: gwy_metrics FILE.gsf [threads: 0 = Gwyddion's OpenMP off, 1 = on (default)]
  *

@@ -365,4 +365,47 @@ mod tests {
         let e = parse(b"Gwyddion Simple").unwrap_err();
         assert_eq!(e.at, Location::Byte(0));
     }
+
+    #[test]
+    fn float32_reading_holds_the_values_parse_widens() {
+        let (nx, ny) = (1500, 900); // more than one piece of PIECE bytes
+        let z: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                if k % 1001 == 5 {
+                    f64::NAN
+                } else {
+                    (k as f64 * 0.001).sin() * 3.7
+                }
+            })
+            .collect();
+        let mut map = HeightMap::from_rows(nx, ny, 0.25, 0.5, z).unwrap();
+        map.x0_mm = 1.5;
+        let mut bytes = Vec::new();
+        write(&mut bytes, &map).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.gsf");
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        let (f, bad) = read_f32(&file, 1e6).ok().unwrap();
+        let m = parse(&bytes).unwrap();
+        assert_eq!(bad, None);
+        assert_eq!(
+            (f.nx, f.ny, f.dx_um, f.dy_um),
+            (m.nx, m.ny, m.dx_um, m.dy_um)
+        );
+        assert_eq!((f.x0_mm, f.y0_mm), (m.x0_mm, m.y0_mm));
+        for (a, b) in f.z_um.iter().zip(&m.z_um) {
+            assert_eq!(f64::from(*a).to_bits(), b.to_bits());
+        }
+        let (_, bad) = read_f32(&file, 3.0).ok().unwrap();
+        let first = m.z_um.iter().position(|v| v.abs() > 3.0).unwrap();
+        assert_eq!(bad, Some(first));
+        // A truncated file is a format error at a byte offset, as with `parse`.
+        std::fs::write(&path, &bytes[..bytes.len() - 2]).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        match read_f32(&file, 1e6) {
+            Err(ReadError::Format(e)) => assert!(matches!(e.at, Location::Byte(_)), "{e}"),
+            _ => panic!("truncated file accepted"),
+        }
+    }
 }

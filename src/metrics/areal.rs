@@ -416,4 +416,55 @@ mod tests {
         assert!((sdq(&m) - 0.5).abs() < 1e-12);
         assert!((sdr_percent(&m) - (1.25f64.sqrt() - 1.0) * 100.0).abs() < 1e-10);
     }
+
+    /// A rough test surface with a few missing nodes (`nan`) and odd sizes (remainders).
+    fn rough(nx: usize, ny: usize, nan: bool) -> Vec<f32> {
+        (0..nx * ny)
+            .map(|k| {
+                let (x, y) = ((k % nx) as f32, (k / nx) as f32);
+                if nan && k % 997 == 13 {
+                    f32::NAN
+                } else {
+                    (0.3 * x).sin() + 0.2 * (0.17 * y).cos() + 0.01 * ((k * 7919) % 101) as f32
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn f32_grid_gives_the_f64_values_for_any_thread_count() {
+        for nan in [false, true] {
+            let (nx, ny) = (203, 77);
+            let z32 = rough(nx, ny, nan);
+            let z64: Vec<f64> = z32.iter().map(|&v| f64::from(v)).collect();
+            let map = HeightMap::from_rows(nx, ny, 0.5, 0.7, z64).unwrap();
+            let g32 = Grid {
+                nx,
+                ny,
+                dx_um: 0.5,
+                dy_um: 0.7,
+                z: &z32[..],
+            };
+            let all = || {
+                (
+                    height_stats_of(g32.z).unwrap(),
+                    sdq_of(g32),
+                    sdr_percent_of(g32),
+                )
+            };
+            let (s, q, r) = all();
+            assert_eq!(s, height_stats(&map.z_um).unwrap());
+            assert_eq!(q.to_bits(), sdq(&map).to_bits());
+            assert_eq!(r.to_bits(), sdr_percent(&map).to_bits());
+            for threads in [1, 2, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (s1, q1, r1) = pool.install(all);
+                assert_eq!(s1, s);
+                assert_eq!((q1.to_bits(), r1.to_bits()), (q.to_bits(), r.to_bits()));
+            }
+        }
+    }
 }
