@@ -13,74 +13,6 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Decimal powers `10^k` for `k ≤ 8` as integers.
-const POW10_U64: [u64; 9] = [
-    1,
-    10,
-    100,
-    1_000,
-    10_000,
-    100_000,
-    1_000_000,
-    10_000_000,
-    100_000_000,
-];
-
-/// Number of leading ASCII digits in the 8 bytes of `w` (loaded little-endian), 0 to 8.
-/// A byte `b` is a digit iff neither `b − '0'` nor `b + 0x46` sets its high bit; borrows
-/// and carries only move upwards, past the first non-digit, so its position is exact.
-#[inline(always)]
-fn digit_run(w: u64) -> usize {
-    let x = w.wrapping_sub(0x3030_3030_3030_3030);
-    let y = w.wrapping_add(0x4646_4646_4646_4646);
-    ((x | y) & 0x8080_8080_8080_8080).trailing_zeros() as usize / 8
-}
-
-/// The value of 8 decimal digits whose values (0 to 9) are the bytes of `v`, the most
-/// significant in the lowest byte (SWAR: three multiplications instead of eight).
-#[inline(always)]
-fn eight_digits(v: u64) -> u64 {
-    const MASK: u64 = 0x0000_00FF_0000_00FF;
-    const MUL1: u64 = 0x000F_4240_0000_0064;
-    const MUL2: u64 = 0x0000_2710_0000_0001;
-    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
-    let v1 = (v & MASK).wrapping_mul(MUL1);
-    let v2 = ((v >> 16) & MASK).wrapping_mul(MUL2);
-    u64::from((v1.wrapping_add(v2) >> 32) as u32)
-}
-
-/// Append the run of digits starting at `i` to `mantissa` (wrapping: the caller only uses
-/// it with at most 18 digits); returns the index after the run. Eight bytes at a time
-/// while eight are left, then byte by byte.
-#[inline(always)]
-fn digits(bytes: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
-    while let Some(chunk) = bytes.get(i..i + 8) {
-        let w = u64::from_le_bytes([
-            chunk[0], chunk[1], chunk[2], chunk[3], chunk[4], chunk[5], chunk[6], chunk[7],
-        ]);
-        let k = digit_run(w);
-        if k == 0 {
-            return i;
-        }
-        // Keep the k digits, in the high bytes (the low ones become leading zeros).
-        let v = w.wrapping_sub(0x3030_3030_3030_3030) << (8 * (8 - k));
-        *mantissa = mantissa
-            .wrapping_mul(POW10_U64[k])
-            .wrapping_add(eight_digits(v));
-        i += k;
-        if k < 8 {
-            return i;
-        }
-    }
-    while i < bytes.len() && bytes[i].is_ascii_digit() {
-        *mantissa = mantissa
-            .wrapping_mul(10)
-            .wrapping_add(u64::from(bytes[i] - b'0'));
-        i += 1;
-    }
-    i
-}
-
 /// Scan one number at the start of `bytes`.
 ///
 /// Returns the value and the number of bytes consumed, or `None` when `bytes` does not
@@ -97,13 +29,23 @@ pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
     // Accumulate all digits; with at most 18 of them the u64 cannot overflow.
     let mut mantissa: u64 = 0;
     let int_start = i;
-    i = digits(bytes, i, &mut mantissa);
+    while i < len && bytes[i].is_ascii_digit() {
+        mantissa = mantissa
+            .wrapping_mul(10)
+            .wrapping_add(u64::from(bytes[i] - b'0'));
+        i += 1;
+    }
     let mut digits = i - int_start;
     let mut scale: i32 = 0;
     if i < len && bytes[i] == b'.' {
         i += 1;
         let frac_start = i;
-        i = self::digits(bytes, i, &mut mantissa);
+        while i < len && bytes[i].is_ascii_digit() {
+            mantissa = mantissa
+                .wrapping_mul(10)
+                .wrapping_add(u64::from(bytes[i] - b'0'));
+            i += 1;
+        }
         let frac = i - frac_start;
         digits += frac;
         scale = -(frac.min(100_000) as i32);
@@ -192,35 +134,5 @@ mod tests {
             assert_eq!(v.to_bits(), want.to_bits(), "{s}");
         }
         assert!(scan_number(b"1e400").unwrap().0.is_infinite());
-    }
-
-    #[test]
-    fn digit_runs_of_every_length_and_neighbour() {
-        // Runs of 0 to 20 digits followed by every kind of byte, at every offset from the
-        // end of the slice (the 8-byte path and the byte loop).
-        for n in 0..=20usize {
-            for next in [b',', b'.', b'/', b':', b'E', b' ', 0x80, 0xFF, 0x00] {
-                let digits: Vec<u8> = (0..n).map(|k| b"9081726354"[k % 10]).collect();
-                for tail in 0..10 {
-                    let mut s = b"1.".to_vec();
-                    s.extend_from_slice(&digits);
-                    s.push(next);
-                    s.extend(std::iter::repeat_n(b'7', tail));
-                    let got = scan_number(&s);
-                    let end = 2 + n;
-                    let text = std::str::from_utf8(&s[..end]).unwrap();
-                    let want: f64 = text.parse().unwrap();
-                    let (v, used) = got.unwrap();
-                    if next == b'E' && tail > 0 {
-                        continue; // "1.xxxE7…": an exponent, checked elsewhere
-                    }
-                    assert_eq!(
-                        (v.to_bits(), used),
-                        (want.to_bits(), end),
-                        "{text:?}+{next}"
-                    );
-                }
-            }
-        }
     }
 }

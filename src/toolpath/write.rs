@@ -31,17 +31,6 @@ const POW10: [u64; 10] = [
 pub fn push_fixed(out: &mut Vec<u8>, v: f64, (min, max): (u32, u32)) {
     let max = max.min(9);
     let min = min.min(max);
-    // The writers' decimals as constants, so that the divisions by 10^max below become
-    // multiplications (this is the hot loop of `crest convert`).
-    match (min, max) {
-        (4, 6) => fixed_point(out, v, 4, 6),
-        (7, 9) => fixed_point(out, v, 7, 9),
-        _ => fixed_point(out, v, min, max),
-    }
-}
-
-#[inline(always)]
-fn fixed_point(out: &mut Vec<u8>, v: f64, min: u32, max: u32) {
     let scaled = v * POW10[max as usize] as f64;
     if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
         // Values too large for the decimals to be meaningful (beyond 2.8e8 mm), or not

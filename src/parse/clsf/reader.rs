@@ -18,19 +18,13 @@ struct Piece {
 /// Streams [`Record`]s out of CLSF text, one logical line at a time.
 pub struct ClsfReader<R> {
     src: R,
-    /// A physical line that did not lie whole in the reader's buffer.
     buf: Vec<u8>,
-    state: State,
-    done: bool,
-}
-
-/// Everything but the source: the line count and the record being joined.
-struct State {
     line: u32,
     joined: String,
     pieces: Vec<Piece>,
     /// Physical lines of the current joined record (for error frames).
     joined_lines: Vec<String>,
+    done: bool,
 }
 
 impl<R: BufRead> ClsfReader<R> {
@@ -39,133 +33,108 @@ impl<R: BufRead> ClsfReader<R> {
         ClsfReader {
             src,
             buf: Vec::with_capacity(256),
-            state: State {
-                line: 0,
-                joined: String::new(),
-                pieces: Vec::new(),
-                joined_lines: Vec::new(),
-            },
+            line: 0,
+            joined: String::new(),
+            pieces: Vec::new(),
+            joined_lines: Vec::new(),
             done: false,
         }
     }
 
     /// Number of physical lines read so far.
     pub fn lines_read(&self) -> u32 {
-        self.state.line
+        self.line
     }
 
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
         loop {
-            // The next physical line, read in place when it lies whole in the source's
-            // buffer (nearly always), else gathered into `buf`.
-            let avail = self.src.fill_buf()?;
-            if let Some(p) = memchr::memchr(b'\n', avail) {
-                let step = self.state.physical(&avail[..p + 1]);
-                self.src.consume(p + 1);
-                match step? {
-                    Some(r) => return Ok(Some(r)),
-                    None => continue,
-                }
-            }
             self.buf.clear();
             let n = self.src.read_until(b'\n', &mut self.buf)?;
             if n == 0 {
                 self.done = true;
-                if self.state.joined.is_empty() {
+                if self.joined.is_empty() {
                     return Ok(None);
                 }
                 // A `$` on the last line: parse what was joined.
-                return self.state.parse_joined().map(Some);
+                return self.parse_joined().map(Some);
             }
-            if let Some(r) = self.state.physical(&self.buf)? {
-                return Ok(Some(r));
+            self.line = self.line.saturating_add(1);
+            // A UTF-8 byte-order mark at the start of the file is not part of the text.
+            if self.line == 1 && self.buf.starts_with(b"\xEF\xBB\xBF") {
+                self.buf.drain(..3);
             }
-        }
-    }
-}
-
-impl State {
-    /// Take one physical line (with its line end, if any): a record when it completes one,
-    /// `None` when it is blank or continued.
-    fn physical(&mut self, raw: &[u8]) -> Result<Option<Record>, ParseError> {
-        self.line = self.line.saturating_add(1);
-        // A UTF-8 byte-order mark at the start of the file is not part of the text.
-        let raw = if self.line == 1 {
-            raw.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(raw)
-        } else {
-            raw
-        };
-        let mut end = raw.len();
-        if end > 0 && raw[end - 1] == b'\n' {
-            end -= 1;
-        }
-        if end > 0 && raw[end - 1] == b'\r' {
-            end -= 1;
-        }
-        let text = match std::str::from_utf8(&raw[..end]) {
-            Ok(t) => t,
-            Err(e) => {
-                let good = &raw[..e.valid_up_to()];
-                let good = String::from_utf8_lossy(good).into_owned();
-                let column = good.chars().count() as u32 + 1;
-                let shown = String::from_utf8_lossy(&raw[..end]).into_owned();
-                return Err(ParseError::at(
-                    self.line,
-                    column,
-                    "ASCII or UTF-8 text",
-                    format!("byte 0x{:02X}", raw[e.valid_up_to()]),
-                    &shown,
-                ));
+            let mut end = self.buf.len();
+            if end > 0 && self.buf[end - 1] == b'\n' {
+                end -= 1;
             }
-        };
-        let trimmed = text.trim_end_matches([' ', '\t']);
-        let lead = trimmed.len() - trimmed.trim_start_matches([' ', '\t']).len();
-        let body = &trimmed[lead..];
-        if self.joined.is_empty() {
-            if body.is_empty() {
-                return Ok(None);
+            if end > 0 && self.buf[end - 1] == b'\r' {
+                end -= 1;
             }
-            if body.starts_with("$$") {
-                return parse_physical(body, self.line, lead, text).map(Some);
-            }
-        }
-        // Drop a trailing `$$` comment, then look for a `$` continuation mark.
-        let code = if body.find('$').is_none() {
-            body
-        } else {
-            match body.find("$$") {
-                Some(k) => body[..k].trim_end_matches([' ', '\t']),
-                None => body,
-            }
-        };
-        if let Some(stripped) = code.strip_suffix('$') {
+            let text = match std::str::from_utf8(&self.buf[..end]) {
+                Ok(t) => t,
+                Err(e) => {
+                    let good = &self.buf[..e.valid_up_to()];
+                    let good = String::from_utf8_lossy(good).into_owned();
+                    let column = good.chars().count() as u32 + 1;
+                    let shown = String::from_utf8_lossy(&self.buf[..end]).into_owned();
+                    return Err(ParseError::at(
+                        self.line,
+                        column,
+                        "ASCII or UTF-8 text",
+                        format!("byte 0x{:02X}", self.buf[e.valid_up_to()]),
+                        &shown,
+                    ));
+                }
+            };
+            let trimmed = text.trim_end_matches([' ', '\t']);
+            let lead = trimmed.len() - trimmed.trim_start_matches([' ', '\t']).len();
+            let body = &trimmed[lead..];
             if self.joined.is_empty() {
-                self.joined_lines.clear();
+                if body.is_empty() {
+                    continue;
+                }
+                if body.starts_with("$$") {
+                    return parse_physical(body, self.line, lead, text).map(Some);
+                }
+            }
+            // Drop a trailing `$$` comment, then look for a `$` continuation mark.
+            let code = if body.find('$').is_none() {
+                body
+            } else {
+                match body.find("$$") {
+                    Some(k) => body[..k].trim_end_matches([' ', '\t']),
+                    None => body,
+                }
+            };
+            if let Some(stripped) = code.strip_suffix('$') {
+                if self.joined.is_empty() {
+                    self.joined_lines.clear();
+                }
+                self.pieces.push(Piece {
+                    offset: self.joined.len(),
+                    line: self.line,
+                    column_base: lead,
+                });
+                self.joined.push_str(stripped);
+                // A continued line's end acts as a blank between arguments.
+                self.joined_lines.push(text.to_string());
+                continue;
+            }
+            if self.joined.is_empty() {
+                if code.is_empty() {
+                    continue;
+                }
+                return parse_physical(code, self.line, lead, text).map(Some);
             }
             self.pieces.push(Piece {
                 offset: self.joined.len(),
                 line: self.line,
                 column_base: lead,
             });
-            self.joined.push_str(stripped);
-            // A continued line's end acts as a blank between arguments.
+            self.joined.push_str(code);
             self.joined_lines.push(text.to_string());
-            return Ok(None);
+            return self.parse_joined().map(Some);
         }
-        if self.joined.is_empty() {
-            if code.is_empty() {
-                return Ok(None);
-            }
-            return parse_physical(code, self.line, lead, text).map(Some);
-        }
-        self.pieces.push(Piece {
-            offset: self.joined.len(),
-            line: self.line,
-            column_base: lead,
-        });
-        self.joined.push_str(code);
-        self.joined_lines.push(text.to_string());
-        self.parse_joined().map(Some)
     }
 
     fn parse_joined(&mut self) -> Result<Record, ParseError> {
