@@ -209,18 +209,16 @@ impl From<FormatError> for ReadError {
     }
 }
 
-/// Bytes per read of the float32 data (one read per thread and piece).
+/// Bytes per read of the float32 data.
 const PIECE: usize = 4 << 20;
 
 /// Read a `.gsf` into a [`GsfField`]: the header, then the data read straight into the
-/// float32 buffer (no byte copy of the file), in pieces on all threads, each scaled to µm in
-/// place. Memory: the file's data size and a few KiB. Also returns the index of the first
+/// float32 buffer (no byte copy of the file), piece by piece, each scaled to µm in place. Memory: the file's data size and a few KiB. Also returns the index of the first
 /// finite height beyond `±limit_um`, if any (checked in the same pass).
 pub(crate) fn read_f32(
     file: &std::fs::File,
     limit_um: f64,
 ) -> Result<(GsfField, Option<usize>), ReadError> {
-    use rayon::prelude::*;
     use std::os::unix::fs::FileExt;
     let len = file.metadata()?.len();
     let len = usize::try_from(len)
@@ -243,7 +241,7 @@ pub(crate) fn read_f32(
     let scale = h.z_um;
     let start = h.data_start as u64;
     let bad: Vec<Option<usize>> = z
-        .par_chunks_mut(PIECE / 4)
+        .chunks_mut(PIECE / 4)
         .enumerate()
         .map(|(k, piece)| -> std::io::Result<Option<usize>> {
             let off = start + (k * PIECE) as u64;
