@@ -1,13 +1,15 @@
 //! Metrics benches: quick Sa, the eight "whole process" parameters, every areal parameter,
 //! a 5th-order form removal and an areal Gaussian filter on 1000 × 1000 maps; reading a
-//! 2000 × 2000 `.gsf`.
+//! 2000 × 2000 `.gsf` (as `f64` and as stored, `f32`); the eight parameters on the `f32`
+//! grid `crest metrics FILE.gsf --params Sa,Sq,Sp,Sv,Sz,Ssk,Sku,Sdr` uses (issue 19).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
-use crest::io::{ReadOptions, read_heightmap, write_heightmap};
+use crest::io::{ReadOptions, read_gsf_f32, read_heightmap, write_heightmap};
 use crest::metrics::{
-    Level, ParamSet, Preprocess, areal_parameters, gaussian_filter_map, preprocess_map,
+    Grid, Level, ParamSet, Preprocess, areal_parameters, areal_parameters_of, gaussian_filter_map,
+    preprocess_map,
 };
 use crest::surface::HeightMap;
 
@@ -40,6 +42,17 @@ fn bench(c: &mut Criterion) {
     g.bench_function("height_params_and_Sdr", |b| {
         b.iter(|| areal_parameters(black_box(&m), &eight).unwrap())
     });
+    let z32: Vec<f32> = m.z_um.iter().map(|&v| v as f32).collect();
+    let grid = Grid {
+        nx: m.nx,
+        ny: m.ny,
+        dx_um: m.dx_um,
+        dy_um: m.dy_um,
+        z: &z32[..],
+    };
+    g.bench_function("height_params_and_Sdr_f32", |b| {
+        b.iter(|| areal_parameters_of(black_box(grid), &eight).unwrap())
+    });
     let all = ParamSet::all(false);
     g.bench_function("all_areal", |b| {
         b.iter(|| areal_parameters(black_box(&m), &all).unwrap())
@@ -67,6 +80,9 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Bytes(std::fs::metadata(&path).unwrap().len()));
     g.bench_function("read_gsf_2000x2000", |b| {
         b.iter(|| read_heightmap(black_box(&path), &ReadOptions::default()).unwrap())
+    });
+    g.bench_function("read_gsf_f32_2000x2000", |b| {
+        b.iter(|| read_gsf_f32(black_box(&path), &ReadOptions::default()).unwrap())
     });
     g.finish();
 }

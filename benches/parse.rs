@@ -1,7 +1,8 @@
 //! Parser and lowering throughput (bytes per second) on real and generated CLSF.
 //!
 //! `parse` = records only; `lower` = records + lowering to postures; `convert` = records +
-//! lowering + contact12 rows into memory (the `crest convert` pipeline without the file).
+//! lowering + contact12 rows into memory (the `crest convert` pipeline without the file);
+//! `newlines` = a `memchr` count of the line ends, the limit of any line reader.
 
 use crest::parse::{ClsfReader, Contact12Reader};
 use crest::toolpath::{Contact12Writer, LowerOptions, Lowerer, Posture, Toolpath};
@@ -66,6 +67,9 @@ fn bench(c: &mut Criterion) {
         ("contact_5axis_4MiB", contact.as_str()),
     ] {
         g.throughput(Throughput::Bytes(text.len() as u64));
+        g.bench_function(format!("newlines/{name}"), |b| {
+            b.iter(|| memchr::memchr_iter(b'\n', black_box(text).as_bytes()).count())
+        });
         g.bench_function(format!("records/{name}"), |b| {
             b.iter(|| {
                 ClsfReader::new(black_box(text).as_bytes())

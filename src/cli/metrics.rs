@@ -6,11 +6,12 @@ use std::path::PathBuf;
 use miette::miette;
 
 use super::Outcome;
-use crest::io::{HeightMapFormat, ReadOptions, read_heightmap};
+use crest::io::{GsfField, HeightMapFormat, ReadOptions, read_gsf_f32, read_heightmap};
 use crest::metrics::{
-    EndEffects, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
-    preprocess_map, preprocess_profile, profile_parameters,
+    EndEffects, Grid, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters,
+    areal_parameters_of, extract_profile, preprocess_map, preprocess_profile, profile_parameters,
 };
+use crest::surface::HeightMap;
 
 /// Border handling of the Gaussian filters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -87,6 +88,32 @@ fn spec_label(s: ProfileSpec) -> String {
     }
 }
 
+/// The map as read: a [`HeightMap`], or a `.gsf` kept as float32 when only plain-pass
+/// parameters are asked for without preprocessing (half the memory, the same values).
+enum Loaded {
+    Map(HeightMap),
+    Field(GsfField),
+}
+
+impl Loaded {
+    fn dims(&self) -> (usize, usize, f64, f64) {
+        match self {
+            Loaded::Map(m) => (m.nx, m.ny, m.dx_um, m.dy_um),
+            Loaded::Field(f) => (f.nx, f.ny, f.dx_um, f.dy_um),
+        }
+    }
+
+    fn known(&self) -> usize {
+        match self {
+            Loaded::Map(m) => m.known(),
+            Loaded::Field(f) => {
+                use rayon::prelude::*;
+                f.z_um.par_iter().filter(|v| v.is_finite()).count()
+            }
+        }
+    }
+}
+
 fn num(v: f64) -> serde_json::Value {
     serde_json::Value::from(v)
 }
@@ -98,7 +125,6 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         dx_um: args.dx_um,
         dy_um: args.dy_um,
     };
-    let map = read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?;
     let pp = Preprocess {
         level: args.level,
         lambda_s_um: args.lambda_s_um,
@@ -117,15 +143,27 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if set.params().is_empty() {
         return Err(miette!("--params lists no parameter"));
     }
+    let filtered = pp.lambda_s_um.is_some() || pp.lambda_c_um.is_some();
+    let as_stored = HeightMapFormat::from_path(&args.file) == Some(HeightMapFormat::Gsf)
+        && !profile_mode
+        && pp.level.degree() == 0
+        && !filtered
+        && set.passes_only();
+    let loaded = if as_stored {
+        Loaded::Field(read_gsf_f32(&args.file, &opts).map_err(|e| miette!("{e}"))?)
+    } else {
+        Loaded::Map(read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?)
+    };
+    let (nx, ny, dx_um, dy_um) = loaded.dims();
     let mut info = serde_json::Map::new();
     info.insert("file".into(), file.clone().into());
     let format = HeightMapFormat::from_path(&args.file).map(|f| format!("{f:?}").to_lowercase());
     info.insert("format".into(), format.into());
-    info.insert("nx".into(), map.nx.into());
-    info.insert("ny".into(), map.ny.into());
-    info.insert("dx_um".into(), num(map.dx_um));
-    info.insert("dy_um".into(), num(map.dy_um));
-    info.insert("valid_nodes".into(), map.known().into());
+    info.insert("nx".into(), nx.into());
+    info.insert("ny".into(), ny.into());
+    info.insert("dx_um".into(), num(dx_um));
+    info.insert("dy_um".into(), num(dy_um));
+    info.insert("valid_nodes".into(), loaded.known().into());
     info.insert("level".into(), pp.level.label().into());
     info.insert(
         "lambda_s_um".into(),
@@ -135,7 +173,6 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         "lambda_c_um".into(),
         pp.lambda_c_um.map_or(serde_json::Value::Null, num),
     );
-    let filtered = pp.lambda_s_um.is_some() || pp.lambda_c_um.is_some();
     info.insert(
         "end_effects".into(),
         if filtered {
@@ -147,32 +184,47 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     );
     info.insert("trimmed_um".into(), num(pp.trim_um()));
 
-    let values = if let Some(spec) = args.profile {
-        let raw = extract_profile(&map, spec).map_err(|e| miette!("{file}: {e}"))?;
-        let prof = preprocess_profile(&raw, &pp).map_err(|e| miette!("{file}: {e}"))?;
-        info.insert(
-            "profile".into(),
-            serde_json::json!({
-                "spec": spec_label(spec),
-                "samples": prof.z.len(),
-                "step_um": prof.step_um,
-                "evaluation_length_um": prof.z.len() as f64 * prof.step_um,
-                "sections": args.sections,
-            }),
-        );
-        profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?
-    } else {
-        // Without form removal or filters the map is used as read (no copy of a large map).
-        let processed;
-        let m = if pp.level.degree() == 0 && !filtered {
-            &map
-        } else {
-            processed = preprocess_map(&map, &pp).map_err(|e| miette!("{file}: {e}"))?;
-            &processed
-        };
-        info.insert("evaluated_nx".into(), m.nx.into());
-        info.insert("evaluated_ny".into(), m.ny.into());
-        areal_parameters(m, &set).map_err(|e| miette!("{file}: {e}"))?
+    let values = match (&loaded, args.profile) {
+        (Loaded::Field(f), _) => {
+            info.insert("evaluated_nx".into(), nx.into());
+            info.insert("evaluated_ny".into(), ny.into());
+            let grid = Grid {
+                nx,
+                ny,
+                dx_um,
+                dy_um,
+                z: &f.z_um,
+            };
+            areal_parameters_of(grid, &set).map_err(|e| miette!("{file}: {e}"))?
+        }
+        (Loaded::Map(map), Some(spec)) => {
+            let raw = extract_profile(map, spec).map_err(|e| miette!("{file}: {e}"))?;
+            let prof = preprocess_profile(&raw, &pp).map_err(|e| miette!("{file}: {e}"))?;
+            info.insert(
+                "profile".into(),
+                serde_json::json!({
+                    "spec": spec_label(spec),
+                    "samples": prof.z.len(),
+                    "step_um": prof.step_um,
+                    "evaluation_length_um": prof.z.len() as f64 * prof.step_um,
+                    "sections": args.sections,
+                }),
+            );
+            profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?
+        }
+        (Loaded::Map(map), None) => {
+            // Without form removal or filters the map is used as read (no copy of a large map).
+            let processed;
+            let m = if pp.level.degree() == 0 && !filtered {
+                map
+            } else {
+                processed = preprocess_map(map, &pp).map_err(|e| miette!("{file}: {e}"))?;
+                &processed
+            };
+            info.insert("evaluated_nx".into(), m.nx.into());
+            info.insert("evaluated_ny".into(), m.ny.into());
+            areal_parameters(m, &set).map_err(|e| miette!("{file}: {e}"))?
+        }
     };
 
     if args.json {
@@ -186,10 +238,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     } else {
         outln!(
             "{file}: {}×{} nodes, dx {} µm, dy {} µm, level {}",
-            map.nx,
-            map.ny,
-            map.dx_um,
-            map.dy_um,
+            nx,
+            ny,
+            dx_um,
+            dy_um,
             pp.level.label()
         );
         if filtered {

@@ -30,7 +30,22 @@ fn unit_to_um(unit: Option<&str>, line: usize) -> Result<f64, FormatError> {
     }
 }
 
-pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
+/// The header of a `.gsf`: the grid, the height scale and where the data start.
+struct Header {
+    nx: usize,
+    ny: usize,
+    dx_um: f64,
+    dy_um: f64,
+    x0_mm: f64,
+    y0_mm: f64,
+    /// Factor from the stored values to µm (applied in `f32`, as stored).
+    z_um: f32,
+    data_start: usize,
+}
+
+/// Parse the header from `bytes`, the file's first bytes (at least through the padding, or
+/// the whole file when it is shorter); `len` is the file's whole length.
+fn header(bytes: &[u8], len: usize) -> Result<Header, FormatError> {
     if !bytes.starts_with(MAGIC) {
         return Err(FormatError::byte(
             0,
@@ -122,7 +137,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
         .filter(|n| *n <= (usize::MAX >> 3))
         .ok_or_else(|| FormatError::file(format!("XRes×YRes = {nx}×{ny} is too large")))?;
     let need = n * 4;
-    let have = bytes.len() - data_start;
+    let have = len - data_start;
     if have != need {
         return Err(FormatError::byte(
             (data_start + have.min(need)) as u64,
@@ -131,21 +146,131 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
             ),
         ));
     }
-    let z: Vec<f64> = bytes[data_start..]
-        .chunks_exact(4)
-        .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]]) * z_um))
-        .collect();
-    let mut map = HeightMap::from_rows(
+    Ok(Header {
         nx,
         ny,
-        super::tidy(xreal * xy_um / nx as f64),
-        super::tidy(yreal * xy_um / ny as f64),
-        z,
-    )
-    .ok_or_else(|| FormatError::file("internal: size mismatch"))?;
-    map.x0_mm = super::tidy(xoff * xy_um / 1000.0);
-    map.y0_mm = super::tidy(yoff * xy_um / 1000.0);
+        dx_um: super::tidy(xreal * xy_um / nx as f64),
+        dy_um: super::tidy(yreal * xy_um / ny as f64),
+        x0_mm: super::tidy(xoff * xy_um / 1000.0),
+        y0_mm: super::tidy(yoff * xy_um / 1000.0),
+        z_um,
+        data_start,
+    })
+}
+
+pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
+    let h = header(bytes, bytes.len())?;
+    let z: Vec<f64> = bytes[h.data_start..]
+        .chunks_exact(4)
+        .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]]) * h.z_um))
+        .collect();
+    let mut map = HeightMap::from_rows(h.nx, h.ny, h.dx_um, h.dy_um, z)
+        .ok_or_else(|| FormatError::file("internal: size mismatch"))?;
+    map.x0_mm = h.x0_mm;
+    map.y0_mm = h.y0_mm;
     Ok(map)
+}
+
+/// A `.gsf` kept as it is stored: the grid and the float32 heights in µm (the very values
+/// [`parse`] widens to `f64`), in half the memory of a [`HeightMap`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GsfField {
+    /// Columns (x).
+    pub nx: usize,
+    /// Rows (y).
+    pub ny: usize,
+    /// Spacing along x, µm.
+    pub dx_um: f64,
+    /// Spacing along y, µm.
+    pub dy_um: f64,
+    /// x of column 0, mm.
+    pub x0_mm: f64,
+    /// y of row 0, mm.
+    pub y0_mm: f64,
+    /// Row-major heights, µm, `NaN` for missing nodes.
+    pub z_um: Vec<f32>,
+}
+
+/// Why [`read_f32`] failed.
+pub(crate) enum ReadError {
+    Io(std::io::Error),
+    Format(FormatError),
+}
+
+impl From<std::io::Error> for ReadError {
+    fn from(e: std::io::Error) -> Self {
+        ReadError::Io(e)
+    }
+}
+
+impl From<FormatError> for ReadError {
+    fn from(e: FormatError) -> Self {
+        ReadError::Format(e)
+    }
+}
+
+/// Bytes per read of the float32 data.
+const PIECE: usize = 4 << 20;
+
+/// Read a `.gsf` into a [`GsfField`]: the header, then the data read straight into the
+/// float32 buffer (no byte copy of the file), piece by piece, each scaled to µm in place. Memory: the file's data size and a few KiB. Also returns the index of the first
+/// finite height beyond `±limit_um`, if any (checked in the same pass).
+pub(crate) fn read_f32(
+    file: &std::fs::File,
+    limit_um: f64,
+) -> Result<(GsfField, Option<usize>), ReadError> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let len = usize::try_from(len)
+        .map_err(|_| FormatError::file("the file is too large for this machine"))?;
+    // The header: read growing prefixes until the NUL padding is in (or the file ends).
+    let mut head = vec![0u8; len.min(4096)];
+    file.read_exact_at(&mut head, 0)?;
+    while head.len() < len {
+        match head.iter().position(|&b| b == 0) {
+            Some(h) if head.len() >= h + 4 => break,
+            _ => {
+                let old = head.len();
+                head.resize(len.min(old * 2), 0);
+                file.read_exact_at(&mut head[old..], old as u64)?;
+            }
+        }
+    }
+    let h = header(&head, len)?;
+    let mut z = vec![0f32; h.nx * h.ny];
+    let scale = h.z_um;
+    let start = h.data_start as u64;
+    let bad: Vec<Option<usize>> = z
+        .chunks_mut(PIECE / 4)
+        .enumerate()
+        .map(|(k, piece)| -> std::io::Result<Option<usize>> {
+            let off = start + (k * PIECE) as u64;
+            file.read_exact_at(bytemuck::cast_slice_mut(piece), off)?;
+            let mut over = false;
+            for v in piece.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
+                over |= f64::from(v.abs()) > limit_um && v.is_finite();
+            }
+            Ok(over
+                .then(|| {
+                    piece
+                        .iter()
+                        .position(|v| v.is_finite() && f64::from(v.abs()) > limit_um)
+                })
+                .flatten()
+                .map(|i| k * (PIECE / 4) + i))
+        })
+        .collect::<std::io::Result<_>>()?;
+    let field = GsfField {
+        nx: h.nx,
+        ny: h.ny,
+        dx_um: h.dx_um,
+        dy_um: h.dy_um,
+        x0_mm: h.x0_mm,
+        y0_mm: h.y0_mm,
+        z_um: z,
+    };
+    Ok((field, bad.into_iter().flatten().next()))
 }
 
 pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
@@ -237,5 +362,48 @@ mod tests {
         assert_eq!(e.at, Location::Line { line: 3, field: 0 });
         let e = parse(b"Gwyddion Simple").unwrap_err();
         assert_eq!(e.at, Location::Byte(0));
+    }
+
+    #[test]
+    fn float32_reading_holds_the_values_parse_widens() {
+        let (nx, ny) = (1500, 900); // more than one piece of PIECE bytes
+        let z: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                if k % 1001 == 5 {
+                    f64::NAN
+                } else {
+                    (k as f64 * 0.001).sin() * 3.7
+                }
+            })
+            .collect();
+        let mut map = HeightMap::from_rows(nx, ny, 0.25, 0.5, z).unwrap();
+        map.x0_mm = 1.5;
+        let mut bytes = Vec::new();
+        write(&mut bytes, &map).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.gsf");
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        let (f, bad) = read_f32(&file, 1e6).ok().unwrap();
+        let m = parse(&bytes).unwrap();
+        assert_eq!(bad, None);
+        assert_eq!(
+            (f.nx, f.ny, f.dx_um, f.dy_um),
+            (m.nx, m.ny, m.dx_um, m.dy_um)
+        );
+        assert_eq!((f.x0_mm, f.y0_mm), (m.x0_mm, m.y0_mm));
+        for (a, b) in f.z_um.iter().zip(&m.z_um) {
+            assert_eq!(f64::from(*a).to_bits(), b.to_bits());
+        }
+        let (_, bad) = read_f32(&file, 3.0).ok().unwrap();
+        let first = m.z_um.iter().position(|v| v.abs() > 3.0).unwrap();
+        assert_eq!(bad, Some(first));
+        // A truncated file is a format error at a byte offset, as with `parse`.
+        std::fs::write(&path, &bytes[..bytes.len() - 2]).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        match read_f32(&file, 1e6) {
+            Err(ReadError::Format(e)) => assert!(matches!(e.at, Location::Byte(_)), "{e}"),
+            _ => panic!("truncated file accepted"),
+        }
     }
 }

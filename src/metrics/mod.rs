@@ -34,13 +34,16 @@ mod params;
 mod profile;
 mod spatial;
 
-pub use areal::{HeightStats, height_stats, sdq, sdr_percent};
+pub use areal::{
+    Grid, Height, HeightStats, height_stats, height_stats_of, sdq, sdq_of, sdr_percent,
+    sdr_percent_of,
+};
 pub use filter::{EndEffects, gaussian_filter_map, gaussian_lowpass_line, gaussian_sigma};
 pub use form::{Level, fit_remove_line, fit_remove_map};
 pub use material::{MaterialRatio, material_ratio};
 pub use params::{
-    AREAL_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters, preprocess_map,
-    preprocess_profile, profile_parameters,
+    AREAL_PARAMS, PASS_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters,
+    areal_parameters_of, preprocess_map, preprocess_profile, profile_parameters,
 };
 pub use profile::{
     Profile, ProfileSpec, extract_profile, profile_values, rz_ra, sampling_length_mm,

@@ -347,23 +347,86 @@ pub fn preprocess_profile(p: &Profile, pp: &Preprocess) -> Result<Profile, Metri
     })
 }
 
+/// The areal parameters computed by plain passes over the heights (no ACF, spectrum or
+/// sort): what [`areal_parameters_of`] computes on any grid, e.g. an `f32` field as read.
+pub const PASS_PARAMS: &[Param] = &[
+    Param::Sa,
+    Param::Sq,
+    Param::Sp,
+    Param::Sv,
+    Param::Sz,
+    Param::Ssk,
+    Param::Sku,
+    Param::Sdq,
+    Param::Sdr,
+];
+
+impl ParamSet {
+    /// Whether every parameter is one of [`PASS_PARAMS`].
+    pub fn passes_only(&self) -> bool {
+        self.0.iter().all(|p| PASS_PARAMS.contains(p))
+    }
+}
+
+/// The values of the pass parameters in `set` (NaN for the others, filled in by the caller).
+fn pass_values<T: areal::Height>(
+    g: areal::Grid<'_, T>,
+    set: &ParamSet,
+) -> Result<Vec<(Param, f64)>, MetricsError> {
+    use Param::*;
+    let stats = if set.any(&[Sa, Sq, Sp, Sv, Sz, Ssk, Sku]) {
+        Some(
+            areal::height_stats_of(g.z)
+                .ok_or_else(|| MetricsError::TooFew("the map has no valid height".into()))?,
+        )
+    } else {
+        None
+    };
+    let sdq = set.any(&[Sdq]).then(|| areal::sdq_of(g));
+    let sdr = set.any(&[Sdr]).then(|| areal::sdr_percent_of(g));
+    Ok(set
+        .params()
+        .iter()
+        .map(|&p| {
+            let v = match p {
+                Sa => stats.map(|s| s.sa),
+                Sq => stats.map(|s| s.sq),
+                Sp => stats.map(|s| s.sp),
+                Sv => stats.map(|s| s.sv),
+                Sz => stats.map(|s| s.sz()),
+                Ssk => stats.map(|s| s.ssk),
+                Sku => stats.map(|s| s.sku),
+                Sdq => sdq,
+                Sdr => sdr,
+                _ => None,
+            };
+            (p, v.unwrap_or(f64::NAN))
+        })
+        .collect())
+}
+
+/// The pass parameters ([`PASS_PARAMS`]) in `set` of any grid, `f64` or `f32` (the same
+/// values for the same heights); an error names a parameter that needs a [`HeightMap`].
+pub fn areal_parameters_of<T: areal::Height>(
+    g: areal::Grid<'_, T>,
+    set: &ParamSet,
+) -> Result<Vec<(Param, f64)>, MetricsError> {
+    if let Some(p) = set.params().iter().find(|p| !PASS_PARAMS.contains(p)) {
+        return Err(MetricsError::BadSetting(format!(
+            "{} needs the whole height map (not a plain pass)",
+            p.symbol()
+        )));
+    }
+    pass_values(g, set)
+}
+
 /// Compute the areal parameters in `set` on an (already preprocessed) map.
 pub fn areal_parameters(
     map: &HeightMap,
     set: &ParamSet,
 ) -> Result<Vec<(Param, f64)>, MetricsError> {
     use Param::*;
-    let mut out = Vec::new();
-    let stats = if set.any(&[Sa, Sq, Sp, Sv, Sz, Ssk, Sku]) {
-        Some(
-            areal::height_stats(&map.z_um)
-                .ok_or_else(|| MetricsError::TooFew("the map has no valid height".into()))?,
-        )
-    } else {
-        None
-    };
-    let sdq = set.any(&[Sdq]).then(|| areal::sdq(map));
-    let sdr = set.any(&[Sdr]).then(|| areal::sdr_percent(map));
+    let mut out = pass_values(areal::Grid::of(map), set)?;
     let acf = set.any(&[Sal, Str]).then(|| spatial::acf_lengths(map, 0.2));
     let spec = set
         .any(&[Std, Ssw])
@@ -375,17 +438,8 @@ pub fn areal_parameters(
     } else {
         None
     };
-    for &p in set.params() {
+    for (p, out) in out.iter_mut() {
         let v = match p {
-            Sa => stats.map(|s| s.sa),
-            Sq => stats.map(|s| s.sq),
-            Sp => stats.map(|s| s.sp),
-            Sv => stats.map(|s| s.sv),
-            Sz => stats.map(|s| s.sz()),
-            Ssk => stats.map(|s| s.ssk),
-            Sku => stats.map(|s| s.sku),
-            Sdq => sdq,
-            Sdr => sdr,
             Sal => acf.map(|a| a.sal),
             Str => acf.map(|a| a.str_ratio),
             Std => spec.map(|s| s.std_deg),
@@ -400,9 +454,9 @@ pub fn areal_parameters(
             Vvc => mr.map(|m| m.vvc),
             Vvv => mr.map(|m| m.vvv),
             Sxp => mr.map(|m| m.sxp),
-            _ => None,
+            _ => continue,
         };
-        out.push((p, v.unwrap_or(f64::NAN)));
+        *out = v.unwrap_or(f64::NAN);
     }
     Ok(out)
 }

@@ -27,7 +27,7 @@ const STAGES: [&str; 17] = [
 ];
 
 /// Stages that may run rayon (fixed chunking: results identical for any thread count).
-const RAYON: [&str; 4] = ["part", "kinematics", "surface", "study"];
+const RAYON: [&str; 5] = ["part", "kinematics", "surface", "metrics", "study"];
 
 /// Stages that may touch files or the terminal.
 const FILES: [&str; 3] = ["io", "plot", "report"];
