@@ -229,19 +229,29 @@ pub(crate) fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .draw()
 }
 
-/// The legend box of `entries` lines as shares (width, height) of a plot area of
-/// `plot_px` (width, height) pixels: about 20 px a line, 330 px wide.
-pub(crate) fn legend_box(entries: usize, (plot_w, plot_h): (f64, f64)) -> (f64, f64) {
+/// The legend box of the entries `labels` as shares (width, height) of a plot area of
+/// `plot_px` (width, height) pixels: about 20 px a line, the sample and 7.5 px a character
+/// wide.
+pub(crate) fn legend_box<'a>(
+    labels: impl IntoIterator<Item = &'a str>,
+    (plot_w, plot_h): (f64, f64),
+) -> (f64, f64) {
+    let (mut entries, mut chars) = (0usize, 0usize);
+    for l in labels {
+        entries += 1;
+        chars = chars.max(l.chars().count());
+    }
     (
-        (330.0 / plot_w.max(100.0)).min(0.9),
+        ((64.0 + 7.5 * chars as f64) / plot_w.max(100.0)).min(0.9),
         ((entries as f64 * 20.0 + 20.0) / plot_h.max(100.0)).min(0.9),
     )
 }
 
-/// The y range `(lo, hi)` raised so that a legend box `box_h` (a share of the plot height,
-/// see [`legend_box`]) fits above the data: the one head-room rule of every figure.
-pub(crate) fn legend_headroom((lo, hi): (f64, f64), box_h: f64) -> (f64, f64) {
-    (lo, hi + (hi - lo) * box_h / (1.0 - box_h))
+/// The range `(lo, hi)` raised so that a legend box `share` of the plot (its height, or its
+/// width when the legend stands right of the data; see [`legend_box`]) fits beyond the
+/// data: the one head-room rule of every figure.
+pub(crate) fn legend_headroom((lo, hi): (f64, f64), share: f64) -> (f64, f64) {
+    (lo, hi + (hi - lo) * share / (1.0 - share))
 }
 
 /// The range of the finite values of `values`, widened by `pad` (a fraction) and made
@@ -385,23 +395,34 @@ impl Draw for Chart {
                     .iter()
                     .flat_map(|s| s.points.iter().filter(finite).map(|p| &p.1))
             };
-            let entries = panel
+            let labels = legend_labels(panel);
+            let entries: Vec<&str> = panel
                 .series
                 .iter()
-                .filter(|s| (s.line || s.markers) && !s.label.is_empty())
-                .count();
-            let legend = entries > 1;
+                .zip(&labels)
+                .filter(|(s, l)| (s.line || s.markers) && !l.is_empty())
+                .map(|(_, l)| l.as_str())
+                .collect();
+            let legend = entries.len() > 1;
             let plot_px = (
                 chart.size.0 as f64 / cols as f64 - 110.0,
                 chart.size.1 as f64 / rows as f64 - 110.0,
             );
-            let legend_box = legend_box(entries, plot_px);
+            let legend_box = legend_box(entries.iter().copied(), plot_px);
+            // The head room goes where it costs less: above the data or, in a chart of one
+            // panel (its x axis is its own), right of them.
+            let right = legend && chart.panels.len() == 1 && legend_box.0 < legend_box.1;
+            let (x0, x1) = if right {
+                legend_headroom((x0, x1), legend_box.0)
+            } else {
+                (x0, x1)
+            };
             let (y0, y1) = panel.y_range.unwrap_or_else(|| {
                 let (lo, hi) = finite_range(ys(), 0.08).unwrap_or((0.0, 1.0));
                 // Counts and heights read best from zero when the data are all positive.
                 let all_positive = ys().all(|&y| y >= 0.0);
                 let lo = if all_positive && lo < 0.0 { 0.0 } else { lo };
-                if legend {
+                if legend && !right {
                     legend_headroom((lo, hi), legend_box.1)
                 } else {
                     (lo, hi)
@@ -444,7 +465,6 @@ impl Draw for Chart {
                     .x_labels(10),
             )
             .draw()?;
-            let labels = legend_labels(panel);
             for (s, label) in panel.series.iter().zip(&labels) {
                 let c = color(s.color);
                 let style = c.stroke_width(2);

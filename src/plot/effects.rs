@@ -50,7 +50,10 @@ impl Draw for BarChart {
         let (w, h) = root.dim_in_pixel();
         let (y0, y1) = if legend {
             let plot_px = (w as f64 - 110.0, h as f64 - 110.0);
-            legend_headroom((y0, y1), legend_box(self.series.len(), plot_px).1)
+            legend_headroom(
+                (y0, y1),
+                legend_box(self.series.iter().map(|s| s.label.as_str()), plot_px).1,
+            )
         } else {
             (y0, y1)
         };
