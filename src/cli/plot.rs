@@ -3,7 +3,7 @@
 //! of `-o`.
 
 use super::Outcome;
-use crest::plot::profile::{LineChart, Series};
+use crest::plot::chart::{Chart, Series};
 use crest::plot::{Format, feed, heightmap, profile, trochoid};
 use miette::miette;
 use std::path::{Path, PathBuf};
@@ -543,7 +543,7 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             serde_json::json!({ "points": len_points(&s), "crest_um_min": lo, "crest_um_max": hi }),
         );
     }
-    let mut series = vec![Series::new("programmed", &s, &feed)];
+    let mut series = vec![Series::line("programmed", &s, &feed, 0)];
     let mut actual_points = 0;
     if let Some(p) = &a.actual {
         match crest::io::series::read_planned_feed(p).map_err(|e| miette!("{e}"))? {
@@ -568,12 +568,12 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
                     ));
                 }
                 actual_points = len_points(&y);
-                series.push(Series::new("actual (planned)", &s, &y));
+                series.push(Series::line("actual (planned)", &s, &y, 1));
             }
             None => {
                 let (x, y) = read_two_columns(p)?;
                 actual_points = len_points(&y);
-                series.push(Series::new("actual", &x, &y));
+                series.push(Series::line("actual", &x, &y, 1));
             }
         }
     }
@@ -582,13 +582,8 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
         .title
         .clone()
         .unwrap_or_else(|| format!("Feed along {name}"));
-    profile::plot_lines(
-        &LineChart {
-            title,
-            x_label: "path length [mm]".to_string(),
-            y_label: "feed [mm/min]".to_string(),
-            series,
-        },
+    crest::plot::chart::write(
+        &Chart::lines(title, "path length [mm]", "feed [mm/min]", series),
         &a.common.output,
     )
     .map_err(|e| miette!("{e}"))?;

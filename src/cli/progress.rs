@@ -1,28 +1,13 @@
-//! The one progress-bar factory of the command line: a bar on stderr when it is a terminal
-//! (nothing otherwise), labelled with the phase and the unit it counts.
+//! The one progress-bar factory of the command line ([`Phases`]): a bar on stderr when it is
+//! a terminal (nothing otherwise), labelled with the phase and the unit it counts.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 
-/// A progress bar of `len` steps for phase `label`, counting `unit`, or `None` when stderr
-/// is not a terminal.
-pub fn bar(len: u64, label: &str, unit: &str) -> Option<ProgressBar> {
-    if !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let b = ProgressBar::new(len);
-    let template = format!(
-        "{{spinner}} {label} [{{bar:40}}] {{pos}}/{{len}} {unit} {{elapsed_precise}} eta {{eta}}"
-    );
-    b.set_style(
-        ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    Some(b)
-}
-
 /// The progress of a pipeline run drawn on stderr (when it is a terminal): a spinner with
 /// the phase's name and its elapsed time from the first second, and a bar with the count and
-/// the time left once the phase counts steps out of a known total.
+/// the time left once the phase counts steps out of a known total. Every command that shows
+/// progress draws it with this (`simulate` through the pipeline, `study` run by run).
 pub struct Phases {
     bar: Option<ProgressBar>,
 }
@@ -36,6 +21,20 @@ impl Phases {
         let b = ProgressBar::new_spinner();
         b.enable_steady_tick(std::time::Duration::from_millis(120));
         Self { bar: Some(b) }
+    }
+
+    /// A counter of `total` steps of phase `name` (in `unit`), for work that reports each
+    /// finished step from any thread: call the returned closure once per step.
+    pub fn counter<'a>(&'a self, name: &str, unit: &str, total: u64) -> impl Fn() + Sync + 'a {
+        use crest::pipeline::Progress;
+        use std::sync::atomic::{AtomicU64, Ordering};
+        self.phase(name, unit);
+        self.advance(0, total);
+        let done = AtomicU64::new(0);
+        move || {
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            self.advance(d, total);
+        }
     }
 
     /// Remove the bar.

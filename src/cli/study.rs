@@ -56,20 +56,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let n_runs = design.runs().len();
 
-    let bar = super::progress::bar(n_runs as u64, "study", "runs");
-    let tick = || {
-        if let Some(b) = &bar {
-            b.inc(1);
-        }
-    };
+    let progress = super::progress::Phases::new();
+    let tick = progress.counter("study", "runs", n_runs as u64);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
     let done = pool.install(|| crest::pipeline::design::run(design, cutter, &file, &tick));
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
+    progress.finish();
     let done = done?;
     // Every run succeeded: render the outputs, then write them.
     write_outputs(&done, &file, &args.output, args.json, started)
@@ -86,20 +80,14 @@ fn run_shard(
     use crest::pipeline::tasks;
     let texts = crest::pipeline::design::load_design_texts(&args.design)?;
     let mine = (0..total).filter(|i| i % n + 1 == k).count();
-    let bar = super::progress::bar(mine as u64, "study", "runs");
-    let tick = || {
-        if let Some(b) = &bar {
-            b.inc(1);
-        }
-    };
+    let progress = super::progress::Phases::new();
+    let tick = progress.counter("study", "runs", mine as u64);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
     let results = pool.install(|| tasks::run_shard(&texts, k, n, &tick));
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
+    progress.finish();
     let results = results?;
     let mut text = Vec::new();
     for r in &results {

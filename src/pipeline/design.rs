@@ -118,7 +118,6 @@ pub fn finish(design: Design, results: Vec<RunResult>, file: &str) -> miette::Re
 pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>> {
     use crate::io::tables::{write_effects_csv, write_runs_csv};
     use crate::plot::effects::{effects_chart, level_chart};
-    use crate::plot::profile::line_chart_svg;
     let (design, results, effects) = (&done.design, &done.results, &done.effects);
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     let mut table = |name: &str, f: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
@@ -144,8 +143,14 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
         }
         if let Some(c) = level_chart(design, effects, i) {
             let name = format!("effects-{}.svg", f.name);
-            let svg = line_chart_svg(&c).map_err(|e| miette!("cannot draw {name}: {e}"))?;
-            files.push((name, svg));
+            let svg = c
+                .check_finite()
+                .map_err(|e| miette!("cannot draw {name}: {e}"))
+                .and_then(|()| {
+                    crate::plot::chart::render_svg(&c)
+                        .map_err(|e| miette!("cannot draw {name}: {e}"))
+                })?;
+            files.push((name, svg.into_bytes()));
         }
     }
     Ok(files)

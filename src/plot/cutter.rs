@@ -2,7 +2,8 @@
 //! the axis, at equal scales, with the joins between its lines and arcs marked. One figure
 //! documents a shape (round insert, APT cutter, profile, circle-segment family).
 
-use super::profile::{Draw, DrawResult, PlotError, label_font, render, tick_font, title_font};
+use super::chart::{color, draw_legend, style_mesh, title_font};
+use super::{Draw, DrawResult, PlotError, render};
 use crate::tool::Cutter;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -41,18 +42,14 @@ impl Draw for Figure {
             .x_label_area_size(50)
             .y_label_area_size(60)
             .build_cartesian_2d(-0.5 * sx..0.5 * sx, cy - 0.5 * sy..cy + 0.5 * sy)?;
-        chart
-            .configure_mesh()
-            .x_desc("r [mm]")
-            .y_desc("z above the tip [mm]")
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .max_light_lines(4)
-            .light_line_style(RGBColor(240, 240, 240))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .draw()?;
-        let blue = RGBColor(0, 114, 178);
-        let grey = RGBColor(150, 150, 150);
+        style_mesh(
+            chart
+                .configure_mesh()
+                .x_desc("r [mm]")
+                .y_desc("z above the tip [mm]"),
+        )
+        .draw()?;
+        let (blue, grey) = (color(2), color(7));
         chart
             .draw_series(LineSeries::new(
                 self.profile.iter().map(|p| (p[0], p[1])),
@@ -86,13 +83,7 @@ impl Draw for Figure {
             )?
             .label("joins of lines and arcs")
             .legend(|(x, y)| Circle::new((x + 10, y), 4, BLACK.filled()));
-        chart
-            .configure_series_labels()
-            .label_font(tick_font())
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
-            .position(SeriesLabelPosition::UpperMiddle)
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperMiddle)?;
         Ok(())
     }
 }

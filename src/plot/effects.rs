@@ -2,14 +2,23 @@
 //! parameter as grouped bars, one bar per factor (Lavernhe et al., Fig 11), and the effect
 //! of one factor at each of its levels as lines (their Fig 12).
 
-use super::profile::{
-    Draw, DrawResult, PlotError, Series, finite_range, label_font, render_bytes, series_color,
-    tick_decimals, tick_font, tick_label, title_font,
+use super::chart::{
+    Chart, Series, color, draw_legend, finite_range, legend_box, legend_headroom, style_mesh,
+    tick_decimals, tick_label, title_font,
 };
-use super::{FONT, Format};
+use super::{Draw, DrawResult, Format, PlotError, render_bytes};
 use crate::study::design::{Design, Effects};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+
+/// The bars of one series (a factor), one per category.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bars {
+    /// Legend label.
+    pub label: String,
+    /// The bar of each category, in order; a non-finite value draws no bar.
+    pub y: Vec<f64>,
+}
 
 /// Grouped bars: one group per category (a roughness parameter), one bar per series (a
 /// factor); `series[i].y[k]` is the bar of series i in category k.
@@ -23,8 +32,8 @@ pub struct BarChart {
     pub x_label: String,
     /// y-axis label with unit.
     pub y_label: String,
-    /// The bars of each series (x is the category index).
-    pub series: Vec<Series>,
+    /// The bars of each series.
+    pub series: Vec<Bars>,
 }
 
 impl Draw for BarChart {
@@ -38,10 +47,15 @@ impl Draw for BarChart {
         let (y0, y1) = finite_range(ys, 0.08).unwrap_or((-1.0, 1.0));
         // Head room for the legend above the bars.
         let legend = self.series.len() > 1;
-        let y1 = if legend {
-            y1 + (y1 - y0) * 0.06 * self.series.len() as f64
+        let (w, h) = root.dim_in_pixel();
+        let (y0, y1) = if legend {
+            let plot_px = (w as f64 - 110.0, h as f64 - 110.0);
+            legend_headroom(
+                (y0, y1),
+                legend_box(self.series.iter().map(|s| s.label.as_str()), plot_px).1,
+            )
         } else {
-            y1
+            (y0, y1)
         };
         let names = self.categories.clone();
         let mut chart = ChartBuilder::on(root)
@@ -56,26 +70,23 @@ impl Draw for BarChart {
             SegmentValue::CenterOf(k) => names.get(*k as usize).cloned().unwrap_or_default(),
             _ => String::new(),
         };
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(n + 1)
-            .x_label_formatter(&fx)
-            .y_label_formatter(&fy)
-            .x_desc(&self.x_label)
-            .y_desc(&self.y_label)
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .max_light_lines(4)
-            .light_line_style(RGBColor(235, 235, 235))
-            .bold_line_style(RGBColor(210, 210, 210))
-            .draw()?;
+        style_mesh(
+            chart
+                .configure_mesh()
+                .disable_x_mesh()
+                .x_labels(n + 1)
+                .x_label_formatter(&fx)
+                .y_label_formatter(&fy)
+                .x_desc(&self.x_label)
+                .y_desc(&self.y_label),
+        )
+        .draw()?;
         // Bar widths in pixels: 80 % of a category, shared by the series.
         let seg_px = chart.plotting_area().dim_in_pixel().0 as f64 / n as f64;
         let m = self.series.len().max(1) as f64;
         let bar = 0.8 * seg_px / m;
         for (i, s) in self.series.iter().enumerate() {
-            let color = series_color(i);
+            let color = color(i);
             let left = 0.1 * seg_px + i as f64 * bar;
             let right = seg_px - left - bar;
             let bars =
@@ -110,13 +121,7 @@ impl Draw for BarChart {
             BLACK.stroke_width(1),
         ))?;
         if legend {
-            chart
-                .configure_series_labels()
-                .label_font((FONT, 15).into_font())
-                .background_style(WHITE.mix(0.9))
-                .border_style(RGBColor(160, 160, 160))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     }
@@ -143,7 +148,6 @@ pub fn bar_chart_svg(chart: &BarChart) -> Result<Vec<u8>, PlotError> {
 /// runs.
 pub fn effects_chart(design: &Design, effects: &[Effects]) -> BarChart {
     let factors = design.factors();
-    let x: Vec<f64> = (0..design.responses.len()).map(|k| k as f64).collect();
     let series = factors
         .iter()
         .enumerate()
@@ -153,10 +157,13 @@ pub fn effects_chart(design: &Design, effects: &[Effects]) -> BarChart {
                 .iter()
                 .map(|e| 100.0 * e.relative_first[i])
                 .collect();
-            Series::new(format!("{} = {}", f.name, f.levels[0]), &x, &y)
+            Bars {
+                label: format!("{} = {}", f.name, f.levels[0]),
+                y,
+            }
         })
         .collect();
-    let series: Vec<Series> = series;
+    let series: Vec<Bars> = series;
     let mut title = if design.title.is_empty() {
         "Effect of each factor at its first level".to_string()
     } else {
@@ -177,17 +184,14 @@ pub fn effects_chart(design: &Design, effects: &[Effects]) -> BarChart {
 
 /// The chart of 001 Fig 12: the relative effect `EF_ij/M` (%) of one factor at each of its
 /// levels (x = the level), one series per response.
-pub fn level_chart(
-    design: &Design,
-    effects: &[Effects],
-    factor: usize,
-) -> Option<super::profile::LineChart> {
+pub fn level_chart(design: &Design, effects: &[Effects], factor: usize) -> Option<Chart> {
     let f = design.factors().into_iter().nth(factor)?;
     let series = design
         .responses
         .iter()
         .zip(effects)
-        .map(|(name, e)| {
+        .enumerate()
+        .map(|(i, (name, e))| {
             let y: Vec<f64> = e
                 .effects
                 .get(factor)
@@ -203,11 +207,11 @@ pub fn level_chart(
                         .collect()
                 })
                 .unwrap_or_default();
-            Series::new(name.clone(), &f.levels, &y)
+            Series::line(name.clone(), &f.levels, &y, i)
         })
         .collect();
-    Some(super::profile::LineChart {
-        title: if design.title.is_empty() {
+    Some(Chart::lines(
+        if design.title.is_empty() {
             format!("Effect of {} at each of its levels", f.name)
         } else {
             format!(
@@ -215,8 +219,8 @@ pub fn level_chart(
                 design.title, f.name
             )
         },
-        x_label: f.name.clone(),
-        y_label: "change from the mean of all runs [%]".into(),
+        f.name.clone(),
+        "change from the mean of all runs [%]",
         series,
-    })
+    ))
 }

@@ -1,7 +1,8 @@
 //! Quantities along the tool path: the feed (programmed, predicted, measured) and the
 //! crest heights it leaves, against the arc length of the path.
 
-use super::profile::{LineChart, PlotError, Series, plot_lines};
+use super::PlotError;
+use super::chart::{Chart, Series, write};
 use std::path::Path;
 
 /// Plot feeds (mm/min) against path length `s_mm` (mm), one line per `(label, feed)`.
@@ -38,16 +39,13 @@ fn along_path(
             s_mm.len()
         )));
     }
-    plot_lines(
-        &LineChart {
-            title: title.to_string(),
-            x_label: "path length [mm]".to_string(),
-            y_label: y_label.to_string(),
-            series: lines
-                .iter()
-                .map(|(label, y)| Series::new(*label, s_mm, y))
-                .collect(),
-        },
+    let series = lines
+        .iter()
+        .enumerate()
+        .map(|(i, (label, y))| Series::line(*label, s_mm, y, i))
+        .collect();
+    write(
+        &Chart::lines(title, "path length [mm]", y_label, series),
         path,
     )
 }

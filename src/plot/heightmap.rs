@@ -4,10 +4,8 @@
 //! Large maps are block-averaged (NaN-aware) to at most a few hundred cells per side
 //! before drawing, so the SVG stays small; the colour range is that of the full map.
 
-use super::profile::{
-    Draw, DrawResult, PlotError, label_font, render, tick_decimals, tick_font, tick_label,
-    title_font,
-};
+use super::chart::{finite_range, label_font, tick_decimals, tick_font, tick_label, title_font};
+use super::{Draw, DrawResult, PlotError, render};
 use crate::surface::HeightMap;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -177,7 +175,7 @@ pub fn plot_heightmap(map: &HeightMap, title: &str, path: &Path) -> Result<(), P
             "the grid spacing must be positive".to_string(),
         ));
     }
-    let Some((lo, hi)) = super::profile::finite_range(&map.z_um, 0.0) else {
+    let Some((lo, hi)) = finite_range(&map.z_um, 0.0) else {
         return Err(PlotError::Empty(format!(
             "every height of '{title}' is missing"
         )));

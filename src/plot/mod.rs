@@ -1,8 +1,12 @@
 //! Charts with plotters, as SVG or PNG, with text rendered from an embedded font (no
 //! system fonts needed): cutter profiles, trochoids, run-out, height maps, profiles, feed, design effects
 //! and regressions. Drawing only: what goes in a chart is computed by the earlier stages.
+//! This file holds the output side every figure shares (fonts, the error type, rendering to
+//! SVG or PNG bytes and files); [`chart`] holds the chart model and the one style.
 
-use std::path::Path;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 /// Font family name registered for every chart.
@@ -75,6 +79,75 @@ impl Format {
             _ => None,
         }
     }
+}
+
+/// Errors of the plots.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The output name has no `.svg` or `.png` extension.
+    #[error("{}: unknown plot format (use .svg or .png)", .0.display())]
+    Format(PathBuf),
+    /// Nothing finite to draw.
+    #[error("nothing to plot: {0}")]
+    Empty(String),
+    /// A parameter out of range.
+    #[error("{0}")]
+    Invalid(String),
+    /// The drawing backend failed.
+    #[error("drawing failed: {0}")]
+    Draw(String),
+    /// Writing the file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// Output file.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+}
+
+/// Result of drawing on one backend.
+pub(crate) type DrawResult<DB> =
+    Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// Something that draws itself on any plotters backend.
+pub(crate) trait Draw {
+    /// Draw on `root` (already filled white).
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
+}
+
+fn draw_err<E: std::fmt::Debug>(e: E) -> PlotError {
+    PlotError::Draw(format!("{e:?}"))
+}
+
+/// Render `chart` at `size` pixels as SVG or PNG bytes, in memory.
+pub(crate) fn render_bytes(
+    format: Format,
+    size: (u32, u32),
+    chart: &impl Draw,
+) -> Result<Vec<u8>, PlotError> {
+    init_fonts();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        chart.draw(&root).map_err(draw_err)?;
+        root.present().map_err(draw_err)?;
+    }
+    match format {
+        Format::Svg => Ok(svg.into_bytes()),
+        Format::Png => svg_to_png(&svg).map_err(|e| PlotError::Draw(e.to_string())),
+    }
+}
+
+/// Render `chart` at `size` pixels to `path` (SVG or PNG by extension), atomically.
+pub(crate) fn render(path: &Path, size: (u32, u32), chart: &impl Draw) -> Result<(), PlotError> {
+    let format = Format::from_path(path).ok_or_else(|| PlotError::Format(path.to_path_buf()))?;
+    let bytes = render_bytes(format, size, chart)?;
+    crate::io::write_atomic(path, |w| w.write_all(&bytes)).map_err(|source| PlotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 pub mod chart;

@@ -5,9 +5,8 @@
 //! The geometry (the ICE paths and the crest between consecutive marks) is
 //! [`crate::tool::trochoid`]'s; this module draws it.
 
-use super::profile::{
-    Draw, DrawResult, PlotError, label_font, render, series_color, tick_font, title_font,
-};
+use super::chart::{caption_font, color, draw_legend, style_mesh, tick_font, title_font};
+use super::{Draw, DrawResult, PlotError, render};
 use crate::math::Point3;
 use crate::tool::Cutter;
 use crate::tool::trochoid::{crest_between_marks_mm, trochoid};
@@ -64,10 +63,6 @@ struct Figure<'a> {
     o: &'a TrochoidOptions,
 }
 
-fn height_color(i: usize) -> RGBColor {
-    series_color(i)
-}
-
 impl Figure<'_> {
     fn curves(&self, lead: f64, passes: std::ops::Range<usize>) -> Vec<(usize, Vec<Point3>)> {
         let o = self.o;
@@ -108,7 +103,7 @@ impl Figure<'_> {
                     lead.to_degrees(),
                     self.o.passes
                 ),
-                label_font(),
+                caption_font(),
             )
             .margin(10)
             .margin_left(40)
@@ -132,7 +127,7 @@ impl Figure<'_> {
             .max_light_lines(2)
             .draw()?;
         for (hi_idx, c) in &curves {
-            let color = height_color(*hi_idx);
+            let color = color(*hi_idx);
             chart.draw_series(LineSeries::new(
                 c.iter().map(|p| (p.x, p.z, p.y)),
                 color.stroke_width(1),
@@ -187,25 +182,22 @@ impl Figure<'_> {
                     lead.to_degrees(),
                     self.o.fz_mm
                 ),
-                label_font(),
+                caption_font(),
             )
             .margin(10)
             .x_label_area_size(50)
             .y_label_area_size(60)
             .build_cartesian_2d(cx - 0.5 * sx..cx + 0.5 * sx, cy - 0.5 * sy..cy + 0.5 * sy)?;
-        chart
-            .configure_mesh()
-            .x_desc("x feed [mm]")
-            .y_desc("y lateral [mm]")
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .max_light_lines(4)
-            .light_line_style(RGBColor(240, 240, 240))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .draw()?;
+        style_mesh(
+            chart
+                .configure_mesh()
+                .x_desc("x feed [mm]")
+                .y_desc("y lateral [mm]"),
+        )
+        .draw()?;
         let mut labelled = vec![false; self.o.heights_mm.len()];
         for (hi_idx, c) in &curves {
-            let color = height_color(*hi_idx);
+            let color = color(*hi_idx);
             let drawn = chart.draw_series(LineSeries::new(
                 c.iter().map(|p| (p.x, p.y)),
                 color.stroke_width(1),
@@ -223,13 +215,7 @@ impl Figure<'_> {
                     });
             }
         }
-        chart
-            .configure_series_labels()
-            .label_font(tick_font())
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     }
 
@@ -270,25 +256,22 @@ impl Figure<'_> {
         let mut chart = ChartBuilder::on(area)
             .caption(
                 "crest between consecutive marks of the edges at tool height z",
-                label_font(),
+                caption_font(),
             )
             .margin(10)
             .x_label_area_size(50)
             .y_label_area_size(70)
             .build_cartesian_2d(zmin..zmax, (lo..hi).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc("tool height z [mm]")
-            .y_desc("crest height [µm]")
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .max_light_lines(4)
-            .light_line_style(RGBColor(240, 240, 240))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .y_label_formatter(&|v| format!("{v:.3}"))
-            .draw()?;
+        style_mesh(
+            chart
+                .configure_mesh()
+                .x_desc("tool height z [mm]")
+                .y_desc("crest height [µm]")
+                .y_label_formatter(&|v| format!("{v:.3}")),
+        )
+        .draw()?;
         for (fi, li, fz, lead, ys, marks) in &lines {
-            let color = series_color(*li);
+            let color = color(*li);
             let style = if *fi == 0 {
                 color.stroke_width(2)
             } else {
@@ -313,13 +296,7 @@ impl Figure<'_> {
                     .map(|&(x, y)| Circle::new((x, y), 3, color.filled())),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .label_font(tick_font())
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
     }
 }

@@ -479,10 +479,12 @@ mod tests {
         assert_eq!(chart.series[0].y, vec![-12.5, -12.5]);
         // Fig 12 style: the yaw effect at its two levels, ∓0.25/2 of Sq.
         let yaw = crate::plot::effects::level_chart(&d, &e, 0).unwrap();
+        let yaw = &yaw.panels[0];
         assert_eq!(yaw.series.len(), 2);
-        assert_eq!(yaw.series[1].x, vec![0.0, 20.0]);
-        assert_relative_eq!(yaw.series[1].y[0], -12.5, epsilon = 1e-9);
-        assert_relative_eq!(yaw.series[1].y[1], 12.5, epsilon = 1e-9);
+        let x: Vec<f64> = yaw.series[1].points.iter().map(|p| p.0).collect();
+        assert_eq!(x, vec![0.0, 20.0]);
+        assert_relative_eq!(yaw.series[1].points[0].1, -12.5, epsilon = 1e-9);
+        assert_relative_eq!(yaw.series[1].points[1].1, 12.5, epsilon = 1e-9);
         assert!(crate::plot::effects::level_chart(&d, &e, 9).is_none());
     }
 
