@@ -100,12 +100,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             for c in &reg.cases {
                 for k in &c.comparisons {
                     outln!(
-                        "lead {:>5}° {:<8} {}: measured {:.3} ± {:.3} µm, simulated {:.4} µm, ratio {:.3}, {}",
+                        "lead {:>5}° {:<8} {}: measured {} µm, simulated {:.4} µm, ratio {:.3}, {}",
                         c.lead_deg,
                         c.side.name(),
                         k.parameter,
-                        k.measured.mean,
-                        k.measured.sd.unwrap_or(f64::NAN),
+                        crest::report::regression::fmt_stat(&k.measured, 3),
                         k.simulated_um,
                         k.ratio,
                         if k.pass { "pass" } else { "FAIL" }

@@ -13,8 +13,8 @@ fn fmt_g(v: f64) -> String {
     crate::math::trim_decimals(v, 4)
 }
 
-/// Format a statistic as `mean ± σ` (σ omitted for one sample).
-fn fmt_stat(s: &Stat, decimals: usize) -> String {
+/// Format a statistic as `mean ± σ` (σ omitted for one sample: `mean (n = 1)`).
+pub fn fmt_stat(s: &Stat, decimals: usize) -> String {
     match s.sd {
         Some(sd) => format!("{:.d$} ± {:.d$}", s.mean, sd, d = decimals),
         None => format!("{:.d$} (n = 1)", s.mean, d = decimals),

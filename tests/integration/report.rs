@@ -485,6 +485,27 @@ fn wide_tolerance_passes_with_exit_0() {
 }
 
 #[test]
+fn one_sample_cases_print_n_1_not_nan() {
+    // Issue 20 item 10: a case measured once has no σ; the terminal lines say "(n = 1)".
+    let (dir, study) = sandbox();
+    let mut csv = String::from("lead_deg,side,sample,Rz_um\n");
+    for lead in [5, 15, 25] {
+        for side in ["concave", "convex"] {
+            csv.push_str(&format!("{lead},{side},S1,1.0\n"));
+        }
+    }
+    let table = write(dir.path(), "t.csv", csv);
+    let out = dir.path().join("out");
+    let a = run_report(&study, &table, &out, &["--tolerance-pct", "20"]).code(0);
+    let stdout = String::from_utf8(a.get_output().stdout.clone()).unwrap();
+    assert!(
+        stdout.contains("lead     5° concave  Rz: measured 1.000 (n = 1) µm, simulated 1.0001 µm"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("NaN"), "{stdout}");
+}
+
+#[test]
 fn matching_measurement_passes_and_json_is_one_object() {
     let (dir, study) = sandbox();
     let mut csv = String::from("lead_deg,side,sample,Rz_um\n");
