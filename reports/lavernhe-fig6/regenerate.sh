@@ -16,7 +16,7 @@ $crest synth plane --tool $tool --tilt-deg 1 --yaw-deg 0 --scallop-um 5 \
   --clearance-mm 1 -o $out/fig6.cls --json > $out/synth.json
 # The whole pass (x −4.5…4.5 mm) across one pass interval centred on the middle pass.
 $crest simulate $out/fig6.cls --tool $tool --model ice --dtheta-deg 0.5 --grid-um 2 \
-  --window=-4.5,-1.4,4.5,1.4 -o "$tmp/pass.gsf" --json | sed "s#$tmp/##" > $out/simulate.json
+  --window=-4.5,-1.4,4.5,1.4 -o "$tmp/pass.gsf" --json | sed -e "s#$tmp/##" -e 's/,"time_s":[^,}]*//' > $out/simulate.json
 $crest plot heightmap "$tmp/pass.gsf" -o $out/heightmap.png \
   --title "001 Fig 6: feed 4000 to 500 mm/min along the pass (x −4.5…4.5 mm)"
 # Close-ups at the start, middle and end of the pass (1 mm each).

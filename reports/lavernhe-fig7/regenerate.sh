@@ -19,7 +19,7 @@ $crest synth extruded-parabola --tool $tool --tilt-deg 5 --yaw-deg 0 --scallop-u
 for spec in "top -1.5 -1.5 1.5 1.5" "x4 2.5 -1.5 5.5 1.5"; do
   set -- $spec
   $crest simulate $out/fig7.cls --tool $tool --model ice --dtheta-deg 0.5 --grid-um 2 \
-    --window=$2,$3,$4,$5 -o "$tmp/$1.gsf" --json | sed "s#$tmp/##" > $out/simulate-$1.json
+    --window=$2,$3,$4,$5 -o "$tmp/$1.gsf" --json | sed -e "s#$tmp/##" -e 's/,"time_s":[^,}]*//' > $out/simulate-$1.json
   $crest plot heightmap "$tmp/$1.gsf" -o $out/heightmap-$1.png \
     --title "001 Fig 7: extruded parabola, passes at 45°, x $2…$4 mm, y $3…$5 mm"
   $crest metrics "$tmp/$1.gsf" --params Sz,Sq,Sa,Ssk,Sku,Sal,Str,Std --json | sed "s#$tmp/##" > $out/metrics-$1.json

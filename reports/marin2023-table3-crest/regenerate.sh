@@ -8,7 +8,7 @@ CREST=${CREST:-target/release/crest}
 OUT=reports/marin2023-table3-crest
 TOOL=samples/tools/ball-r5-z4.toml
 for lead in 5 15 25; do
-  "$CREST" tool --tool "$TOOL" --lead-deg "$lead" --ap-mm 0.4 --fz-mm 0.05 --json > "$OUT/tool-lead$lead.json"
+  "$CREST" tool --tool "$TOOL" --lead-deg "$lead" --ap-mm 0.4 --fz-mm 0.05 --rule paper --json > "$OUT/tool-lead$lead.json"
   "$CREST" tool --tool "$TOOL" --lead-deg "$lead" --ap-mm 0.4 --fz-mm 0.05 --rule exact --json > "$OUT/tool-lead$lead-exact.json"
 done
 "$CREST" plot trochoid --tool "$TOOL" --lead-deg 5,15,25 --fz-mm 0.2 --crest-fz-mm 0.05,0.2 \
