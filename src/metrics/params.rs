@@ -349,17 +349,8 @@ pub fn preprocess_profile(p: &Profile, pp: &Preprocess) -> Result<Profile, Metri
 
 /// The areal parameters computed by plain passes over the heights (no ACF, spectrum or
 /// sort): what [`areal_parameters_of`] computes on any grid, e.g. an `f32` field as read.
-pub const PASS_PARAMS: &[Param] = &[
-    Param::Sa,
-    Param::Sq,
-    Param::Sp,
-    Param::Sv,
-    Param::Sz,
-    Param::Ssk,
-    Param::Sku,
-    Param::Sdq,
-    Param::Sdr,
-];
+/// The first nine of [`AREAL_PARAMS`] (Sa … Sdr).
+pub const PASS_PARAMS: &[Param] = AREAL_PARAMS.split_at(9).0;
 
 impl ParamSet {
     /// Whether every parameter is one of [`PASS_PARAMS`].
