@@ -737,6 +737,8 @@ fn request_of(
         model,
         dtheta_deg,
         grid_um,
+        chord_tol_um: None,
+        band_um: None,
         grid,
         ap_mm,
         path,

@@ -102,6 +102,16 @@ pub struct Args {
     /// Grid spacing, µm (default: a tenth of the feed per tooth, 0.5 … 20 µm, printed).
     #[arg(long, value_name = "G")]
     pub grid_um: Option<f64>,
+    /// Chord tolerance of the cutter's meridian polyline and of the dome model's angular
+    /// mesh, µm (default 0.01, 0.001 … 10). A coarser mesh is faster; heights then err by up
+    /// to about this much.
+    #[arg(long, value_name = "T")]
+    pub chord_tol_um: Option<f64>,
+    /// Height of the first band above the reference that is rasterised, µm (default 5; the
+    /// surface is then finished in a band four times as high). Speed only: set it above the
+    /// expected scallop so that tiles are not computed twice; heights do not change.
+    #[arg(long, value_name = "B")]
+    pub band_um: Option<f64>,
     /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z above the reference
     /// surface).
     #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
@@ -274,6 +284,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         model: args.model.into(),
         dtheta_deg: args.dtheta_deg,
         grid_um: args.grid_um,
+        chord_tol_um: args.chord_tol_um,
+        band_um: args.band_um,
         grid,
         ap_mm: args.ap_mm,
         path: args.path,

@@ -89,6 +89,10 @@ pub enum GridRequest {
     },
 }
 
+/// Accepted chord tolerances, µm: finer meshes take unbounded time, coarser ones are not a
+/// model of the cutter any more.
+pub const CHORD_TOL_UM: (f64, f64) = (0.001, 10.0);
+
 /// Everything `crest simulate` is asked (serde data: a part-map task carries it).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -125,6 +129,13 @@ pub struct SimulateRequest {
     pub dtheta_deg: f64,
     /// Grid spacing, µm; by default a tenth of the feed per tooth (see [`default_grid_um`]).
     pub grid_um: Option<f64>,
+    /// Chord tolerance of the meshes, µm (default [`surface::Options`]'s 0.01 µm; see
+    /// [`CHORD_TOL_UM`]).
+    #[serde(default)]
+    pub chord_tol_um: Option<f64>,
+    /// First rasterised band above the reference, µm (speed only; default 5 µm).
+    #[serde(default)]
+    pub band_um: Option<f64>,
     /// Grid placement.
     pub grid: GridRequest,
     /// Depth of cut, mm (default: process.toml, else 0.5).
@@ -433,6 +444,20 @@ pub fn simulate_shard(
             return Err(miette!("--grid-um must be positive, got {g}"));
         }
     }
+    if let Some(t) = req.chord_tol_um {
+        if !(CHORD_TOL_UM.0..=CHORD_TOL_UM.1).contains(&t) {
+            return Err(miette!(
+                "--chord-tol-um must be between {} and {} µm, got {t}",
+                CHORD_TOL_UM.0,
+                CHORD_TOL_UM.1
+            ));
+        }
+    }
+    if let Some(b) = req.band_um {
+        if !(b.is_finite() && b >= 0.1) {
+            return Err(miette!("--band-um must be at least 0.1 µm, got {b}"));
+        }
+    }
     let dmin = crate::math::limits::MIN_DTHETA_DEG;
     if !(req.dtheta_deg.is_finite() && req.dtheta_deg >= dmin && req.dtheta_deg <= 90.0) {
         return Err(miette!(
@@ -705,6 +730,12 @@ pub fn simulate_shard(
         grid_um * 1e-3,
     );
     sopts.depth_mm = ap_mm;
+    if let Some(t) = req.chord_tol_um {
+        sopts.chord_tol_mm = t * 1e-3;
+    }
+    if let Some(b) = req.band_um {
+        sopts.band_mm = (b * 1e-3).min(ap_mm);
+    }
     sopts.process = process.effects(match &req.tool {
         Some(t) => t.min_chip()?,
         None => None,

@@ -695,3 +695,86 @@ fn bad_window_and_unknown_process_key_are_usage_errors() {
             predicate::str::contains("process.toml:2:").and(predicate::str::contains("spindle")),
         );
 }
+
+/// Heights of a CSV height map (rows of numbers; `#` lines skipped).
+fn csv_heights(path: &std::path::Path) -> Vec<f64> {
+    crate::util::read(path)
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .flat_map(|l| l.split(','))
+        .map(|s| s.trim().parse().unwrap_or(f64::NAN))
+        .collect()
+}
+
+#[test]
+fn band_and_chord_tolerance_trade_speed_for_stated_accuracy() {
+    use crate::util::repo;
+    let dir = tempdir();
+    let cls = dir.path().join("raster.cls");
+    let ball = repo("samples/synth/ball-r5.toml");
+    crest()
+        .args(["synth", "plane", "--tool"])
+        .arg(&ball)
+        .args(["--stepover-mm", "0.4", "--size-mm", "3,3", "--point-step-mm", "0.05"])
+        .args(["--feed-mm-min", "1000", "--rpm", "20000", "-o"])
+        .arg(&cls)
+        .assert()
+        .success();
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        crest()
+            .arg("simulate")
+            .arg(&cls)
+            .arg("--tool")
+            .arg(&ball)
+            .args(["--model", "dome", "--grid-um", "10", "--fz-mm", "0.05"])
+            .args(["--window=-0.5,-0.5,0.5,0.5"])
+            .args(extra)
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .success();
+        csv_heights(&out)
+    };
+    let exact = run("default.csv", &[]);
+    assert!(exact.iter().all(|z| z.is_finite()), "every node cut");
+    // The scallop of 0.4 mm passes with R 5 is 4.0 µm: the default 5 µm band holds it; a
+    // band of 1 µm must widen (compute again) and a band of 20 µm holds it at once. The
+    // band only decides which triangles are rasterised first: the heights agree to far
+    // below the mesh's own 0.01 µm chord tolerance.
+    for band in ["1", "20"] {
+        let z = run(&format!("band{band}.csv"), &["--band-um", band]);
+        assert_eq!(z.len(), exact.len());
+        let worst = z
+            .iter()
+            .zip(&exact)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 0.01, "--band-um {band}: {worst} µm");
+    }
+    // A coarser mesh errs by at most its chord tolerance, and does err.
+    for (tol, name) in [(0.1, "0.1"), (1.0, "1")] {
+        let z = run(&format!("chord{name}.csv"), &["--chord-tol-um", name]);
+        let worst = z
+            .iter()
+            .zip(&exact)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= tol && worst > 0.01 * tol, "--chord-tol-um {name}: {worst} µm");
+    }
+    // Out of range: refused before any work, naming the option.
+    for (opt, v) in [("--chord-tol-um", "0"), ("--chord-tol-um", "11"), ("--band-um", "nan")] {
+        let out = crest()
+            .arg("simulate")
+            .arg(&cls)
+            .arg("--tool")
+            .arg(&ball)
+            .args(["--model", "dome", "--window=-0.5,-0.5,0.5,0.5", opt, v, "-o"])
+            .arg(dir.path().join("never.csv"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{opt} {v}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(opt), "{opt} {v}");
+        assert!(!dir.path().join("never.csv").exists());
+    }
+}
