@@ -3,6 +3,7 @@
 //! file sizes and stray files. Code after a file's `#[cfg(test)]` is test code and exempt
 //! (tests may build fixtures with later stages).
 
+use approx::assert_relative_eq;
 use std::path::{Path, PathBuf};
 
 /// The library's stages in pipeline order; a stage may use only earlier ones.
@@ -213,8 +214,65 @@ fn config_reference_examples_load() {
     assert_eq!(cutter.teeth(), 4);
     let process = crest::config::ProcessConfig::parse(blocks[1], "process.toml").unwrap();
     assert_eq!(process.rpm, Some(15000.0));
-    if let Err(e) = crest::kinematics::Machine::from_toml_str(blocks[2]) {
-        let e = e.to_string();
-        assert!(!e.contains("unknown"), "{e}");
-    }
+    // The machine example shows one axis of each kind ("one per linear axis"): completed
+    // with Y, Z and C it must load, every key with the documented meaning and unit.
+    let rest = r#"
+[[linear]]
+name = "Y"
+direction = [0.0, 1.0, 0.0]
+sign = 1
+vmax = 833.333
+amax = 5000.0
+jmax = 80000.0
+tol = 0.01
+
+[[linear]]
+name = "Z"
+direction = [0.0, 0.0, 1.0]
+sign = 1
+vmax = 833.333
+amax = 5000.0
+jmax = 100000.0
+tol = 0.01
+
+[[rotary]]
+name = "C"
+side = "table"
+axis = [0.0, 0.0, 1.0]
+point = [0.0, 0.0, 0.0]
+sign = 1
+limits = []
+vmax = 300.0
+amax = 1080.0
+jmax = 36000.0
+tol = 0.01
+"#;
+    let m = crest::kinematics::Machine::from_toml_str(&format!("{}{rest}", blocks[2]))
+        .unwrap_or_else(|e| panic!("docs/config.md's machine example: {e}"));
+    assert_eq!(m.name, "5-axis AC table");
+    assert_relative_eq!(m.cycle_time, 0.003);
+    assert_relative_eq!(m.min_block_cycles, 1.0);
+    assert_eq!(m.lookahead_blocks, 0);
+    assert!(m.junction_spacing_rule);
+    assert_eq!(m.dir_home, crest::math::Vec3::new(0.0, 0.0, 1.0));
+    let x = &m.linear[0];
+    assert_eq!(x.name, "X");
+    assert_eq!(x.direction, crest::math::Vec3::new(1.0, 0.0, 0.0));
+    assert_relative_eq!(x.sign, 1.0);
+    assert_relative_eq!(x.limits.vmax, 833.333);
+    assert_relative_eq!(x.limits.amax, 5000.0);
+    assert_relative_eq!(x.limits.jmax, 40000.0);
+    assert_relative_eq!(x.limits.tol, 0.01);
+    let a = &m.rotary[0];
+    assert_eq!(a.name, "A");
+    assert_eq!(a.axis, crest::math::Vec3::new(1.0, 0.0, 0.0));
+    // Rotary values are documented in degrees; the machine holds radians.
+    let (lo, hi) = a.travel.expect("limits = [-120, 120]");
+    assert_relative_eq!(lo, (-120.0f64).to_radians(), epsilon = 1e-12);
+    assert_relative_eq!(hi, 120.0f64.to_radians(), epsilon = 1e-12);
+    assert_relative_eq!(a.limits.vmax, 300.0f64.to_radians(), epsilon = 1e-12);
+    assert_relative_eq!(a.limits.amax, 1080.0f64.to_radians(), epsilon = 1e-12);
+    assert_relative_eq!(a.limits.jmax, 36000.0f64.to_radians(), epsilon = 1e-9);
+    assert_relative_eq!(a.limits.tol, 0.01f64.to_radians(), epsilon = 1e-15);
+    assert_eq!(m.rotary[1].travel, None, "limits = [] is endless");
 }

@@ -715,7 +715,14 @@ fn band_and_chord_tolerance_trade_speed_for_stated_accuracy() {
     crest()
         .args(["synth", "plane", "--tool"])
         .arg(&ball)
-        .args(["--stepover-mm", "0.4", "--size-mm", "3,3", "--point-step-mm", "0.05"])
+        .args([
+            "--stepover-mm",
+            "0.4",
+            "--size-mm",
+            "3,3",
+            "--point-step-mm",
+            "0.05",
+        ])
         .args(["--feed-mm-min", "1000", "--rpm", "20000", "-o"])
         .arg(&cls)
         .assert()
@@ -760,21 +767,38 @@ fn band_and_chord_tolerance_trade_speed_for_stated_accuracy() {
             .zip(&exact)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        assert!(worst <= tol && worst > 0.01 * tol, "--chord-tol-um {name}: {worst} µm");
+        assert!(
+            worst <= tol && worst > 0.01 * tol,
+            "--chord-tol-um {name}: {worst} µm"
+        );
     }
     // Out of range: refused before any work, naming the option.
-    for (opt, v) in [("--chord-tol-um", "0"), ("--chord-tol-um", "11"), ("--band-um", "nan")] {
+    for (opt, v) in [
+        ("--chord-tol-um", "0"),
+        ("--chord-tol-um", "11"),
+        ("--band-um", "nan"),
+    ] {
         let out = crest()
             .arg("simulate")
             .arg(&cls)
             .arg("--tool")
             .arg(&ball)
-            .args(["--model", "dome", "--window=-0.5,-0.5,0.5,0.5", opt, v, "-o"])
+            .args([
+                "--model",
+                "dome",
+                "--window=-0.5,-0.5,0.5,0.5",
+                opt,
+                v,
+                "-o",
+            ])
             .arg(dir.path().join("never.csv"))
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(2), "{opt} {v}");
-        assert!(String::from_utf8_lossy(&out.stderr).contains(opt), "{opt} {v}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(opt),
+            "{opt} {v}"
+        );
         assert!(!dir.path().join("never.csv").exists());
     }
 }
