@@ -708,7 +708,8 @@ fn request_of(
     let model = match model {
         "ice" => crest::surface::ModelKind::Ice,
         "dome" => crest::surface::ModelKind::Dome,
-        m => return Err(bad(&format!("model must be 'ice' or 'dome', got '{m}'"))),
+        "swept" => crest::surface::ModelKind::Swept,
+        m => return Err(bad(&format!("model must be 'ice', 'dome' or 'swept', got '{m}'"))),
     };
     let feed = match feed {
         None => None,

@@ -27,6 +27,9 @@ pub enum ModelName {
     Dome,
     /// Pondered movement: the teeth's cutting edges swept at every Δθ.
     Ice,
+    /// The ball swept continuously along the path: no teeth, no feed marks, no run-out
+    /// (a tool's run-out is ignored); the scallops between passes, fast (ball end only).
+    Swept,
 }
 
 impl From<ModelName> for ModelKind {
@@ -34,6 +37,7 @@ impl From<ModelName> for ModelKind {
         match m {
             ModelName::Dome => ModelKind::Dome,
             ModelName::Ice => ModelKind::Ice,
+            ModelName::Swept => ModelKind::Swept,
         }
     }
 }

@@ -80,11 +80,12 @@ fn model_rows(r: &Regression) -> Vec<[String; 11]> {
                         match z.surface_model {
                             ModelKind::Ice => "ICE",
                             ModelKind::Dome => "dome",
+                            ModelKind::Swept => "swept ball",
                         },
                         fmt_g(z.grid_um),
                         match z.surface_model {
                             ModelKind::Ice => format!(", Δθ {}°", fmt_g(z.dtheta_deg)),
-                            ModelKind::Dome => String::new(),
+                            ModelKind::Dome | ModelKind::Swept => String::new(),
                         },
                         p.rule
                     ),
@@ -267,6 +268,7 @@ fn method_text(r: &Regression) -> Vec<String> {
             match z.surface_model {
                 ModelKind::Ice => "ICE",
                 ModelKind::Dome => "dome",
+                ModelKind::Swept => "swept ball",
             },
             fmt_g(z.grid_um)
         ));

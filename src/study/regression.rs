@@ -565,6 +565,7 @@ pub fn simulate_case_with(
             dtheta_rad: spec.dtheta_deg.to_radians(),
         },
         ModelKind::Dome => Zmodel::Dome,
+        ModelKind::Swept => Zmodel::Swept,
     };
     let mut opts = Options::new(model, grid, dx);
     opts.depth_mm = ap_mm.max(dx);

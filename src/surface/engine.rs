@@ -97,6 +97,8 @@ struct Setup<'a> {
     /// Dome model: teeth whose revolved body repeats an earlier tooth's (no run-out), which
     /// stamp the same triangles again; skipped unless passes are told apart by tooth.
     dome_repeat: Vec<bool>,
+    /// Swept model: the ball's radius, mm.
+    ball_mm: f64,
 }
 
 /// Simulate the surface that `cutter` leaves along `samples`.
@@ -224,6 +226,7 @@ pub fn simulate_with(
             .filter(|t| t.sq_mm > 0.0)
             .map(|t| TextureField::new(&t)),
         dome_repeat,
+        ball_mm: cutter.radius_mm,
     };
     let mut map = HeightMap::new_nan(nx, ny, d * 1e3, d * 1e3);
     map.x0_mm = x0;
@@ -317,6 +320,20 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
     }
     if let Model::Ice { dtheta_rad } = opts.model {
         positive(dtheta_rad, "spindle step Δθ")?;
+    }
+    if opts.model == Model::Swept {
+        if !matches!(cutter.shape, crate::tool::Shape::Ball) {
+            return Err(SurfaceError::InvalidOption(format!(
+                "the swept model sweeps a ball; the cutter is a {} end (use dome or ice)",
+                cutter.shape.name()
+            )));
+        }
+        if opts.process.ploughs() {
+            return Err(SurfaceError::InvalidOption(
+                "the swept model has no teeth, so no chip and no ploughing (use dome or ice)"
+                    .to_string(),
+            ));
+        }
     }
     match opts.grid {
         GridSpec::Window {
@@ -570,6 +587,7 @@ impl Setup<'_> {
                     self.ice_strips(k, dtheta_rad, self.threshold(k, band), band)
                 }
                 Model::Dome => self.dome_strips(k, self.threshold(k, band)),
+                Model::Swept => self.swept_strips(k, self.threshold(k, band)),
             })
             .collect();
         let mut strips = Vec::new();
@@ -782,6 +800,90 @@ impl Setup<'_> {
     }
 
     /// Strip indices per tile, for the tiles in `pending`.
+    /// The ball centre of sample `k` in node space (i, j in nodes, w in mm).
+    fn ball_centre(&self, k: usize) -> Vec3 {
+        let a = &self.samples[k];
+        let c = a.position + a.axis.normalize() * self.ball_mm;
+        self.g * (c - self.frame.origin) - Vec3::new(self.x0 / self.d, self.y0 / self.d, 0.0)
+    }
+
+    /// The swept model's strip of sample `k`: the move to the next sample of its run (a
+    /// lone sample is a move of length 0), with the node-space box within which the ball
+    /// can come below `thr`.
+    fn swept_strips(&self, k: usize, thr: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
+        let run = self.samples[k].run;
+        let next = k + 1 < self.samples.len() && self.samples[k + 1].run == run;
+        let first = k == 0 || self.samples[k - 1].run != run;
+        if !next && !first {
+            return (Vec::new(), Vec::new());
+        }
+        let c0 = self.ball_centre(k);
+        let c1 = if next { self.ball_centre(k + 1) } else { c0 };
+        let bottom = c0.z.min(c1.z) - self.ball_mm;
+        if bottom > thr {
+            return (Vec::new(), Vec::new());
+        }
+        let h = thr - bottom;
+        let reach = if h >= self.ball_mm {
+            self.ball_mm
+        } else {
+            (h * (2.0 * self.ball_mm - h)).sqrt()
+        } / self.d;
+        let bb = [
+            c0.x.min(c1.x) - reach,
+            c0.y.min(c1.y) - reach,
+            c0.x.max(c1.x) + reach,
+            c0.y.max(c1.y) + reach,
+        ];
+        let strip = Strip {
+            k: k as u32,
+            a: 0,
+            b: i64::from(next),
+            n: 1,
+            tooth: 0,
+            lo: 0,
+            hi: 0,
+        };
+        (vec![strip], vec![bb])
+    }
+
+    /// Lower `tile` to the ball swept along strip `s` ([`swept::lowest`] at every node).
+    fn sweep_ball(&self, s: &Strip, tile: &mut Tile) {
+        let k = s.k as usize;
+        let d = self.d;
+        let to_mm = |c: Vec3| [c.x * d, c.y * d, c.z];
+        let c0 = self.ball_centre(k);
+        let c1 = if s.b == 1 {
+            self.ball_centre(k + 1)
+        } else {
+            c0
+        };
+        let r = self.ball_mm;
+        let reach = r / d + 1.0;
+        let lo_i = (c0.x.min(c1.x) - reach).floor().max(tile.i0 as f64) as usize;
+        let lo_j = (c0.y.min(c1.y) - reach).floor().max(tile.j0 as f64) as usize;
+        let hi_i = (c0.x.max(c1.x) + reach)
+            .ceil()
+            .min((tile.i0 + tile.w) as f64 - 1.0);
+        let hi_j = (c0.y.max(c1.y) + reach)
+            .ceil()
+            .min((tile.j0 + tile.h) as f64 - 1.0);
+        if hi_i < lo_i as f64 || hi_j < lo_j as f64 {
+            return;
+        }
+        let (a, b) = (to_mm(c0), to_mm(c1));
+        for j in lo_j..=hi_j as usize {
+            for i in lo_i..=hi_i as usize {
+                if let Some(z) = super::swept::lowest(a, b, (i as f64 * d, j as f64 * d), r) {
+                    let cell = &mut tile.z[(j - tile.j0) * tile.w + (i - tile.i0)];
+                    if z < *cell {
+                        *cell = z;
+                    }
+                }
+            }
+        }
+    }
+
     fn bin(
         &self,
         strips: &[Strip],
@@ -839,7 +941,12 @@ impl Setup<'_> {
         let qc = self.tile_nominal(i0, j0, w, h);
         let cull = qc.iter().fold(f64::NEG_INFINITY, |m, q| m.max(q.0)) + band;
         let mut cols = Scratch::default();
-        let slack = if self.opts.process.ploughs() {
+        let slack = if matches!(self.opts.model, Model::Swept) {
+            for &si in list {
+                self.sweep_ball(&strips[si as usize], &mut tile);
+            }
+            0.0
+        } else if self.opts.process.ploughs() {
             self.plough_tile(&mut tile, strips, list, cull, &mut cols);
             self.opts.process.min_chip_mm
         } else {
@@ -900,7 +1007,7 @@ impl Setup<'_> {
         let mut open = vec![[f64::INFINITY, 0.0, 0.0]; n * nt];
         let gap = match self.opts.model {
             Model::Ice { .. } => 0.5 * PI,
-            Model::Dome => 0.5,
+            Model::Dome | Model::Swept => 0.5,
         };
         let rect = (tile.i0, tile.j0, tile.w, tile.h);
         let z = &mut tile.z;
@@ -930,7 +1037,7 @@ impl Setup<'_> {
                     let b = self.samples.get(k + 1).map_or(a, |x| x.theta_rad);
                     a + (b - a) * s.a as f64 / s.n as f64
                 }
-                Model::Dome => k as f64,
+                Model::Dome | Model::Swept => k as f64,
             };
             let j = s.tooth as usize;
             self.strip_triangles(s, cols, |a, b, c| {
@@ -1056,6 +1163,7 @@ impl Setup<'_> {
                 }
                 (s.b - s.a + 1) as usize
             }
+            Model::Swept => unreachable!("the swept model has no triangles"),
         };
         let nl = hi - lo + 1;
         for c in 0..ncols - 1 {

@@ -31,6 +31,7 @@ pub mod map;
 pub mod process;
 pub(crate) mod profile;
 pub(crate) mod raster;
+mod swept;
 
 pub use engine::{simulate, simulate_with};
 pub use grid::GridFrame;
@@ -49,6 +50,9 @@ pub enum Model {
         /// Largest spindle step Δθ, rad.
         dtheta_rad: f64,
     },
+    /// The ball swept continuously along the path, without teeth (no feed marks, no
+    /// run-out): the scallops between passes at the speed of a z-map CAM simulator.
+    Swept,
 }
 
 /// The surface model by name, as files and options write it (`"ice"`, `"dome"`).
@@ -60,6 +64,8 @@ pub enum ModelKind {
     Ice,
     /// Instantaneous positions: the revolved body of each tooth every fz (002 §2.4.1).
     Dome,
+    /// The ball swept continuously along the path, no teeth: scallops only, fast.
+    Swept,
 }
 
 impl ModelKind {
@@ -68,6 +74,7 @@ impl ModelKind {
         match self {
             ModelKind::Ice => "ice",
             ModelKind::Dome => "dome",
+            ModelKind::Swept => "swept",
         }
     }
 
@@ -86,6 +93,7 @@ impl ModelKind {
     ) -> (Model, crate::resample::Mode) {
         match self {
             ModelKind::Dome => (Model::Dome, crate::resample::Mode::FeedPerTooth),
+            ModelKind::Swept => (Model::Swept, crate::resample::Mode::FeedPerTooth),
             ModelKind::Ice => {
                 let per_rev = fz_mm * teeth.max(1) as f64;
                 let travel = if per_rev > 0.0 && per_rev.is_finite() {

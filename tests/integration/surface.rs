@@ -69,6 +69,80 @@ fn dome_raster_lateral_crest_matches_closed_form() {
     assert_abs_diff_eq!(m.get(0, 40), 0.0, epsilon = 0.01);
 }
 
+#[test]
+fn swept_ball_gives_the_exact_scallop_and_lies_under_the_dome_by_at_most_the_feed_mark() {
+    // The raster of the test above, R 5, stepover 0.2 mm: the swept ball leaves, at a node
+    // dy from the nearest pass, exactly R − √(R² − dy²) (no feed marks); the dome stamps
+    // every fz lie above it by at most the feed-mark cusp fz²/(8R) (+ its 0.01 µm mesh).
+    let cutter = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
+    let fz = 0.05;
+    let mut samples = Vec::new();
+    for (run, y) in [-0.2, 0.0, 0.2, 0.4, 0.6].iter().enumerate() {
+        samples.extend(pass(
+            &cutter,
+            run,
+            Point3::new(-1.2, *y, 0.0),
+            Vec3::x(),
+            Vec3::z(),
+            2.5,
+            fz,
+            fz,
+            0.0,
+        ));
+    }
+    let grid = GridSpec::Window {
+        x0_mm: 0.0,
+        y0_mm: 0.0,
+        x1_mm: 0.1,
+        y1_mm: 0.4,
+    };
+    let run = |model| {
+        simulate(
+            &samples,
+            &cutter,
+            &Options::new(model, grid, 0.005),
+            &no_progress,
+        )
+        .unwrap()
+        .map
+    };
+    let swept = run(Model::Swept);
+    let dome = run(Model::Dome);
+    assert_eq!((swept.nx, swept.ny), (21, 81));
+    let mark = fz * fz / (8.0 * 5.0) * 1e3;
+    for j in 0..swept.ny {
+        let y = j as f64 * 0.005;
+        let dy = (y - (y / 0.2).round() * 0.2).abs();
+        let exact = (5.0 - (25.0 - dy * dy).sqrt()) * 1e3;
+        for i in 0..swept.nx {
+            let (s, d) = (swept.get(i, j), dome.get(i, j));
+            assert_abs_diff_eq!(s, exact, epsilon = 1e-9);
+            assert!(
+                d - s >= -1e-9 && d - s <= mark + 0.01 + 1e-9,
+                "node ({i}, {j}): dome {d} µm, swept {s} µm, feed mark {mark} µm"
+            );
+        }
+    }
+    // A non-ball cutter is refused, naming the model.
+    let torus = Cutter::new(
+        Shape::Torus {
+            corner_radius_mm: 1.0,
+        },
+        5.0,
+        2,
+        0.0,
+    );
+    let e = simulate(
+        &samples,
+        &torus,
+        &Options::new(Model::Swept, grid, 0.005),
+        &no_progress,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("swept"), "{e}");
+}
+
 /// A single pass along +x at 15° lead, 4 teeth, fz 0.05 mm, run-out `e0_mm` at phase
 /// `phase_deg`: the height profile along the pass centre (y = 0), µm, at 2 µm spacing.
 fn lead_pass_profile(e0_mm: f64, phase_deg: f64) -> Vec<f64> {
