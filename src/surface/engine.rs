@@ -99,6 +99,9 @@ struct Setup<'a> {
     dome_repeat: Vec<bool>,
     /// Swept model: the ball's radius, mm.
     ball_mm: f64,
+    /// Swept model: per sample, the last sample of the straight stretch that starts there
+    /// (`u32::MAX` inside a stretch); empty for the other models.
+    swept_end: Vec<u32>,
 }
 
 /// Simulate the surface that `cutter` leaves along `samples`.
@@ -227,6 +230,17 @@ pub fn simulate_with(
             .map(|t| TextureField::new(&t)),
         dome_repeat,
         ball_mm: cutter.radius_mm,
+        swept_end: Vec::new(),
+    };
+    let setup = if opts.model == Model::Swept {
+        let centres: Vec<Vec3> = (0..samples.len()).map(|k| setup.ball_centre(k)).collect();
+        let runs: Vec<usize> = samples.iter().map(|s| s.run).collect();
+        Setup {
+            swept_end: straight_stretches(&centres, &runs, d),
+            ..setup
+        }
+    } else {
+        setup
     };
     let mut map = HeightMap::new_nan(nx, ny, d * 1e3, d * 1e3);
     map.x0_mm = x0;
@@ -587,7 +601,7 @@ impl Setup<'_> {
                     self.ice_strips(k, dtheta_rad, self.threshold(k, band), band)
                 }
                 Model::Dome => self.dome_strips(k, self.threshold(k, band)),
-                Model::Swept => self.swept_strips(k, self.threshold(k, band)),
+                Model::Swept => self.swept_strips(k, band),
             })
             .collect();
         let mut strips = Vec::new();
@@ -807,18 +821,20 @@ impl Setup<'_> {
         self.g * (c - self.frame.origin) - Vec3::new(self.x0 / self.d, self.y0 / self.d, 0.0)
     }
 
-    /// The swept model's strip of sample `k`: the move to the next sample of its run (a
-    /// lone sample is a move of length 0), with the node-space box within which the ball
-    /// can come below `thr`.
-    fn swept_strips(&self, k: usize, thr: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
-        let run = self.samples[k].run;
-        let next = k + 1 < self.samples.len() && self.samples[k + 1].run == run;
-        let first = k == 0 || self.samples[k - 1].run != run;
-        if !next && !first {
+    /// The swept model's strip of sample `k` when a straight stretch of its run starts
+    /// there ([`straight_stretches`]; a lone sample is a stretch of length 0), with the
+    /// node-space box within which the ball can come below the band over the nominal.
+    fn swept_strips(&self, k: usize, band: f64) -> (Vec<Strip>, Vec<[f64; 4]>) {
+        let end = self.swept_end[k];
+        if end == u32::MAX {
             return (Vec::new(), Vec::new());
         }
         let c0 = self.ball_centre(k);
-        let c1 = if next { self.ball_centre(k + 1) } else { c0 };
+        let c1 = self.ball_centre(end as usize);
+        let mid = (c0 + c1) * 0.5;
+        let half = 0.5 * (c1.xy() - c0.xy()).norm();
+        let r = self.ball_mm / self.d;
+        let thr = self.nominal.local_max(mid.x, mid.y, r + half + 1.0) + band;
         let bottom = c0.z.min(c1.z) - self.ball_mm;
         if bottom > thr {
             return (Vec::new(), Vec::new());
@@ -838,7 +854,7 @@ impl Setup<'_> {
         let strip = Strip {
             k: k as u32,
             a: 0,
-            b: i64::from(next),
+            b: i64::from(end) - k as i64,
             n: 1,
             tooth: 0,
             lo: 0,
@@ -847,19 +863,26 @@ impl Setup<'_> {
         (vec![strip], vec![bb])
     }
 
-    /// Lower `tile` to the ball swept along strip `s` ([`swept::lowest`] at every node).
-    fn sweep_ball(&self, s: &Strip, tile: &mut Tile) {
+    /// Lower `tile` to the ball swept along strip `s` ([`swept::lowest`] at every node the
+    /// ball can bring below `cull`).
+    fn sweep_ball(&self, s: &Strip, tile: &mut Tile, cull: f64) {
         let k = s.k as usize;
         let d = self.d;
         let to_mm = |c: Vec3| [c.x * d, c.y * d, c.z];
         let c0 = self.ball_centre(k);
-        let c1 = if s.b == 1 {
-            self.ball_centre(k + 1)
-        } else {
-            c0
-        };
+        let c1 = self.ball_centre(k + s.b as usize);
         let r = self.ball_mm;
-        let reach = r / d + 1.0;
+        // Horizontal reach of the ball's cap below `cull`, nodes (+1 for rounding).
+        let h = cull - (c0.z.min(c1.z) - r);
+        if h < 0.0 {
+            return;
+        }
+        let reach = if h >= r {
+            r
+        } else {
+            (h * (2.0 * r - h)).sqrt()
+        } / d
+            + 1.0;
         let lo_i = (c0.x.min(c1.x) - reach).floor().max(tile.i0 as f64) as usize;
         let lo_j = (c0.y.min(c1.y) - reach).floor().max(tile.j0 as f64) as usize;
         let hi_i = (c0.x.max(c1.x) + reach)
@@ -943,7 +966,7 @@ impl Setup<'_> {
         let mut cols = Scratch::default();
         let slack = if matches!(self.opts.model, Model::Swept) {
             for &si in list {
-                self.sweep_ball(&strips[si as usize], &mut tile);
+                self.sweep_ball(&strips[si as usize], &mut tile, cull);
             }
             0.0
         } else if self.opts.process.ploughs() {
@@ -1197,6 +1220,56 @@ impl Default for Scratch {
     }
 }
 
+/// Most moves (sample to sample) in one straight stretch of the swept model (bounds the work of finding
+/// them).
+const STRETCH_MAX: usize = 512;
+
+/// Largest distance of a ball centre from the straight stretch that replaces it, mm: the
+/// heights move by at most this much.
+const STRETCH_TOL_MM: f64 = 1e-7;
+
+/// The swept model's straight stretches: for each sample, the last sample of the stretch
+/// that starts there, `u32::MAX` for samples inside one. A stretch follows its run while
+/// every ball centre it passes lies within [`STRETCH_TOL_MM`] of the chord from its first
+/// to its last centre (and forward along it), at most [`STRETCH_MAX`] moves; the ball
+/// swept along the chord then covers what the samples' moves cover. `centres` in node
+/// space (x, y in nodes of `d` mm, z in mm).
+fn straight_stretches(centres: &[Vec3], runs: &[usize], d: f64) -> Vec<u32> {
+    let mm = |c: &Vec3| Vec3::new(c.x * d, c.y * d, c.z);
+    let n = centres.len();
+    let mut end = vec![u32::MAX; n];
+    let mut k = 0;
+    while k < n {
+        let a = mm(&centres[k]);
+        let mut m = k;
+        while m + 1 < n && runs[m + 1] == runs[k] && m + 1 - k <= STRETCH_MAX {
+            let b = mm(&centres[m + 1]);
+            let chord = b - a;
+            let len = chord.norm();
+            let ok = len > 0.0
+                && (k + 1..=m).all(|i| {
+                    let p = mm(&centres[i]) - a;
+                    let t = p.dot(&chord) / len;
+                    t >= -STRETCH_TOL_MM
+                        && t <= len + STRETCH_TOL_MM
+                        && (p - chord * (t / len)).norm() <= STRETCH_TOL_MM
+                });
+            if !ok {
+                break;
+            }
+            m += 1;
+        }
+        end[k] = m as u32;
+        // The next stretch starts where this one ends, unless the run ended here.
+        k = if m > k && m + 1 < n && runs[m + 1] == runs[m] {
+            m
+        } else {
+            m + 1
+        };
+    }
+    end
+}
+
 /// [`Setup::candidates`] for levels along a meridian that is not convex: every level is
 /// tested, the range runs from the first to the last within `lim` (one more each side).
 fn scan_candidates(f: &dyn Fn(usize) -> f64, n: usize, lim: f64) -> Option<(usize, usize)> {
@@ -1210,4 +1283,54 @@ fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
     bb[1] = bb[1].min(p[1]);
     bb[2] = bb[2].max(p[0]);
     bb[3] = bb[3].max(p[1]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{STRETCH_MAX, straight_stretches};
+    use crate::math::Vec3;
+
+    #[test]
+    fn straight_stretches_follow_lines_and_break_at_corners_runs_and_curves() {
+        // Two runs: a line of 1200 samples with a corner after 700, then a circle arc.
+        let d = 0.01;
+        let mut c = Vec::new();
+        let mut runs = Vec::new();
+        for i in 0..700 {
+            c.push(Vec3::new(i as f64 * 0.5, 0.0, 3.0)); // node space: 0.005 mm steps
+            runs.push(0);
+        }
+        for i in 1..=500 {
+            c.push(Vec3::new(699.0 * 0.5, i as f64 * 0.5, 3.0));
+            runs.push(0);
+        }
+        for i in 0..100 {
+            let a = i as f64 * 0.01; // R 5 mm = 500 nodes, 0.05 mm steps
+            c.push(Vec3::new(500.0 * a.cos(), 500.0 * a.sin(), 3.0));
+            runs.push(1);
+        }
+        let end = straight_stretches(&c, &runs, d);
+        let starts: Vec<(usize, u32)> = end
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| **e != u32::MAX)
+            .map(|(k, e)| (k, *e))
+            .collect();
+        // The first leg in stretches of at most STRETCH_MAX moves, ending at the corner.
+        assert_eq!(starts[0], (0, STRETCH_MAX as u32));
+        assert_eq!(starts[1], (STRETCH_MAX, 699));
+        assert_eq!(starts[2], (699, 1199));
+        // Consecutive stretches share their ends; the arc's sagitta over one 0.05 mm step
+        // already exceeds the tolerance, so each of its moves is its own stretch, and the
+        // second run starts afresh.
+        for w in starts.windows(2) {
+            if runs[w[1].0] == runs[w[0].0] {
+                assert_eq!(w[0].1 as usize, w[1].0);
+            }
+        }
+        let arc: Vec<_> = starts.iter().filter(|(k, _)| *k >= 1200).collect();
+        assert_eq!(arc.len(), 99);
+        assert!(arc.iter().all(|(k, e)| *e as usize == k + 1 || *k == 1299));
+        assert!(starts.iter().all(|(k, e)| *e as usize >= *k));
+    }
 }

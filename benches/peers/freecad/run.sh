@@ -22,6 +22,12 @@ for i in $(seq "$runs"); do
     $crest simulate "$tmp/raster.cls" --tool $dir/ball-r3.toml --rpm 10000 --feed-mm-min 200 \
     --model dome --grid-um 10 --window=0.005,0.005,9.995,9.995 --chord-tol-um 1 --band-um 15 \
     -o "$tmp/crest.gsf" 2>&1
+  # The swept-ball model: FreeCAD's own ground (the tool body swept along each move, no
+  # teeth), with exact float heights.
+  /usr/bin/time -f "crest --model swept whole process: %e s wall, %U s user, %M KB" \
+    $crest simulate "$tmp/raster.cls" --tool $dir/ball-r3.toml --rpm 10000 --feed-mm-min 200 \
+    --model swept --grid-um 10 --window=0.005,0.005,9.995,9.995 --band-um 15 \
+    -o "$tmp/crest.gsf" 2>&1
 done
 uptime
 # Heights: FreeCAD's absolute z (mm), crest's above the nominal plane z = -0.3 (µm).
@@ -31,17 +37,21 @@ $crest simulate "$tmp/raster.cls" --tool $dir/ball-r3.toml --rpm 10000 --feed-mm
 $crest simulate "$tmp/raster.cls" --tool $dir/ball-r3.toml --rpm 10000 --feed-mm-min 200 \
   --model dome --grid-um 10 --window=0.005,0.005,9.995,9.995 --chord-tol-um 1 --band-um 15 \
   -o "$tmp/coarse.csv" > /dev/null
-python3 - "$tmp/freecad.csv" "$tmp/crest.csv" "$tmp/coarse.csv" <<'PY'
+$crest simulate "$tmp/raster.cls" --tool $dir/ball-r3.toml --rpm 10000 --feed-mm-min 200 \
+  --model swept --grid-um 10 --window=0.005,0.005,9.995,9.995 --band-um 15 \
+  -o "$tmp/swept.csv" > /dev/null
+python3 - "$tmp/freecad.csv" "$tmp/crest.csv" "$tmp/coarse.csv" "$tmp/swept.csv" <<'PY'
 import sys
 import numpy as np
 fc = np.loadtxt(sys.argv[1], delimiter=",")
 cr = np.loadtxt(sys.argv[2], delimiter=",", comments="#")
 co = np.loadtxt(sys.argv[3], delimiter=",", comments="#")
+sw = np.loadtxt(sys.argv[4], delimiter=",", comments="#")
 c = (np.arange(1000) + 0.5) * 0.01
 dy = np.abs(c - np.round(c / 0.5) * 0.5)          # distance to the nearest pass
 exact = (3.0 - np.sqrt(9.0 - dy ** 2)) * 1e3      # scallop above z = -0.3, µm
 exact = np.repeat(exact[:, None], 1000, axis=1)    # rows = y
-for name, z in (("freecad", (fc + 0.3) * 1e3), ("crest", cr), ("crest coarse", co)):
+for name, z in (("freecad", (fc + 0.3) * 1e3), ("crest", cr), ("crest coarse", co), ("crest swept", sw)):
     e = z - exact
     print(f"{name}: {len(np.unique(np.round(z, 6)))} distinct heights, error vs exact "
           f"mean {e.mean():+.3f} µm, max |e| {np.abs(e).max():.3f} µm, rms {np.sqrt((e**2).mean()):.3f} µm")
