@@ -89,12 +89,22 @@ fn parse(text: &str, file: &str) -> miette::Result<Study> {
 /// Read the study `path` and the tool file it names (relative to the study file).
 pub fn load_runout_texts(path: &Path) -> miette::Result<RunoutTexts> {
     let study_toml = read_text(path, "study file")?;
-    let study_file = path.display().to_string();
-    let study = parse(&study_toml, &study_file)?;
-    let tool_path = path.parent().unwrap_or(Path::new(".")).join(&study.tool);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    runout_texts(&path.display().to_string(), study_toml, dir)
+}
+
+/// The texts of the study `study_toml` (named `study_file`) and of the tool file it names,
+/// read relative to `dir`.
+pub fn runout_texts(
+    study_file: &str,
+    study_toml: String,
+    dir: &Path,
+) -> miette::Result<RunoutTexts> {
+    let study = parse(&study_toml, study_file)?;
+    let tool_path = dir.join(&study.tool);
     let tool_toml = read_text(&tool_path, "tool file")?;
     Ok(RunoutTexts {
-        study_file,
+        study_file: study_file.to_string(),
         study_toml,
         tool_file: tool_path.display().to_string(),
         tool_toml,
