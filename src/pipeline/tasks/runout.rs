@@ -10,9 +10,8 @@
 //! `"NaN"`, `"inf"` or `"-inf"`.
 
 use crate::pipeline::runout::{RunoutRun, RunoutTexts, finish, prepare};
-use crate::study::runout::{RunoutRow, run_case};
+use crate::study::runout::{RunoutRow, run_cases};
 use miette::miette;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// The `kind` of a run-out task and of its result.
@@ -193,11 +192,7 @@ pub fn run_runout_task(task: &RunoutTask) -> miette::Result<RunoutResult> {
         .into_iter()
         .filter(|c| c.case % task.shards + 1 == task.shard)
         .collect();
-    let rows: Vec<RunoutRow> = mine
-        .par_iter()
-        .map(|c| run_case(&p.cutter, &p.study, c))
-        .collect::<Result<_, _>>()
-        .map_err(|e| miette!("{e}"))?;
+    let rows = run_cases(&p.cutter, &p.study, &mine).map_err(|e| miette!("{e}"))?;
     Ok(RunoutResult {
         kind: RUNOUT_CASES.to_string(),
         study_file: task.study_file.clone(),
