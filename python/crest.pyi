@@ -223,10 +223,17 @@ def map_tasks(
     ``tasks`` plain dicts, task k simulating cells k, k+tasks, … of the map. File paths are
     made absolute; every worker must see the files there."""
 
+def runout_tasks(study: str, *, tasks: Optional[int] = None) -> List[Dict[str, Any]]:
+    """The tasks of a run-out sweep (a ``crest runout`` study file path, or its TOML text
+    with ``tool`` relative to the working directory): one plain dict per case of the sweep,
+    or with ``tasks`` that many, task k evaluating cases k-1, k-1+tasks, … (0-based, the
+    cases of ``runout.csv``). A task carries the study and tool texts."""
+
 def run_task(task: Union[Dict[str, Any], str]) -> Dict[str, Any]:
-    """Run one task (a dict from :func:`study_tasks` or :func:`map_tasks`, or its JSON);
-    returns a plain dict (a study run: responses, fz_mm, stepover_mm, error; a map task: its
-    cells' points and heights). Releases the GIL."""
+    """Run one task (a dict from :func:`study_tasks`, :func:`runout_tasks` or
+    :func:`map_tasks`, or its JSON); returns a plain dict (a study run: responses, fz_mm,
+    stepover_mm, error; a run-out task: its cases' numbers; a map task: its cells' points
+    and heights). Releases the GIL."""
 
 def merge(
     results: Iterable[Union[Dict[str, Any], str]], output: Optional[StrPath] = None
@@ -236,4 +243,7 @@ def merge(
     bytes of runs.csv, effects.csv and the charts, identical to ``crest study``'s); with
     ``output`` the files are written there too. The results of one part map's
     :func:`map_tasks` give the :class:`PartMap` of :func:`simulate`; with ``output`` (a
-    .ply path) the PLY ``crest simulate`` writes, byte for byte."""
+    .ply path) the PLY ``crest simulate`` writes, byte for byte. The results of one run-out
+    sweep's :func:`runout_tasks` give a dict with ``rule``, ``x``, ``tool``, ``rows`` (as
+    ``crest runout --json``) and ``files`` (name → bytes of runout.csv and the charts,
+    identical to ``crest runout``'s); with ``output`` the files are written there too."""

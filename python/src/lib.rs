@@ -1137,9 +1137,35 @@ fn map_tasks<'py>(
     json_loads(py, &text)
 }
 
-/// Run one task of `study_tasks` or `map_tasks` (a dict, or its JSON text); returns the
-/// result as a dict (picklable). A study run that fails comes back with its `error`.
-/// Releases the GIL.
+/// The tasks of a run-out sweep (`crest runout` study): `study` is a path to the study TOML,
+/// or its text (its `tool` then relative to the working directory). With `tasks`, that many
+/// tasks (task k: cases k-1, k-1+tasks, … of the sweep, 0-based); by default one task per
+/// case. Each a plain dict (picklable) carrying the study and tool texts.
+#[pyfunction]
+#[pyo3(signature = (study, *, tasks = None))]
+fn runout_tasks<'py>(
+    py: Python<'py>,
+    study: &str,
+    tasks: Option<usize>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let texts = if study.contains('\n') || study.contains('=') {
+        crest::pipeline::runout::runout_texts(
+            "<study>",
+            study.to_string(),
+            std::path::Path::new(""),
+        )
+    } else {
+        crest::pipeline::runout::load_runout_texts(std::path::Path::new(study))
+    }
+    .map_err(err)?;
+    let tasks = crest::pipeline::tasks::runout::runout_tasks(&texts, tasks).map_err(err)?;
+    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    json_loads(py, &text)
+}
+
+/// Run one task of `study_tasks`, `runout_tasks` or `map_tasks` (a dict, or its JSON text);
+/// returns the result as a dict (picklable). A study run that fails comes back with its
+/// `error`. Releases the GIL.
 #[pyfunction]
 fn run_task<'py>(py: Python<'py>, task: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     let text = json_dumps(task)?;
@@ -1178,6 +1204,9 @@ fn part_map(py: Python<'_>, m: &crest::surface::PartMap) -> PyResult<PartMap> {
 /// `crest study` when a run failed, and when runs are missing, repeated or of another design.
 /// The results of every task of one part map (`map_tasks`) give the `PartMap` `simulate`
 /// gives; with `output` (a .ply path) its PLY is written, the bytes of `crest simulate`.
+/// The results of every task of one run-out sweep (`runout_tasks`) give a dict with `rule`,
+/// `x`, `tool`, `rows` (as `crest runout --json`) and `files` (runout.csv and the charts,
+/// the bytes `crest runout` writes); with `output` they are written into that folder.
 #[pyfunction]
 #[pyo3(signature = (results, output = None))]
 fn merge<'py>(
@@ -1214,6 +1243,15 @@ fn merge<'py>(
                     }
                     Ok((Merged::Map(m), Vec::new()))
                 }
+                Merged::Runout(run) => {
+                    let files = crest::pipeline::runout::render_outputs(&run)?;
+                    if let Some(dir) = &output {
+                        crest::io::write_files(dir, &files).map_err(|e| {
+                            miette::miette!("cannot write into {}: {e}", dir.display())
+                        })?;
+                    }
+                    Ok((Merged::Runout(run), files))
+                }
             }
         })
         .map_err(err)?;
@@ -1221,6 +1259,7 @@ fn merge<'py>(
         (Merged::Map(m), _) => {
             return Ok(Py::new(py, part_map(py, &m)?)?.into_bound(py).into_any());
         }
+        (Merged::Runout(run), files) => return runout_dict(py, &run, &files),
         (Merged::Design(done), files) => (done, files),
     };
     let d = PyDict::new(py);
@@ -1247,6 +1286,27 @@ fn merge<'py>(
     Ok(d.into_any())
 }
 
+/// A merged run-out study as `merge` returns it: `rule`, `x`, `tool`, `rows` (the objects of
+/// `crest runout --json`) and `files` (name → bytes).
+fn runout_dict<'py>(
+    py: Python<'py>,
+    run: &crest::pipeline::runout::RunoutRun,
+    files: &[(String, Vec<u8>)],
+) -> PyResult<Bound<'py, PyAny>> {
+    let d = PyDict::new(py);
+    d.set_item("rule", run.study.rule.name())?;
+    d.set_item("x", run.study.x.key())?;
+    d.set_item("tool", run.tool_path.display().to_string())?;
+    let rows = serde_json::to_string(&run.rows).map_err(|e| CrestError::new_err(e.to_string()))?;
+    d.set_item("rows", json_loads(py, &rows)?)?;
+    let f = PyDict::new(py);
+    for (name, bytes) in files {
+        f.set_item(name, pyo3::types::PyBytes::new(py, bytes))?;
+    }
+    d.set_item("files", f)?;
+    Ok(d.into_any())
+}
+
 /// crest: predicted 5-axis ball-end machined surfaces from tool paths (Python face).
 #[pymodule]
 #[pyo3(name = "crest")]
@@ -1263,6 +1323,7 @@ fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(resample, m)?)?;
     m.add_function(wrap_pyfunction!(study_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(map_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(runout_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(run_task, m)?)?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;
     Ok(())

@@ -66,3 +66,28 @@ feed_mm_min = [2000.0, 3000.0, 4000.0]
     p = dir / f"{title}.toml"
     p.write_text(text)
     return p
+
+
+BALL = ROOT / "samples" / "synth" / "ball-r5.toml"
+
+# The options of a small part map: a 0.6 × 0.6 mm region of a plane at 4 µm, four cells.
+MAP_ARGS = [
+    "--tool", BALL, "--model", "dome", "--grid-um", "10", "--fz-mm", "0.05",
+    "--map-mm", "0.004", "--region=-0.3,-0.3,-0.5,0.3,0.3,0.5",
+]
+MAP_KW = dict(
+    map_mm=0.004, tool=str(BALL), model="dome", grid_um=10.0, fz_mm=0.05,
+    region=(-0.3, -0.3, -0.5, 0.3, 0.3, 0.5),
+)
+
+
+def plane_part(cli, dir: pathlib.Path):
+    """A 4 × 4 mm plane part and its path (`crest synth plane`): (cls, stl) paths."""
+    cls, stl = dir / "plane.cls", dir / "plane.stl"
+    p = cli(
+        "synth", "plane", "--tool", BALL, "--stepover-mm", "0.4", "--stepover-along-surface",
+        "--size-mm", "4,4", "--point-step-mm", "0.05", "--feed-mm-min", "1000",
+        "--rpm", "20000", "--part-tol-um", "0.01", "-o", cls, "--part-stl", stl,
+    )
+    assert p.returncode == 0, p.stderr
+    return cls, stl

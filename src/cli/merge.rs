@@ -1,15 +1,16 @@
-//! `crest merge`: assemble the shard files of `crest study --shard K/N` (or of `crest
-//! simulate --map-mm … --shard K/N`) into the outputs the command writes on one machine
-//! (the same bytes).
+//! `crest merge`: assemble the shard files of `crest study --shard K/N` (of `crest
+//! runout … --shard K/N`, of `crest simulate --map-mm … --shard K/N`) into the outputs the
+//! command writes on one machine (the same bytes).
 //!
 //! ```text
 //! crest merge OUT/shard-*.jsonl -o DIR [--json]        (a study: DIR gets runs.csv, …)
+//! crest merge OUT/shard-*.jsonl -o DIR [--json]        (a run-out study: runout.csv, …)
 //! crest merge OUT/shard-*.jsonl -o MAP.ply [--json]    (a part map)
 //! ```
 //!
 //! Every line of every shard file is one task result (`crest::pipeline::tasks`); the results
-//! must be of one design (covering each run exactly once) or of one part map (every shard
-//! exactly once). As in `crest study`, nothing is written unless every run succeeded.
+//! must be of one design (covering each run exactly once), of one run-out study or of one
+//! part map (every shard exactly once). As in `crest study`, nothing is written unless every run succeeded.
 
 use super::Outcome;
 use crest::pipeline::tasks::Merged;
@@ -21,12 +22,13 @@ use std::time::Instant;
 /// Options of `crest merge`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Shard files written by `crest study --shard K/N` or `crest simulate --map-mm …
-    /// --shard K/N` (JSON lines).
+    /// Shard files written by `crest study --shard K/N`, `crest runout … --shard K/N` or
+    /// `crest simulate --map-mm … --shard K/N` (JSON lines).
     #[arg(required = true, value_name = "SHARD_FILES")]
     pub shards: Vec<PathBuf>,
     /// A study's output folder (created if needed) for runs.csv, effects.csv and the
-    /// charts; for a part map, the PLY file.
+    /// charts (a run-out study's for runout.csv and its charts); for a part map, the PLY
+    /// file.
     #[arg(short = 'o', long = "output", value_name = "DIR|MAP.ply")]
     pub output: PathBuf,
     /// Print one JSON object (runs, effects, output paths) on stdout, as `crest study --json`.
@@ -63,9 +65,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             .unwrap_or_default()
     };
     let design_file = name("design_file");
+    let study_file = name("study_file");
     match crest::pipeline::tasks::merge_any(results)? {
         Merged::Design(done) => {
             super::study::write_outputs(&done, &design_file, &args.output, args.json, started)
+        }
+        Merged::Runout(run) => {
+            super::runout::write_outputs(&run, &study_file, &args.output, args.json)
         }
         Merged::Map(m) => write_map(&m, &args, started),
     }

@@ -3,13 +3,18 @@
 //! The study format is documented in `crest::config::runout` and
 //! `samples/studies/runout.toml`.
 //!
+//! With `--shard K/N` only cases K-1, K-1+N, … (0-based) are evaluated and their rows
+//! written as one JSON line (`crest::pipeline::tasks::runout::RunoutResult`) to
+//! `DIR/shard-K-of-N.jsonl`; `crest merge` assembles the shards into the outputs above,
+//! byte for byte.
+//!
 //! `crest runout identify --profile PROFILE.csv --tool TOOL.toml --fz-mm F [--lead-deg L]
 //! [--json] [--write-tool FILE]`: the run-out identified from a measured profile
 //! (`crest::study::identify`).
 
 use super::Outcome;
 use miette::{IntoDiagnostic, WrapErr, miette};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Options of `crest runout`.
 #[derive(Debug, clap::Args)]
@@ -27,6 +32,10 @@ pub struct Args {
     /// Print one JSON object on stdout (the rows and the files written).
     #[arg(long)]
     pub json: bool,
+    /// Evaluate only shard K of N (1 ≤ K ≤ N: cases K-1, K-1+N, … counted from 0) and write
+    /// their rows as JSON lines to DIR/shard-K-of-N.jsonl; `crest merge` assembles the shards.
+    #[arg(long, value_name = "K/N", value_parser = crest::pipeline::tasks::parse_shard)]
+    pub shard: Option<(usize, usize)>,
 }
 
 /// Subcommands of `crest runout`.
@@ -67,21 +76,69 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let (Some(study_path), Some(out_dir)) = (args.study, args.out) else {
         return Err(miette!("crest runout needs STUDY.TOML and -o DIR"));
     };
+    if let Some((k, n)) = args.shard {
+        return run_shard(&study_path, &out_dir, k, n, args.json);
+    }
     let run = crest::pipeline::runout::runout(&study_path)?;
+    write_outputs(&run, &study_path.display().to_string(), &out_dir, args.json)
+}
+
+/// `crest runout --shard K/N`: the shard's rows, written as one JSON line.
+fn run_shard(
+    study_path: &Path,
+    out_dir: &Path,
+    k: usize,
+    n: usize,
+    json: bool,
+) -> miette::Result<Outcome> {
+    use crest::pipeline::tasks::runout::{run_runout_task, runout_tasks};
+    let texts = crest::pipeline::runout::load_runout_texts(study_path)?;
+    let task = runout_tasks(&texts, Some(n))?.swap_remove(k - 1);
+    let result = run_runout_task(&task)?;
+    let mut text = serde_json::to_vec(&result).into_diagnostic()?;
+    text.push(b'\n');
+    let name = format!("shard-{k}-of-{n}.jsonl");
+    crest::io::write_files(out_dir, &[(name.clone(), text)])
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write into {}", out_dir.display()))?;
+    let path = out_dir.join(&name);
+    let cases: Vec<usize> = result.cases.iter().map(|c| c.case).collect();
+    if json {
+        let j = serde_json::json!({
+            "study": texts.study_file,
+            "shard": [k, n],
+            "cases": cases,
+            "cases_total": result.cases_total,
+            "output": path.display().to_string(),
+        });
+        outln!("{j}");
+    } else {
+        outln!(
+            "{}: shard {k}/{n}, {} of {} cases; wrote {}",
+            texts.study_file,
+            cases.len(),
+            result.cases_total,
+            path.display()
+        );
+    }
+    Ok(Outcome::Ok)
+}
+
+/// Render and write the outputs of a finished run-out study into `out_dir` and print its
+/// summary (or, with `json`, its JSON object): `crest runout` and `crest merge`.
+pub(crate) fn write_outputs(
+    run: &crest::pipeline::runout::RunoutRun,
+    study_file: &str,
+    out_dir: &Path,
+    json: bool,
+) -> miette::Result<Outcome> {
     let (study, cutter, rows, tool_path) = (&run.study, &run.cutter, &run.rows, &run.tool_path);
-    let mut csv = Vec::new();
-    crest::io::tables::write_runout_csv(rows, cutter.teeth(), &mut csv)
-        .map_err(|e| miette::miette!("cannot write runout.csv: {e}"))?;
-    let mut files = vec![("runout.csv".to_string(), csv)];
-    files.extend(
-        crest::plot::runout::figures(rows, study, cutter.teeth(), &run.lateral, &run.tool_name())
-            .map_err(|e| miette::miette!("cannot draw the run-out charts: {e}"))?,
-    );
-    let written = crest::io::write_files(&out_dir, &files)
+    let files = crest::pipeline::runout::render_outputs(run)?;
+    let written = crest::io::write_files(out_dir, &files)
         .map_err(|e| miette::miette!("{}: cannot write the outputs: {e}", out_dir.display()))?;
-    if args.json {
+    if json {
         let out = serde_json::json!({
-            "study": study_path.display().to_string(),
+            "study": study_file,
             "tool": tool_path.display().to_string(),
             "rule": study.rule.name(),
             "x": study.x.key(),

@@ -9,10 +9,12 @@
 //! decimal (serde_json's `float_roundtrip` parses them back to the same bits); a missing
 //! value (NaN) is `null`.
 //!
-//! Part maps split the same way into tile tasks ([`map`]); [`run_any`] and [`merge_any`]
-//! take a task or results of either kind by their `kind`.
+//! Part maps split the same way into tile tasks ([`map`]), run-out sweeps into case tasks
+//! ([`runout`]); [`run_any`] and [`merge_any`] take a task or results of any kind by their
+//! `kind`.
 
 pub mod map;
+pub mod runout;
 
 use super::design::{DesignRun, DesignTexts, finish, tool_of};
 use crate::study::design::{Design, RunResult};
@@ -303,18 +305,23 @@ pub enum Merged {
     Design(Box<DesignRun>),
     /// The part map (`crest simulate --map-mm`'s PLY).
     Map(crate::surface::PartMap),
+    /// The run-out study (`crest runout`'s outputs).
+    Runout(Box<super::runout::RunoutRun>),
 }
 
 fn kind_of(v: &serde_json::Value) -> &str {
     v.get("kind").and_then(|k| k.as_str()).unwrap_or("")
 }
 
-/// Run one task given as JSON (a design run or a part-map shard, by its `kind`); the result
-/// as JSON.
+/// Run one task given as JSON (a design run, a part-map shard or a run-out shard, by its
+/// `kind`); the result as JSON.
 pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
     let bad = |e: serde_json::Error| miette!("not a crest task: {e}");
     let out = match kind_of(&task) {
         map::MAP_TILES => serde_json::to_value(map::run_map_task(
+            &serde_json::from_value(task).map_err(bad)?,
+        )?),
+        runout::RUNOUT_CASES => serde_json::to_value(runout::run_runout_task(
             &serde_json::from_value(task).map_err(bad)?,
         )?),
         _ => serde_json::to_value(run_task(&serde_json::from_value(task).map_err(bad)?)?),
@@ -322,20 +329,25 @@ pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
     out.map_err(|e| miette!("cannot encode the task result: {e}"))
 }
 
+/// The group a result of this `kind` merges with: a part map, a run-out study, or else a
+/// designed experiment (whose merge names a kind it does not know).
+fn group_of(v: &serde_json::Value) -> &'static str {
+    match kind_of(v) {
+        map::MAP_TILES => map::MAP_TILES,
+        runout::RUNOUT_CASES => runout::RUNOUT_CASES,
+        _ => DESIGN_RUN,
+    }
+}
+
 /// Assemble task results given as JSON, each with where it comes from (`file:line`, for
-/// messages): all of one design ([`merge`]) or all of one part map ([`map::merge_map`]).
+/// messages): all of one design ([`merge`]), all of one part map ([`map::merge_map`]) or
+/// all of one run-out study ([`runout::merge_runout`]).
 pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Merged> {
-    let map = results
-        .first()
-        .is_some_and(|(_, v)| kind_of(v) == map::MAP_TILES);
-    if let Some((at, v)) = results
-        .iter()
-        .find(|(_, v)| (kind_of(v) == map::MAP_TILES) != map)
-    {
+    let group = results.first().map_or(DESIGN_RUN, |(_, v)| group_of(v));
+    if let Some((at, v)) = results.iter().find(|(_, v)| group_of(v) != group) {
         return Err(miette!(
-            "{at}: a result of kind '{}' among results of kind '{}': merge the results of one study or one part map",
+            "{at}: a result of kind '{}' among results of kind '{group}': merge the results of one study, one run-out study or one part map",
             kind_of(v),
-            if map { map::MAP_TILES } else { DESIGN_RUN }
         ));
     }
     fn parse<T: serde::de::DeserializeOwned>(
@@ -348,9 +360,11 @@ pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Me
             })
             .collect()
     }
-    if map {
-        Ok(Merged::Map(map::merge_map(parse(results)?)?))
-    } else {
-        Ok(Merged::Design(Box::new(merge(parse(results)?)?)))
+    match group {
+        map::MAP_TILES => Ok(Merged::Map(map::merge_map(parse(results)?)?)),
+        runout::RUNOUT_CASES => Ok(Merged::Runout(Box::new(runout::merge_runout(parse(
+            results,
+        )?)?))),
+        _ => Ok(Merged::Design(Box::new(merge(parse(results)?)?))),
     }
 }

@@ -275,8 +275,16 @@ pub fn run_case(cutter: &Cutter, study: &Study, c: &RunoutCase) -> Result<Runout
 
 /// Run every case in parallel; rows come back in case order.
 pub fn run_study(cutter: &Cutter, study: &Study) -> Result<Vec<RunoutRow>, ToolError> {
-    study
-        .cases(cutter)
+    run_cases(cutter, study, &study.cases(cutter))
+}
+
+/// Run the given cases (some of [`Study::cases`]) in parallel; rows come back in their order.
+pub fn run_cases(
+    cutter: &Cutter,
+    study: &Study,
+    cases: &[RunoutCase],
+) -> Result<Vec<RunoutRow>, ToolError> {
+    cases
         .par_iter()
         .map(|c| run_case(cutter, study, c))
         .collect()

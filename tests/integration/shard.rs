@@ -1,7 +1,8 @@
-//! `crest study --shard K/N`, `crest simulate --map-mm … --shard K/N` and `crest merge`: a
-//! design (a part map) run as three shards in three separate processes and merged gives the
-//! bytes of the single-process `crest study` (`crest simulate`); merging refuses missing,
-//! repeated and foreign runs (shards).
+//! `crest study --shard K/N`, `crest runout … --shard K/N`, `crest simulate --map-mm …
+//! --shard K/N` and `crest merge`: a design (a run-out sweep, a part map) run as three shards
+//! in three separate processes and merged gives the bytes of the single-process `crest
+//! study` (`crest runout`, `crest simulate`); merging refuses missing, repeated and foreign
+//! runs (shards) and results of mixed kinds.
 
 use std::path::{Path, PathBuf};
 
@@ -340,4 +341,158 @@ fn a_part_map_in_three_processes_merges_to_the_single_process_ply() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// The run-out sample study (78 cases) and its tool, or a copy beside `dir` with other
+/// offsets.
+fn runout_study(dir: &Path, other: bool) -> PathBuf {
+    let sample = repo("samples/studies/runout.toml");
+    if !other {
+        return sample;
+    }
+    let text = read(&sample)
+        .replace(
+            "tool = \"../tools/",
+            &format!("tool = \"{}/", repo("samples/tools").display()),
+        )
+        .replace("offset_um = [0.0, 0.25,", "offset_um = [0.1, 0.25,");
+    write(dir, "other-runout.toml", text)
+}
+
+#[test]
+fn a_runout_sweep_in_three_processes_merges_to_the_single_process_bytes() {
+    let dir = tempdir();
+    let study = runout_study(dir.path(), false);
+    let single = dir.path().join("single");
+    let s = crest()
+        .arg("runout")
+        .arg(&study)
+        .arg("-o")
+        .arg(&single)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+    let total = output_json(&s)["cases"].as_u64().unwrap() as usize;
+    assert_eq!(total, 78);
+
+    let shards = dir.path().join("shards");
+    let children: Vec<std::process::Child> = (1..=3)
+        .map(|k| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_crest"))
+                .arg("runout")
+                .arg(&study)
+                .arg("--shard")
+                .arg(format!("{k}/3"))
+                .arg("-o")
+                .arg(&shards)
+                .stdout(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    // Shard k holds cases k-1, k+2, … (0-based).
+    for k in 1..=3usize {
+        let text = read(&shards.join(format!("shard-{k}-of-3.jsonl")));
+        assert_eq!(text.lines().count(), 1);
+        let j = crate::util::json(text.trim().as_bytes());
+        assert_eq!(j["kind"], "runout-cases");
+        let cases: Vec<usize> = j["cases"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["case"].as_u64().unwrap() as usize)
+            .collect();
+        let want: Vec<usize> = (k - 1..total).step_by(3).collect();
+        assert_eq!(cases, want);
+    }
+    let merged = dir.path().join("merged");
+    let files: Vec<PathBuf> = (1..=3)
+        .rev()
+        .map(|k| shards.join(format!("shard-{k}-of-3.jsonl")))
+        .collect();
+    let m = crest()
+        .arg("merge")
+        .args(&files)
+        .arg("-o")
+        .arg(&merged)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+    let (j, sj) = (output_json(&m), output_json(&s));
+    for key in ["study", "tool", "rule", "x", "cases", "rows"] {
+        assert_eq!(j[key], sj[key], "{key} differs");
+    }
+    let names: Vec<String> = std::fs::read_dir(&single)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 7, "{names:?}");
+    for name in &names {
+        assert_eq!(
+            bytes(&merged.join(name)),
+            bytes(&single.join(name)),
+            "{name} differs"
+        );
+    }
+
+    // A missing or repeated shard, a shard of another study, or a study's results among a
+    // run-out study's, are refused.
+    let fails = |files: &[PathBuf], want: &str| {
+        let out = dir.path().join("bad");
+        let o = crest()
+            .arg("merge")
+            .args(files)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(want), "wanted '{want}' in: {err}");
+        assert!(!out.exists(), "nothing is written");
+    };
+    fails(&files[..2], "1 of 3 shards are missing: 1");
+    fails(
+        &[files[0].clone(), files[1].clone(), files[0].clone()],
+        "shard 3 of 3 is given twice",
+    );
+    let other = dir.path().join("other");
+    crest()
+        .arg("runout")
+        .arg(runout_study(dir.path(), true))
+        .args(["--shard", "1/3", "-o"])
+        .arg(&other)
+        .assert()
+        .success();
+    let mut mixed = files[..2].to_vec();
+    mixed.push(other.join("shard-1-of-3.jsonl"));
+    fails(&mixed, "the results are of different run-out studies");
+    let d = design(dir.path(), "six");
+    crest()
+        .arg("study")
+        .arg(&d)
+        .args(["--shard", "1/9", "-o"])
+        .arg(&other)
+        .assert()
+        .success();
+    let mut mixed = files.clone();
+    mixed.push(other.join("shard-1-of-9.jsonl"));
+    fails(&mixed, "among results of kind");
+    let mut mixed = vec![other.join("shard-1-of-9.jsonl")];
+    mixed.extend(files.iter().cloned());
+    fails(&mixed, "among results of kind");
+    let o = crest()
+        .arg("runout")
+        .arg(&study)
+        .args(["--shard", "4/3", "-o"])
+        .arg(dir.path().join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is not a shard K/N"));
 }
