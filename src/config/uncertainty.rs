@@ -35,7 +35,11 @@ impl UncertaintyFile {
 
     /// The checked uncertainty (every standard uncertainty finite and ≥ 0; keys left out keep
     /// [`Uncertainty::default`]); errors at the value's line and column of `text`.
-    pub(crate) fn to_uncertainty(&self, text: &str, file: &str) -> Result<Uncertainty, ConfigError> {
+    pub(crate) fn to_uncertainty(
+        &self,
+        text: &str,
+        file: &str,
+    ) -> Result<Uncertainty, ConfigError> {
         let nonneg = |key: &str, v: &Option<Spanned<f64>>| -> Result<Option<f64>, ConfigError> {
             match v {
                 Some(x) if !(x.get_ref().is_finite() && *x.get_ref() >= 0.0) => {

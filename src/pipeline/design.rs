@@ -100,7 +100,11 @@ pub fn run_monte_carlo(
     if let Some((n, _)) = monte_carlo {
         crate::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
-    let results = run_design(&design, |p| evaluate(&design, &cutter, p, monte_carlo), tick);
+    let results = run_design(
+        &design,
+        |p| evaluate(&design, &cutter, p, monte_carlo),
+        tick,
+    );
     finish(design, results, file, monte_carlo)
 }
 

@@ -368,7 +368,11 @@ mod tests {
     /// A two-tooth ball end (R 5) with a 5 µm run-out offset, tilted 10° over the plane,
     /// stepover 0.1 mm, fz 0.05 mm: one tooth cuts deeper, and the responses of the unit cell
     /// move smoothly with the offset and the tooth radii.
-    fn banded_run() -> (super::super::design::Design, Cutter, super::super::run::PreparedRun) {
+    fn banded_run() -> (
+        super::super::design::Design,
+        Cutter,
+        super::super::run::PreparedRun,
+    ) {
         let text = "surface = \"plane\"\ntool = \"t.toml\"\nrpm = 15000.0\ngrid_um = 5.0\n\
                     dtheta_deg = 2.0\nresponses = [\"Sz\", \"Sq\", \"Sa\"]\n[factors]\n\
                     tilt_deg = [10.0]\nstepover_mm = [0.1]\nfeed_mm_min = [1500.0]\n";
@@ -381,8 +385,11 @@ mod tests {
         (design, cutter, run)
     }
 
-    fn fixture() -> &'static (super::super::design::Design, Cutter, super::super::run::PreparedRun)
-    {
+    fn fixture() -> &'static (
+        super::super::design::Design,
+        Cutter,
+        super::super::run::PreparedRun,
+    ) {
         static F: std::sync::OnceLock<(
             super::super::design::Design,
             Cutter,
@@ -428,8 +435,12 @@ mod tests {
                 .build()
                 .unwrap()
         };
-        let a = pool(1).install(|| run_bands(&design, cutter, point, 6, 4)).unwrap();
-        let b = pool(2).install(|| run_bands(&design, cutter, point, 6, 4)).unwrap();
+        let a = pool(1)
+            .install(|| run_bands(&design, cutter, point, 6, 4))
+            .unwrap();
+        let b = pool(2)
+            .install(|| run_bands(&design, cutter, point, 6, 4))
+            .unwrap();
         assert_eq!(a, b);
         let det = super::super::run::simulate_run(&design, cutter, point).unwrap();
         assert_eq!(a.responses, det.responses);

@@ -253,8 +253,8 @@ pub fn evaluate_run(
         &run.samples
     };
     let sopts = crate::surface::Options::new(run.model, run.window.grid, design.grid_um * 1e-3);
-    let sim = crate::surface::simulate(samples, cutter, &sopts, &|_, _| {})
-        .map_err(|e| e.to_string())?;
+    let sim =
+        crate::surface::simulate(samples, cutter, &sopts, &|_, _| {}).map_err(|e| e.to_string())?;
     let nodes = sim.map.nx * sim.map.ny;
     if sim.nodes_cut != nodes {
         return Err(format!(

@@ -512,5 +512,8 @@ fn monte_carlo_needs_one_to_a_hundred_thousand_samples() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("bad.toml:14:19") && err.contains("parameter_scale"), "{err}");
+    assert!(
+        err.contains("bad.toml:14:19") && err.contains("parameter_scale"),
+        "{err}"
+    );
 }
