@@ -190,7 +190,11 @@ pub(crate) fn write_outputs(
             j["monte_carlo"] = serde_json::json!({
                 "samples": n,
                 "seed": seed,
-                "uncertainty": design.uncertainty,
+                "uncertainty": {
+                    "runout_offset_um": num(design.uncertainty.runout_offset_um),
+                    "tooth_deviation_um": num(design.uncertainty.tooth_deviation_um),
+                    "spindle_phase": design.uncertainty.spindle_phase,
+                },
             });
         }
         outln!("{j}");

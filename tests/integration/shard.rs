@@ -426,6 +426,10 @@ fn monte_carlo_shards_in_two_processes_merge_to_the_single_process_bytes() {
     assert_eq!(s["monte_carlo"], j["monte_carlo"]);
     assert_eq!(s["monte_carlo"]["samples"], 5);
     assert_eq!(s["monte_carlo"]["seed"], 7);
+    assert_eq!(
+        s["monte_carlo"]["uncertainty"],
+        serde_json::json!({"runout_offset_um": 1.0, "tooth_deviation_um": 0.5, "spindle_phase": true})
+    );
     let csv = read(&single.join("runs.csv"));
     assert_eq!(
         csv.lines().next().unwrap(),
