@@ -192,9 +192,14 @@ def plan_feed(file: StrPath, machine: StrPath, *, level: str = "jerk", absolute:
     ``name``, ``total_time_s``, ``programmed_time_s``, ``self_check_ok`` and per posture
     ``t_s``, ``feed_mm_min``, ``path_speed_mm_min``, ``line`` (numpy arrays). Releases the GIL."""
 
-def study_tasks(design: str) -> List[Dict[str, Any]]:
+def study_tasks(
+    design: str, *, monte_carlo: Optional[int] = None, seed: int = 1
+) -> List[Dict[str, Any]]:
     """The tasks of a designed experiment (a ``crest study`` design file path, or its TOML
-    text with ``tool`` relative to the working directory): one plain dict per run."""
+    text with ``tool`` relative to the working directory): one plain dict per run. With
+    ``monte_carlo=N`` every task also computes the P5/P50/P95 bands of its responses over N
+    samples of ``seed`` (``crest study --monte-carlo N --seed S``); merged, they give that
+    command's bytes."""
 
 def map_tasks(
     file: StrPath,

@@ -1051,9 +1051,17 @@ fn plan_feed<'py>(
 
 /// The tasks of a designed experiment (`crest study` design): `design` is a path to the
 /// design TOML, or its text (its `tool` then relative to the working directory). One task
-/// per run, each a plain dict (picklable) carrying the design and tool texts.
+/// per run, each a plain dict (picklable) carrying the design and tool texts; with
+/// `monte_carlo` = N also the Monte Carlo settings (N samples of `seed`, as `crest study
+/// --monte-carlo N --seed S`).
 #[pyfunction]
-fn study_tasks<'py>(py: Python<'py>, design: &str) -> PyResult<Bound<'py, PyAny>> {
+#[pyo3(signature = (design, *, monte_carlo = None, seed = 1))]
+fn study_tasks<'py>(
+    py: Python<'py>,
+    design: &str,
+    monte_carlo: Option<usize>,
+    seed: u64,
+) -> PyResult<Bound<'py, PyAny>> {
     let texts = if design.contains('\n') || design.contains('=') {
         let d =
             crest::config::design::parse_design(design, "<design>").map_err(|e| err(e.into()))?;
@@ -1069,7 +1077,8 @@ fn study_tasks<'py>(py: Python<'py>, design: &str) -> PyResult<Bound<'py, PyAny>
     } else {
         crest::pipeline::design::load_design_texts(std::path::Path::new(design)).map_err(err)?
     };
-    let tasks = crest::pipeline::tasks::design_tasks(&texts).map_err(err)?;
+    let mc = crest::pipeline::tasks::MonteCarlo::of(monte_carlo.map(|n| (n, seed)));
+    let tasks = crest::pipeline::tasks::design_tasks_with(&texts, mc).map_err(err)?;
     let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
     json_loads(py, &text)
 }

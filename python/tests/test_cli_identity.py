@@ -150,6 +150,29 @@ def test_study_tasks_merge_to_the_bytes_of_crest_study(cli, tmp_path):
         crest.merge(results[1::2])
 
 
+def test_monte_carlo_study_tasks_merge_to_the_bytes_of_crest_study(cli, tmp_path):
+    d = tiny_design(tmp_path)
+    out = tmp_path / "cli"
+    p = cli("study", d, "-o", out, "--json", "--monte-carlo", "3", "--seed", "5")
+    assert p.returncode == 0, p.stderr
+    j = json.loads(p.stdout)
+    assert j["monte_carlo"]["samples"] == 3 and j["monte_carlo"]["seed"] == 5
+
+    tasks = crest.study_tasks(str(d), monte_carlo=3, seed=5)
+    assert all(t["monte_carlo"] == {"samples": 3, "seed": 5} for t in tasks)
+    # Tasks without the setting carry no key (old tasks still parse).
+    assert "monte_carlo" not in crest.study_tasks(str(d))[0]
+    results = [crest.run_task(t) for t in reversed(tasks)]
+    assert all(len(r["bands"]) == 4 for r in results)
+    merged = crest.merge(results)
+    assert merged["runs"] == j["runs"]
+    for name in ("runs.csv", "effects.csv"):
+        assert merged["files"][name] == (out / name).read_bytes(), name
+    assert b"Sz_p5,Sz_p50,Sz_p95" in merged["files"]["runs.csv"]
+    with pytest.raises(crest.CrestError, match="at least one sample"):
+        crest.study_tasks(str(d), monte_carlo=0)
+
+
 def test_shard_files_merge_in_python(cli, tmp_path):
     d = tiny_design(tmp_path)
     for k in (1, 2):

@@ -2,7 +2,7 @@
 //! cutting parameters, 001 §4 and appendix) and its factor effects (001 Eqs 7-8).
 //!
 //! ```text
-//! crest study design.toml -o DIR [--json] [--threads N] [--shard K/N]
+//! crest study design.toml -o DIR [--json] [--threads N] [--shard K/N] [--monte-carlo N --seed S]
 //! ```
 //!
 //! Each run is simulated by `crest::study::run::simulate_run` (synthetic path →
@@ -16,6 +16,13 @@
 //! With `--shard K/N` only runs K, K+N, … are simulated and their results written as JSON
 //! lines (`crest::pipeline::tasks::TaskResult`) to `DIR/shard-K-of-N.jsonl`; `crest merge`
 //! assembles the shards into the outputs above, byte for byte.
+//!
+//! With `--monte-carlo N` every run is also simulated N times with its inputs drawn from the
+//! design's `[uncertainty]` (run-out, spindle phase of every pass; sample i from stream i of
+//! the seed S, `crate::study::montecarlo::run_bands`), and `runs.csv` gets the columns
+//! `X_p5`, `X_p50`, `X_p95` after each response `X` (`--json`: `bands` per run); the
+//! deterministic columns and the effects are those of the run without it. Shards carry the
+//! setting, so merged shards give the same bytes.
 
 use super::Outcome;
 use crest::pipeline::design::{DesignRun, effects_json, run_json};
@@ -41,6 +48,13 @@ pub struct Args {
     /// JSON lines to DIR/shard-K-of-N.jsonl; `crest merge` assembles the shards.
     #[arg(long, value_name = "K/N", value_parser = crest::pipeline::tasks::parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// Monte Carlo samples per run for P5/P50/P95 bands of every response (inputs from the
+    /// design's [uncertainty]; 1 ≤ N ≤ 100000).
+    #[arg(long, value_name = "N")]
+    pub monte_carlo: Option<usize>,
+    /// Seed of the Monte Carlo samples.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub seed: u64,
 }
 
 /// Run `crest study`.
@@ -50,6 +64,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let (design, cutter) = crest::pipeline::design::load_design(&args.design)?;
     if args.threads == Some(0) {
         return Err(miette!("--threads must be at least 1"));
+    }
+    let monte_carlo = args.monte_carlo.map(|n| (n, args.seed));
+    if let Some(n) = args.monte_carlo {
+        crest::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
     if let Some((k, n)) = args.shard {
         return run_shard(&args, k, n, design.runs().len(), started);
@@ -62,7 +80,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
-    let done = pool.install(|| crest::pipeline::design::run(design, cutter, &file, &tick));
+    let done = pool.install(|| {
+        crest::pipeline::design::run_monte_carlo(design, cutter, &file, monte_carlo, &tick)
+    });
     progress.finish();
     let done = done?;
     // Every run succeeded: render the outputs, then write them.
@@ -86,7 +106,8 @@ fn run_shard(
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .into_diagnostic()?;
-    let results = pool.install(|| tasks::run_shard(&texts, k, n, &tick));
+    let mc = tasks::MonteCarlo::of(args.monte_carlo.map(|n| (n, args.seed)));
+    let results = pool.install(|| tasks::run_shard_with(&texts, k, n, mc, &tick));
     progress.finish();
     let results = results?;
     let mut text = Vec::new();
@@ -144,7 +165,7 @@ pub(crate) fn write_outputs(
         design,
         results,
         effects,
-        ..
+        monte_carlo,
     } = done;
     let n_runs = results.len();
     let runs_csv = output.join("runs.csv");
@@ -153,7 +174,7 @@ pub(crate) fn write_outputs(
     let elapsed = started.elapsed().as_secs_f64();
 
     if json {
-        let j = serde_json::json!({
+        let mut j = serde_json::json!({
             "design": file,
             "title": design.title,
             "runs": results.iter().map(|r| run_json(design, r)).collect::<Vec<_>>(),
@@ -165,6 +186,17 @@ pub(crate) fn write_outputs(
             },
             "time_s": num(elapsed),
         });
+        if let Some((n, seed)) = monte_carlo {
+            j["monte_carlo"] = serde_json::json!({
+                "samples": n,
+                "seed": seed,
+                "uncertainty": {
+                    "runout_offset_um": num(design.uncertainty.runout_offset_um),
+                    "tooth_deviation_um": num(design.uncertainty.tooth_deviation_um),
+                    "spindle_phase": design.uncertainty.spindle_phase,
+                },
+            });
+        }
         outln!("{j}");
     } else {
         outln!(
@@ -182,6 +214,18 @@ pub(crate) fn write_outputs(
                 .map(|(f, v)| format!("{} {:+.1} %", f.name, 100.0 * v))
                 .collect();
             outln!("  {name}: mean {:.4}; EF_i1/M {}", e.mean, rel.join(", "));
+        }
+        if let Some((n, seed)) = monte_carlo {
+            outln!("  Monte Carlo: {n} samples per run, seed {seed}; P95 − P5 over the runs:");
+            for (k, name) in design.responses.iter().enumerate() {
+                let w: Vec<f64> = results
+                    .iter()
+                    .filter_map(|r| r.bands.as_ref().map(|b| b[k].width()))
+                    .collect();
+                let lo = w.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                outln!("    {name}: {lo:.4} to {hi:.4}");
+            }
         }
     }
     Ok(Outcome::Ok)

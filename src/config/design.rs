@@ -16,6 +16,10 @@
 //! tilt_deg = [1, 10]
 //! scallop_um = [5, 10]                     # or stepover_mm
 //! feed_mm_min = [2000, 4000]
+//! [uncertainty]                            # optional: inputs of --monte-carlo
+//! runout_offset_um = 1.0                   # as the regression study's (config::uncertainty)
+//! tooth_deviation_um = 1.0
+//! spindle_phase = true
 //! ```
 
 use super::ConfigError;
@@ -64,6 +68,7 @@ struct DesignFile {
     step_rule: Option<Spanned<StepRule>>,
     responses: Spanned<Vec<String>>,
     factors: FactorsFile,
+    uncertainty: Option<super::uncertainty::UncertaintyFile>,
 }
 
 /// The 1-based line and column of the first line that starts with `key` (for rules about a
@@ -224,6 +229,20 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
             }
             Ok(Some(list.clone()))
         };
+    let uncertainty = match &d.uncertainty {
+        Some(u) => {
+            if let Some(pos) = u.parameter_scale_at() {
+                return Err(at(
+                    pos,
+                    "uncertainty.parameter_scale scales calibrated parameters (crest report \
+                     --free); a design has none"
+                        .into(),
+                ));
+            }
+            u.to_uncertainty(text, file)?
+        }
+        None => crate::study::montecarlo::Uncertainty::default(),
+    };
     let factors = FactorLevels {
         yaw_deg: levels("yaw_deg", &f.yaw_deg)?,
         tilt_deg: levels("tilt_deg", &f.tilt_deg)?,
@@ -248,6 +267,7 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
         step_rule: d.step_rule.map(|s| s.into_inner()).unwrap_or_default(),
         responses: d.responses.into_inner(),
         factors,
+        uncertainty,
     })
 }
 

@@ -15,6 +15,7 @@ pub mod process;
 pub mod regression;
 pub mod runout;
 pub mod tool;
+pub mod uncertainty;
 
 pub use machine::MachineError;
 pub use process::ProcessConfig;

@@ -62,15 +62,6 @@ struct SimulateFile {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct UncertaintyFile {
-    runout_offset_um: Option<Spanned<f64>>,
-    tooth_deviation_um: Option<Spanned<f64>>,
-    spindle_phase: Option<bool>,
-    parameter_scale: Option<Spanned<f64>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct CaseFile {
     lead_deg: Spanned<f64>,
     side: Side,
@@ -108,7 +99,7 @@ struct StudyFile {
     #[serde(default)]
     process: Option<super::process::EffectsFile>,
     #[serde(default)]
-    uncertainty: Option<UncertaintyFile>,
+    uncertainty: Option<super::uncertainty::UncertaintyFile>,
     #[serde(rename = "case", default)]
     cases: Vec<Spanned<CaseFile>>,
 }
@@ -288,31 +279,10 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
         Some(p) => p.to_process(text, file, None)?,
         None => crate::surface::Process::default(),
     };
-    let mut uncertainty = crate::study::montecarlo::Uncertainty::default();
-    if let Some(u) = &s.uncertainty {
-        let nonneg = |key: &str, v: &Option<Spanned<f64>>| -> Result<Option<f64>, ConfigError> {
-            match v {
-                Some(x) if !(x.get_ref().is_finite() && *x.get_ref() >= 0.0) => Err(at(
-                    x.span().start,
-                    format!("uncertainty.{key} must be ≥ 0, found {}", x.get_ref()),
-                )),
-                Some(x) => Ok(Some(*x.get_ref())),
-                None => Ok(None),
-            }
-        };
-        if let Some(v) = nonneg("runout_offset_um", &u.runout_offset_um)? {
-            uncertainty.runout_offset_um = v;
-        }
-        if let Some(v) = nonneg("tooth_deviation_um", &u.tooth_deviation_um)? {
-            uncertainty.tooth_deviation_um = v;
-        }
-        if let Some(v) = nonneg("parameter_scale", &u.parameter_scale)? {
-            uncertainty.parameter_scale = v;
-        }
-        if let Some(b) = u.spindle_phase {
-            uncertainty.spindle_phase = b;
-        }
-    }
+    let uncertainty = match &s.uncertainty {
+        Some(u) => u.to_uncertainty(text, file)?,
+        None => crate::study::montecarlo::Uncertainty::default(),
+    };
     Ok(Study {
         process,
         uncertainty,

@@ -76,19 +76,27 @@ fn fmt_value(v: f64) -> String {
 }
 
 /// `runs.csv`: one row per run, `run`, the factor values, `fz_mm`, `step_mm`, the responses
-/// and `error` (why the run failed, empty otherwise).
+/// and `error` (why the run failed, empty otherwise). With Monte Carlo bands (any run has
+/// them: `crest study --monte-carlo`), each response column `X` is followed by `X_p5`,
+/// `X_p50` and `X_p95`, its 5th, 50th and 95th percentiles over the samples.
 pub fn write_runs_csv(
     design: &Design,
     results: &[RunResult],
     w: &mut dyn Write,
 ) -> std::io::Result<()> {
+    let banded = results.iter().any(|r| r.bands.is_some());
     let mut csv = csv::Writer::from_writer(w);
     let mut head = vec!["run".to_string()];
     head.extend(design.factors().into_iter().map(|f| f.name));
     head.push("fz_mm".into());
     head.push("step_mm".into());
     // Response columns are named by their symbol only: units follow iso25178.md.
-    head.extend(design.responses.iter().cloned());
+    for name in &design.responses {
+        head.push(name.clone());
+        if banded {
+            head.extend(["p5", "p50", "p95"].map(|q| format!("{name}_{q}")));
+        }
+    }
     head.push("error".into());
     csv.write_record(&head)?;
     for r in results {
@@ -96,7 +104,18 @@ pub fn write_runs_csv(
         row.extend(r.point.values.iter().map(|v| format!("{v}")));
         row.push(fmt_value(r.fz_mm));
         row.push(fmt_value(r.stepover_mm));
-        row.extend(r.responses.iter().map(|v| fmt_value(*v)));
+        for (k, v) in r.responses.iter().enumerate() {
+            row.push(fmt_value(*v));
+            if banded {
+                let b = r
+                    .bands
+                    .as_ref()
+                    .and_then(|b| b.get(k))
+                    .copied()
+                    .unwrap_or(crate::study::montecarlo::Band::NAN);
+                row.extend([b.p5, b.p50, b.p95].map(fmt_value));
+            }
+        }
         row.push(r.error.clone().unwrap_or_default());
         csv.write_record(&row)?;
     }

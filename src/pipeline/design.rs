@@ -18,6 +18,8 @@ pub struct DesignRun {
     pub results: Vec<RunResult>,
     /// Factor effects per response, in response order.
     pub effects: Vec<Effects>,
+    /// With `--monte-carlo N --seed S`: (N, S); every result then has its bands.
+    pub monte_carlo: Option<(usize, u64)>,
 }
 
 /// Read the design `path` and its tool (without running anything).
@@ -81,13 +83,53 @@ pub fn run(
     file: &str,
     tick: &(dyn Fn() + Sync),
 ) -> miette::Result<DesignRun> {
-    let results = run_design(&design, |p| simulate_run(&design, &cutter, p), tick);
-    finish(design, results, file)
+    run_monte_carlo(design, cutter, file, None, tick)
+}
+
+/// [`run`], with `monte_carlo` = (N, S) the P5/P50/P95 bands of every response of every run
+/// over N samples of seed S ([`crate::study::montecarlo::run_bands`]); the same for any
+/// thread count. N is checked (1 ≤ N ≤ [`crate::study::montecarlo::MAX_SAMPLES`]) before
+/// any run.
+pub fn run_monte_carlo(
+    design: Design,
+    cutter: Cutter,
+    file: &str,
+    monte_carlo: Option<(usize, u64)>,
+    tick: &(dyn Fn() + Sync),
+) -> miette::Result<DesignRun> {
+    if let Some((n, _)) = monte_carlo {
+        crate::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
+    }
+    let results = run_design(
+        &design,
+        |p| evaluate(&design, &cutter, p, monte_carlo),
+        tick,
+    );
+    finish(design, results, file, monte_carlo)
+}
+
+/// Evaluate run `p` of `design`: [`simulate_run`], or with `monte_carlo` = (N, S)
+/// [`crate::study::montecarlo::run_bands`].
+pub fn evaluate(
+    design: &Design,
+    cutter: &Cutter,
+    p: &crate::study::design::RunPoint,
+    monte_carlo: Option<(usize, u64)>,
+) -> Result<crate::study::design::RunOutput, String> {
+    match monte_carlo {
+        None => simulate_run(design, cutter, p),
+        Some((n, seed)) => crate::study::montecarlo::run_bands(design, cutter, p, n, seed),
+    }
 }
 
 /// A design's results (one per run, in run order) checked and completed with the effects:
-/// fails, naming every failed run, unless all succeeded.
-pub fn finish(design: Design, results: Vec<RunResult>, file: &str) -> miette::Result<DesignRun> {
+/// fails, naming every failed run, unless all succeeded. `monte_carlo` is recorded as given.
+pub fn finish(
+    design: Design,
+    results: Vec<RunResult>,
+    file: &str,
+    monte_carlo: Option<(usize, u64)>,
+) -> miette::Result<DesignRun> {
     let failed: Vec<String> = results
         .iter()
         .filter_map(|r| {
@@ -109,6 +151,7 @@ pub fn finish(design: Design, results: Vec<RunResult>, file: &str) -> miette::Re
         design,
         results,
         effects,
+        monte_carlo,
     })
 }
 
@@ -161,7 +204,8 @@ fn num(v: f64) -> serde_json::Value {
 }
 
 /// One run as the JSON object of `crest study --json` (`run`, `factors`, `tilt_deg`,
-/// `yaw_deg`, `feed_mm_min`, `fz_mm`, `stepover_mm`, `responses`, `error`).
+/// `yaw_deg`, `feed_mm_min`, `fz_mm`, `stepover_mm`, `responses`, `error`; with Monte
+/// Carlo bands also `bands`: response → `p5`, `p50`, `p95`).
 pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
     let factors: serde_json::Map<String, serde_json::Value> = design
         .factors()
@@ -175,7 +219,7 @@ pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
         .zip(&r.responses)
         .map(|(k, v)| (k.clone(), num(*v)))
         .collect();
-    serde_json::json!({
+    let mut j = serde_json::json!({
         "run": r.point.run,
         "factors": factors,
         "tilt_deg": num(r.point.tilt_deg),
@@ -185,7 +229,22 @@ pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
         "stepover_mm": num(r.stepover_mm),
         "responses": responses,
         "error": r.error,
-    })
+    });
+    if let Some(bands) = &r.bands {
+        let b: serde_json::Map<String, serde_json::Value> = design
+            .responses
+            .iter()
+            .zip(bands)
+            .map(|(k, b)| {
+                (
+                    k.clone(),
+                    serde_json::json!({"p5": num(b.p5), "p50": num(b.p50), "p95": num(b.p95)}),
+                )
+            })
+            .collect();
+        j["bands"] = serde_json::Value::Object(b);
+    }
+    j
 }
 
 /// The effects as the JSON array of `crest study --json`: per response its `mean` and, per

@@ -18,6 +18,7 @@ pub mod runout;
 
 use super::design::{DesignRun, DesignTexts, finish, tool_of};
 use crate::study::design::{Design, RunResult};
+use crate::study::montecarlo::Band;
 use miette::miette;
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +43,55 @@ pub struct Task {
     pub run: usize,
     /// Number of runs of the design.
     pub runs: usize,
+    /// Monte Carlo bands to compute, if any (absent in tasks without them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub monte_carlo: Option<MonteCarlo>,
+}
+
+/// The Monte Carlo settings of a task (`crest study --monte-carlo N --seed S`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MonteCarlo {
+    /// Number of samples N.
+    pub samples: usize,
+    /// Seed S.
+    pub seed: u64,
+}
+
+impl MonteCarlo {
+    /// From `(N, S)`.
+    pub fn of(settings: Option<(usize, u64)>) -> Option<MonteCarlo> {
+        settings.map(|(samples, seed)| MonteCarlo { samples, seed })
+    }
+
+    /// As `(N, S)`.
+    pub fn pair(settings: Option<MonteCarlo>) -> Option<(usize, u64)> {
+        settings.map(|m| (m.samples, m.seed))
+    }
+}
+
+/// One response's Monte Carlo band in a task result (`null` where not finite).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskBand {
+    /// 5th percentile.
+    pub p5: Option<f64>,
+    /// Median.
+    pub p50: Option<f64>,
+    /// 95th percentile.
+    pub p95: Option<f64>,
+}
+
+fn task_bands(bands: Option<Vec<Band>>) -> Option<Vec<TaskBand>> {
+    bands.map(|b| {
+        b.into_iter()
+            .map(|b| TaskBand {
+                p5: finite(b.p5),
+                p50: finite(b.p50),
+                p95: finite(b.p95),
+            })
+            .collect()
+    })
 }
 
 /// The outcome of one task: the run's responses or why it failed, with its design (so that
@@ -67,6 +117,12 @@ pub struct TaskResult {
     pub stepover_mm: Option<f64>,
     /// Why the run failed, if it did.
     pub error: Option<String>,
+    /// The task's Monte Carlo settings, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub monte_carlo: Option<MonteCarlo>,
+    /// With Monte Carlo: the band of every response, in the design's order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bands: Option<Vec<TaskBand>>,
 }
 
 fn finite(v: f64) -> Option<f64> {
@@ -84,8 +140,19 @@ fn parse(t: &DesignTexts) -> miette::Result<Design> {
 /// per run in run order. The design and its tool are checked here, so a task fails only in
 /// its run.
 pub fn design_tasks(t: &DesignTexts) -> miette::Result<Vec<Task>> {
+    design_tasks_with(t, None)
+}
+
+/// [`design_tasks`] with Monte Carlo bands of `monte_carlo` samples (checked here).
+pub fn design_tasks_with(
+    t: &DesignTexts,
+    monte_carlo: Option<MonteCarlo>,
+) -> miette::Result<Vec<Task>> {
     let design = parse(t)?;
     tool_of(t)?;
+    if let Some(m) = monte_carlo {
+        crate::study::montecarlo::check_samples(m.samples).map_err(|e| miette!("{e}"))?;
+    }
     let runs = design.runs().len();
     Ok((1..=runs)
         .map(|run| Task {
@@ -96,6 +163,7 @@ pub fn design_tasks(t: &DesignTexts) -> miette::Result<Vec<Task>> {
             tool_toml: t.tool_toml.clone(),
             run,
             runs,
+            monte_carlo,
         })
         .collect())
 }
@@ -130,13 +198,20 @@ pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
     }
     let point = &points[task.run - 1];
     let n = design.responses.len();
-    let out = crate::study::run::simulate_run(&design, &cutter, point);
-    let (responses, fz_mm, stepover_mm, error) = match out {
+    let mc = MonteCarlo::pair(task.monte_carlo);
+    if let Some((samples, _)) = mc {
+        crate::study::montecarlo::check_samples(samples).map_err(|e| miette!("{e}"))?;
+    }
+    let out = super::design::evaluate(&design, &cutter, point, mc);
+    let (responses, fz_mm, stepover_mm, error, bands) = match out {
         Ok(mut o) => {
             o.responses.resize(n, f64::NAN);
-            (o.responses, o.fz_mm, o.stepover_mm, None)
+            if let Some(b) = &mut o.bands {
+                b.resize(n, Band::NAN);
+            }
+            (o.responses, o.fz_mm, o.stepover_mm, None, o.bands)
         }
-        Err(e) => (vec![f64::NAN; n], f64::NAN, f64::NAN, Some(e)),
+        Err(e) => (vec![f64::NAN; n], f64::NAN, f64::NAN, Some(e), None),
     };
     Ok(TaskResult {
         kind: DESIGN_RUN.to_string(),
@@ -148,6 +223,8 @@ pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
         fz_mm: finite(fz_mm),
         stepover_mm: finite(stepover_mm),
         error,
+        monte_carlo: task.monte_carlo,
+        bands: task_bands(bands),
     })
 }
 
@@ -160,8 +237,23 @@ pub fn run_shard(
     n: usize,
     tick: &(dyn Fn() + Sync),
 ) -> miette::Result<Vec<TaskResult>> {
+    run_shard_with(t, k, n, None, tick)
+}
+
+/// [`run_shard`] with Monte Carlo bands of `monte_carlo` samples (checked before any run).
+pub fn run_shard_with(
+    t: &DesignTexts,
+    k: usize,
+    n: usize,
+    monte_carlo: Option<MonteCarlo>,
+    tick: &(dyn Fn() + Sync),
+) -> miette::Result<Vec<TaskResult>> {
     let design = parse(t)?;
     let cutter = tool_of(t)?;
+    let mc = MonteCarlo::pair(monte_carlo);
+    if let Some((samples, _)) = mc {
+        crate::study::montecarlo::check_samples(samples).map_err(|e| miette!("{e}"))?;
+    }
     let all = design.runs();
     let runs = all.len();
     let points: Vec<_> = all
@@ -173,7 +265,7 @@ pub fn run_shard(
     let results = crate::study::design::run_points(
         &design,
         points,
-        |p| crate::study::run::simulate_run(&design, &cutter, p),
+        |p| super::design::evaluate(&design, &cutter, p, mc),
         tick,
     );
     Ok(results
@@ -188,6 +280,8 @@ pub fn run_shard(
             fz_mm: finite(r.fz_mm),
             stepover_mm: finite(r.stepover_mm),
             error: r.error,
+            monte_carlo,
+            bands: task_bands(r.bands),
         })
         .collect())
 }
@@ -228,10 +322,11 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
             r.kind
         ));
     }
-    let (file, text, runs) = (
+    let (file, text, runs, monte_carlo) = (
         first.design_file.clone(),
         first.design_toml.clone(),
         first.runs,
+        first.monte_carlo,
     );
     if let Some(r) = results
         .iter()
@@ -242,6 +337,20 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
             r.run,
             r.design_file,
             r.runs
+        ));
+    }
+    if let Some(r) = results.iter().find(|r| r.monte_carlo != monte_carlo) {
+        let say = |m: Option<MonteCarlo>| {
+            m.map_or("no Monte Carlo".to_string(), |m| {
+                format!("--monte-carlo {} --seed {}", m.samples, m.seed)
+            })
+        };
+        return Err(miette!(
+            "{file}: the results were run with different Monte Carlo settings: run {} with {}, run {} with {}",
+            first.run,
+            say(monte_carlo),
+            r.run,
+            say(r.monte_carlo)
         ));
     }
     let design = crate::config::design::parse_design(&text, &file)?;
@@ -286,16 +395,30 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
             let mut responses: Vec<f64> =
                 r.responses.iter().map(|v| v.unwrap_or(f64::NAN)).collect();
             responses.resize(n, f64::NAN);
+            let nan = |v: Option<f64>| v.unwrap_or(f64::NAN);
+            let bands = r.bands.map(|b| {
+                let mut b: Vec<Band> = b
+                    .iter()
+                    .map(|b| Band {
+                        p5: nan(b.p5),
+                        p50: nan(b.p50),
+                        p95: nan(b.p95),
+                    })
+                    .collect();
+                b.resize(n, Band::NAN);
+                b
+            });
             RunResult {
                 point,
                 responses,
                 fz_mm: r.fz_mm.unwrap_or(f64::NAN),
                 stepover_mm: r.stepover_mm.unwrap_or(f64::NAN),
                 error: r.error,
+                bands,
             }
         })
         .collect();
-    finish(design, results, &file)
+    finish(design, results, &file, MonteCarlo::pair(monte_carlo))
 }
 
 /// What [`merge_any`] assembled: a designed experiment or a part map.

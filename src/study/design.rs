@@ -159,6 +159,8 @@ pub struct Design {
     pub responses: Vec<String>,
     /// The factors and their levels.
     pub factors: FactorLevels,
+    /// Standard uncertainties of the inputs of `--monte-carlo` (the file's `[uncertainty]`).
+    pub uncertainty: super::montecarlo::Uncertainty,
 }
 
 /// How the pass interval of a run is given.
@@ -261,6 +263,8 @@ pub struct RunOutput {
     pub fz_mm: f64,
     /// Pass interval (drive-plane spacing), mm.
     pub stepover_mm: f64,
+    /// With `--monte-carlo`: the P5/P50/P95 band of every response, in response order.
+    pub bands: Option<Vec<super::montecarlo::Band>>,
 }
 
 /// The outcome of one run: its responses (in [`Design::responses`] order) or why it failed.
@@ -276,6 +280,9 @@ pub struct RunResult {
     pub stepover_mm: f64,
     /// Why the run failed, if it did.
     pub error: Option<String>,
+    /// With `--monte-carlo`: the P5/P50/P95 band of every response (NaN bands where the run
+    /// failed).
+    pub bands: Option<Vec<super::montecarlo::Band>>,
 }
 
 /// Evaluate every run of `design` with `eval` in parallel (rayon); results come back in run
@@ -305,12 +312,16 @@ where
             match out {
                 Ok(mut o) => {
                     o.responses.resize(n, f64::NAN);
+                    if let Some(b) = &mut o.bands {
+                        b.resize(n, super::montecarlo::Band::NAN);
+                    }
                     RunResult {
                         point,
                         responses: o.responses,
                         fz_mm: o.fz_mm,
                         stepover_mm: o.stepover_mm,
                         error: None,
+                        bands: o.bands,
                     }
                 }
                 Err(e) => RunResult {
@@ -319,6 +330,7 @@ where
                     fz_mm: f64::NAN,
                     stepover_mm: f64::NAN,
                     error: Some(e),
+                    bands: None,
                 },
             }
         })
@@ -414,6 +426,7 @@ mod tests {
             responses: vec![6.0 * sq, sq],
             fz_mm: p.feed_mm_min / 15000.0,
             stepover_mm: 0.1 * h,
+            bands: None,
         })
     }
 
@@ -502,6 +515,7 @@ mod tests {
                         responses: vec![1.0],
                         fz_mm: 0.1,
                         stepover_mm: 1.0,
+                        bands: None,
                     })
                 }
             },

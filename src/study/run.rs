@@ -113,6 +113,38 @@ pub fn simulate_run(
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
 ) -> Result<RunOutput, String> {
+    let prepared = prepare_run(design, cutter, p)?;
+    evaluate_run(design, &prepared, cutter, &[])
+}
+
+/// The part of a run that does not depend on the tool's run-out or the spindle phase: the
+/// synthetic path planned with the nominal cutter (the pass interval from the scallop, the
+/// window, the resampled samples), simulated once per Monte Carlo sample by
+/// [`evaluate_run`].
+#[derive(Debug, Clone)]
+pub struct PreparedRun {
+    /// The resampled path; `Sample::run` is the pass.
+    pub samples: Vec<crate::resample::Sample>,
+    /// Number of passes (cutting runs) of the path.
+    pub passes: usize,
+    /// The evaluated window.
+    pub window: RunWindow,
+    /// Surface model with its resampling.
+    pub model: crate::surface::Model,
+    /// Feed per tooth, mm.
+    pub fz_mm: f64,
+    /// Pass interval (drive-plane spacing), mm.
+    pub stepover_mm: f64,
+    /// The responses as areal parameters, in [`Design::responses`] order.
+    pub params: Vec<crate::metrics::Param>,
+}
+
+/// Plan and resample run `p` of `design` with the nominal `cutter` (see [`simulate_run`]).
+pub fn prepare_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<PreparedRun, String> {
     use crate::synth::{Orientation, PathSpec, Step, Surface};
     let lead = design.factors.lead_deg.is_some();
     let orientation = if lead {
@@ -173,9 +205,56 @@ pub fn simulate_run(
         .with_rpm(design.rpm)
         .with_feed_mm_min(p.feed_mm_min);
     let samples = crate::resample::resample(path, &ropts).map_err(|e| e.to_string())?;
-    let sopts = crate::surface::Options::new(model, win.grid, design.grid_um * 1e-3);
-    let sim = crate::surface::simulate(&samples, cutter, &sopts, &|_, _| {})
-        .map_err(|e| e.to_string())?;
+    let params: Vec<crate::metrics::Param> = design
+        .responses
+        .iter()
+        .map(|r| {
+            crate::metrics::Param::from_symbol(r)
+                .filter(|p| !p.is_profile())
+                .ok_or_else(|| format!("'{r}' is not an areal parameter"))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok(PreparedRun {
+        passes: samples.iter().map(|s| s.run + 1).max().unwrap_or(0),
+        samples,
+        window: win,
+        model,
+        fz_mm,
+        stepover_mm: synth.stepover_mm,
+        params,
+    })
+}
+
+/// Simulate a prepared run with `cutter` (the nominal one, or one with its run-out
+/// perturbed) and the spindle at `phases_rad[k]` at the start of pass k (a pass beyond the
+/// list, and every pass when it is empty, starts at phase 0, as [`simulate_run`]).
+pub fn evaluate_run(
+    design: &Design,
+    run: &PreparedRun,
+    cutter: &crate::tool::Cutter,
+    phases_rad: &[f64],
+) -> Result<RunOutput, String> {
+    let shifted: Vec<crate::resample::Sample>;
+    let samples = if phases_rad.iter().any(|&p| p != 0.0) {
+        shifted = run
+            .samples
+            .iter()
+            .map(|s| {
+                let mut s = s.clone();
+                let phase = phases_rad.get(s.run).copied().unwrap_or(0.0);
+                if phase != 0.0 {
+                    s.theta_rad += phase;
+                }
+                s
+            })
+            .collect();
+        &shifted
+    } else {
+        &run.samples
+    };
+    let sopts = crate::surface::Options::new(run.model, run.window.grid, design.grid_um * 1e-3);
+    let sim =
+        crate::surface::simulate(samples, cutter, &sopts, &|_, _| {}).map_err(|e| e.to_string())?;
     let nodes = sim.map.nx * sim.map.ny;
     if sim.nodes_cut != nodes {
         return Err(format!(
@@ -195,15 +274,7 @@ pub fn simulate_run(
             1e3 * REACH_HEIGHT_MM
         ));
     }
-    let params: Vec<crate::metrics::Param> = design
-        .responses
-        .iter()
-        .map(|r| {
-            crate::metrics::Param::from_symbol(r)
-                .filter(|p| !p.is_profile())
-                .ok_or_else(|| format!("'{r}' is not an areal parameter"))
-        })
-        .collect::<Result<_, _>>()?;
+    let params = &run.params;
     let mut set_list: Vec<&str> = params.iter().map(|p| p.symbol()).collect();
     set_list.dedup();
     let set =
@@ -220,8 +291,9 @@ pub fn simulate_run(
         .collect();
     Ok(RunOutput {
         responses,
-        fz_mm,
-        stepover_mm: synth.stepover_mm,
+        fz_mm: run.fz_mm,
+        stepover_mm: run.stepover_mm,
+        bands: None,
     })
 }
 

@@ -496,3 +496,183 @@ fn a_runout_sweep_in_three_processes_merges_to_the_single_process_bytes() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("is not a shard K/N"));
 }
+
+/// Two runs with Monte Carlo bands (run-out offset and tooth radius uncertain, spindle
+/// phase drawn per pass).
+fn mc_design(dir: &Path) -> PathBuf {
+    let text = format!(
+        "title = \"mc\"\n\
+         surface = \"plane\"\n\
+         tool = \"{}\"\n\
+         rpm = 15000.0\n\
+         grid_um = 4.0\n\
+         dtheta_deg = 2.0\n\
+         responses = [\"Sz\", \"Sa\"]\n\
+         [factors]\n\
+         tilt_deg = [10.0]\n\
+         stepover_mm = [0.05]\n\
+         feed_mm_min = [2000.0, 4000.0]\n\
+         [uncertainty]\n\
+         runout_offset_um = 1.0\n\
+         tooth_deviation_um = 0.5\n",
+        repo("samples/tools/torus-r5-rc1.5.toml").display()
+    );
+    write(dir, "mc.toml", text)
+}
+
+#[test]
+fn monte_carlo_shards_in_two_processes_merge_to_the_single_process_bytes() {
+    let dir = tempdir();
+    let d = mc_design(dir.path());
+    let mc = ["--monte-carlo", "5", "--seed", "7"];
+    let single = dir.path().join("single");
+    let s = crest()
+        .arg("study")
+        .arg(&d)
+        .args(mc)
+        .arg("-o")
+        .arg(&single)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let s = output_json(&s);
+    let shards = dir.path().join("shards");
+    let children: Vec<std::process::Child> = (1..=2)
+        .map(|k| {
+            std::process::Command::new(env!("CARGO_BIN_EXE_crest"))
+                .arg("study")
+                .arg(&d)
+                .args(mc)
+                .arg("--shard")
+                .arg(format!("{k}/2"))
+                .arg("--threads")
+                .arg("1")
+                .arg("-o")
+                .arg(&shards)
+                .stdout(std::process::Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    let merged = dir.path().join("merged");
+    let files: Vec<PathBuf> = (1..=2)
+        .map(|k| shards.join(format!("shard-{k}-of-2.jsonl")))
+        .collect();
+    let o = crest()
+        .arg("merge")
+        .args(&files)
+        .arg("-o")
+        .arg(&merged)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let j = output_json(&o);
+    for name in ["runs.csv", "effects.csv"] {
+        assert_eq!(
+            bytes(&merged.join(name)),
+            bytes(&single.join(name)),
+            "{name} differs"
+        );
+    }
+    assert_eq!(s["runs"], j["runs"]);
+    assert_eq!(s["monte_carlo"], j["monte_carlo"]);
+    assert_eq!(s["monte_carlo"]["samples"], 5);
+    assert_eq!(s["monte_carlo"]["seed"], 7);
+    assert_eq!(
+        s["monte_carlo"]["uncertainty"],
+        serde_json::json!({"runout_offset_um": 1.0, "tooth_deviation_um": 0.5, "spindle_phase": true})
+    );
+    let csv = read(&single.join("runs.csv"));
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "run,tilt_deg,stepover_mm,feed_mm_min,fz_mm,step_mm,Sz,Sz_p5,Sz_p50,Sz_p95,Sa,Sa_p5,Sa_p50,Sa_p95,error"
+    );
+
+    // Without --monte-carlo: the deterministic values, to the last bit, and no bands.
+    let plain = crest()
+        .arg("study")
+        .arg(&d)
+        .arg("-o")
+        .arg(dir.path().join("plain"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    let plain = output_json(&plain);
+    assert!(plain.get("monte_carlo").is_none());
+    for (p, m) in plain["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(s["runs"].as_array().unwrap())
+    {
+        assert_eq!(p["responses"], m["responses"]);
+        assert!(p.get("bands").is_none());
+        for k in ["Sz", "Sa"] {
+            let b = &m["bands"][k];
+            let (p5, p95) = (b["p5"].as_f64().unwrap(), b["p95"].as_f64().unwrap());
+            assert!(p5 <= b["p50"].as_f64().unwrap() && b["p50"].as_f64().unwrap() <= p95);
+            // The spindle phase between passes and the run-out move the marks.
+            assert!(p95 > p5, "{k}: {b}");
+        }
+    }
+
+    // Shards of different Monte Carlo settings do not merge.
+    let other = dir.path().join("other");
+    crest()
+        .arg("study")
+        .arg(&d)
+        .args(["--monte-carlo", "5", "--seed", "8", "--shard", "2/2"])
+        .arg("-o")
+        .arg(&other)
+        .assert()
+        .success();
+    let o = crest()
+        .arg("merge")
+        .arg(&files[0])
+        .arg(other.join("shard-2-of-2.jsonl"))
+        .arg("-o")
+        .arg(dir.path().join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("different Monte Carlo"), "{err}");
+}
+
+#[test]
+fn monte_carlo_needs_one_to_a_hundred_thousand_samples() {
+    let dir = tempdir();
+    let d = mc_design(dir.path());
+    for n in ["0", "100001"] {
+        let o = crest()
+            .arg("study")
+            .arg(&d)
+            .args(["--monte-carlo", n])
+            .arg("-o")
+            .arg(dir.path().join("out"))
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{n}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("--monte-carlo"), "{err}");
+        assert!(!dir.path().join("out").exists());
+    }
+    let bad = read(&d).replace("tooth_deviation_um = 0.5", "parameter_scale = 2.0");
+    let b = write(dir.path(), "bad.toml", bad);
+    let o = crest()
+        .arg("study")
+        .arg(&b)
+        .arg("-o")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.toml:14:19") && err.contains("parameter_scale"),
+        "{err}"
+    );
+}
