@@ -90,6 +90,7 @@ fn eight_digits(d: u64) -> u64 {
 /// Returns the value and the number of bytes consumed, or `None` when `bytes` does not
 /// start with a number. The value may be infinite when the number overflows `f64`; the
 /// caller decides whether that is an error.
+#[inline]
 pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
     let len = bytes.len();
     // The sign without a branch (signs of coordinates follow no pattern).
