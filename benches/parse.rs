@@ -2,7 +2,8 @@
 //!
 //! `parse` = records only; `lower` = records + lowering to postures; `convert` = records +
 //! lowering + contact12 rows into memory (the `crest convert` pipeline without the file);
-//! `newlines` = a `memchr` count of the line ends, the limit of any line reader.
+//! `newlines` = a `memchr` count of the line ends, the limit of any line reader;
+//! `write/contact12_rows` = the contact12 rows of lowered postures alone (bytes written).
 
 use crest::parse::{ClsfReader, Contact12Reader};
 use crest::toolpath::{Contact12Writer, LowerOptions, Lowerer, Posture, Toolpath};
@@ -89,6 +90,30 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.throughput(Throughput::Bytes(csv_text.len() as u64));
+    let mut postures = Vec::new();
+    let mut low = Lowerer::new(LowerOptions {
+        keep_postures: false,
+        ..Default::default()
+    });
+    let mut keep = |_: &Toolpath, p: &Posture| {
+        postures.push(p.clone());
+        Ok(())
+    };
+    for r in ClsfReader::new(contact.as_bytes()) {
+        let r = r.unwrap_or_else(|e| panic!("{e}"));
+        low.push(&r, &mut keep).unwrap_or_else(|e| panic!("{e}"));
+    }
+    low.finish(&mut keep).unwrap_or_else(|e| panic!("{e}"));
+    g.bench_function("write/contact12_rows", |b| {
+        b.iter(|| {
+            let mut out = Vec::with_capacity(csv_text.len());
+            let mut w = Contact12Writer::new(false);
+            for p in black_box(&postures) {
+                w.posture(p, &mut out).unwrap_or_else(|e| panic!("{e}"));
+            }
+            out.len()
+        })
+    });
     g.bench_function("records/contact12_csv", |b| {
         b.iter(|| {
             Contact12Reader::new(black_box(csv_text.as_str()).as_bytes())

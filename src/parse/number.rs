@@ -13,40 +13,101 @@ const POW10: [f64; 23] = [
     1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
 ];
 
-/// Scan one number at the start of `bytes`.
+/// `10^n` for `n ≤ 8`, as integers.
+const POW10_U64: [u64; 9] = [
+    1,
+    10,
+    100,
+    1_000,
+    10_000,
+    100_000,
+    1_000_000,
+    10_000_000,
+    100_000_000,
+];
+
+/// The run of ASCII digits starting at `bytes[i]`: where it ends, and `mantissa` with its
+/// digits appended (wrapping, as the caller only trusts up to 18 digits).
 ///
-/// Returns the value and the number of bytes consumed, or `None` when `bytes` does not
-/// start with a number. The value may be infinite when the number overflows `f64`; the
-/// caller decides whether that is an error.
-pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
-    let len = bytes.len();
-    let mut i = 0;
-    let mut negative = false;
-    if i < len && (bytes[i] == b'+' || bytes[i] == b'-') {
-        negative = bytes[i] == b'-';
-        i += 1;
+/// Eight bytes at a time where eight are left: which of them are digits and their value
+/// come from a few word operations, so a run of any length up to 8 costs one branch
+/// instead of one (mispredicted at the end) per digit.
+#[inline(always)]
+fn digit_run(bytes: &[u8], mut i: usize, mut mantissa: u64) -> (usize, u64) {
+    while let Some(w) = bytes.get(i..i + 8) {
+        let mut word = [0u8; 8];
+        word.copy_from_slice(w);
+        let w = u64::from_le_bytes(word);
+        let n = leading_digits(w);
+        if n == 0 {
+            return (i, mantissa);
+        }
+        // The n digits as the low end of an eight-digit number with leading zeros.
+        let d = w.wrapping_sub(0x3030_3030_3030_3030) << (8 * (8 - n));
+        mantissa = mantissa
+            .wrapping_mul(POW10_U64[n])
+            .wrapping_add(eight_digits(d));
+        i += n;
+        if n < 8 {
+            return (i, mantissa);
+        }
     }
-    // Accumulate all digits; with at most 18 of them the u64 cannot overflow.
-    let mut mantissa: u64 = 0;
-    let int_start = i;
-    while i < len && bytes[i].is_ascii_digit() {
+    while i < bytes.len() && bytes[i].is_ascii_digit() {
         mantissa = mantissa
             .wrapping_mul(10)
             .wrapping_add(u64::from(bytes[i] - b'0'));
         i += 1;
     }
-    let mut digits = i - int_start;
+    (i, mantissa)
+}
+
+/// How many of the eight bytes of `w` (first byte lowest) are ASCII digits before the
+/// first one that is not.
+#[inline(always)]
+fn leading_digits(w: u64) -> usize {
+    // A byte's top bit ends up set when it is below b'0' (the subtraction borrows) or above
+    // b'9' (adding 0x46 reaches 0x80, or wraps for bytes ≥ 0xBA, which the subtraction then
+    // flags). Borrows and carries only run into later bytes, past the first non-digit.
+    let below = w.wrapping_sub(0x3030_3030_3030_3030);
+    let above = w.wrapping_add(0x4646_4646_4646_4646);
+    let non_digit = (below | above) & 0x8080_8080_8080_8080;
+    (non_digit.trailing_zeros() / 8) as usize
+}
+
+/// The value of eight digit values (0-9, one per byte, the first and most significant in
+/// the lowest byte).
+#[inline(always)]
+fn eight_digits(d: u64) -> u64 {
+    // Pairs, then quadruples, then the whole (each step multiplies adjacent fields by their
+    // weight; no field overflows into the next).
+    let d = d.wrapping_mul(10).wrapping_add(d >> 8) & 0x00FF_00FF_00FF_00FF;
+    let d = d.wrapping_mul(100).wrapping_add(d >> 16) & 0x0000_FFFF_0000_FFFF;
+    d.wrapping_mul(10_000).wrapping_add(d >> 32) & 0xFFFF_FFFF
+}
+
+/// Scan one number at the start of `bytes`.
+///
+/// Returns the value and the number of bytes consumed, or `None` when `bytes` does not
+/// start with a number. The value may be infinite when the number overflows `f64`; the
+/// caller decides whether that is an error.
+#[inline]
+pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
+    let len = bytes.len();
+    // The sign without a branch (signs of coordinates follow no pattern).
+    let first = bytes.first().copied().unwrap_or(0);
+    let negative = first == b'-';
+    let mut i = usize::from(negative || first == b'+');
+    // Accumulate all digits; with at most 18 of them the u64 cannot overflow.
+    let (end, mut mantissa) = digit_run(bytes, i, 0);
+    let mut digits = end - i;
+    i = end;
     let mut scale: i32 = 0;
     if i < len && bytes[i] == b'.' {
         i += 1;
-        let frac_start = i;
-        while i < len && bytes[i].is_ascii_digit() {
-            mantissa = mantissa
-                .wrapping_mul(10)
-                .wrapping_add(u64::from(bytes[i] - b'0'));
-            i += 1;
-        }
-        let frac = i - frac_start;
+        let (end, m) = digit_run(bytes, i, mantissa);
+        mantissa = m;
+        let frac = end - i;
+        i = end;
         digits += frac;
         scale = -(frac.min(100_000) as i32);
     }
@@ -83,7 +144,9 @@ pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
         } else {
             m * POW10[scale as usize]
         };
-        return Some((if negative { -v } else { v }, i));
+        // v ≥ 0: the sign bit set is the negation (−0 for 0, as `-v` gives).
+        let v = f64::from_bits(v.to_bits() | (u64::from(negative) << 63));
+        return Some((v, i));
     }
     // Slow path: the standard library parses exactly this syntax correctly rounded.
     let text = std::str::from_utf8(&bytes[..i]).ok()?;
@@ -114,6 +177,43 @@ mod tests {
         check("-.", None);
         check("abc", None);
         check("", None);
+    }
+
+    #[test]
+    fn digit_runs_of_every_length_and_position() {
+        // Runs of 0-20 digits followed by each kind of byte, at every offset of a word, and
+        // ending at the end of the slice.
+        for len in 0..=20usize {
+            let digits: String = (0..len)
+                .map(|k| char::from(b'0' + (k * 7 % 10) as u8))
+                .collect();
+            let want: u64 = digits.bytes().fold(0u64, |m, c| {
+                m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'))
+            });
+            for tail in [
+                "", ",", ".", "/", ":", "a", " ", "\u{e9}", "\u{ff}", "12345678",
+            ] {
+                for pad in 0..9 {
+                    let text = format!("{}{digits}{tail}", "x".repeat(pad));
+                    let b = text.as_bytes();
+                    let (end, m) = digit_run(b, pad, 0);
+                    let run = b[pad..].iter().take_while(|c| c.is_ascii_digit()).count();
+                    let all: u64 = b[pad..pad + run].iter().fold(0u64, |m, c| {
+                        m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'))
+                    });
+                    assert_eq!((end, m), (pad + run, all), "{text:?}");
+                    if !tail.starts_with('1') {
+                        assert_eq!(m, want);
+                    }
+                }
+            }
+        }
+        // Every byte value right after a digit.
+        for c in 0..=255u8 {
+            let b = [b'4', c, b'x', b'x', b'x', b'x', b'x', b'x', b'x'];
+            let n = 1 + usize::from(c.is_ascii_digit());
+            assert_eq!(digit_run(&b, 0, 0).0, n, "{c}");
+        }
     }
 
     #[test]

@@ -28,75 +28,82 @@ const POW10: [u64; 10] = [
 
 /// Append `v` in fixed point with between `min` and `max` decimals (`max ≤ 9`), rounded
 /// half away from zero; `-0` prints as `0`.
-pub fn push_fixed(out: &mut Vec<u8>, v: f64, (min, max): (u32, u32)) {
-    let max = max.min(9);
-    let min = min.min(max);
-    let scaled = v * POW10[max as usize] as f64;
-    if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
+pub fn push_fixed(out: &mut Vec<u8>, v: f64, decimals: (u32, u32)) {
+    let mut s = [0u8; FIXED_ROOM];
+    match fixed_digits(&mut s, v, decimals) {
+        Some(n) => out.extend_from_slice(&s[..n]),
         // Values too large for the decimals to be meaningful (beyond 2.8e8 mm), or not
         // finite: the shortest form that reads back exactly.
-        let _ = write!(out, "{v}");
-        return;
-    }
-    // Round half away from zero without a libm call, then split at the decimal point.
-    let q = (scaled.abs() + 0.5) as u64;
-    let p = POW10[max as usize];
-    let int = q / p;
-    let mut frac = (q % p) as u32;
-    let mut dec = max as usize;
-    while dec > min as usize && frac % 10 == 0 {
-        frac /= 10;
-        dec -= 1;
-    }
-    if scaled < 0.0 && q != 0 {
-        out.push(b'-');
-    }
-    push_u64(out, int);
-    if dec > 0 {
-        // The fraction, zero-padded to `dec` digits, two digits at a time.
-        let mut buf = [b'0'; 10];
-        let mut k = 10;
-        while frac >= 100 {
-            let r = (frac % 100) as usize * 2;
-            frac /= 100;
-            k -= 2;
-            buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+        None => {
+            let _ = write!(out, "{v}");
         }
-        if frac >= 10 {
-            let r = frac as usize * 2;
-            k -= 2;
-            buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
-        } else if frac > 0 {
-            buf[k - 1] = b'0' + frac as u8;
-        }
-        out.push(b'.');
-        out.extend_from_slice(&buf[10 - dec..]);
     }
 }
 
-/// Append the decimal digits of `v`.
-fn push_u64(out: &mut Vec<u8>, mut v: u64) {
-    if v < 10 {
-        out.push(b'0' + v as u8);
-        return;
+/// Bytes [`fixed_digits`] may write: at most 17 (sign, 15 digits, point), rounded up so
+/// that a scratch is a whole number of vector registers.
+const FIXED_ROOM: usize = 32;
+
+/// [`push_fixed`]'s digits, left-aligned in `s`; returns their length, or `None` for the
+/// values [`push_fixed`] prints with `format!` (not finite, or 2.8e14 and more once scaled
+/// by `10^max`). Writing into a fixed array (no `Vec` growth checks, no `memcpy` call per
+/// number, a fixed number of digit steps for the decimals) is what makes contact12 rows
+/// cheap.
+#[inline(always)]
+fn fixed_digits(s: &mut [u8; FIXED_ROOM], v: f64, (min, max): (u32, u32)) -> Option<usize> {
+    let max = max.min(9) as usize;
+    let min = (min as usize).min(max);
+    let scaled = v * POW10[max] as f64;
+    if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
+        return None;
     }
-    let mut buf = [0u8; 20];
-    let mut k = buf.len();
-    while v >= 100 {
+    // Round half away from zero without a libm call, then split at the decimal point
+    // (0 ≤ the rounded value < 2.8e14: the conversion through i64 is exact).
+    let q = (scaled.abs() + 0.5) as i64 as u64;
+    let p = POW10[max];
+    let int = q / p;
+    let frac = q % p;
+    let neg = usize::from(scaled < 0.0 && q != 0);
+    s[0] = b'-';
+    // `int` < 2.8e14: at most 15 digits.
+    let digits = if int < 10 {
+        1
+    } else {
+        int.ilog10() as usize + 1
+    };
+    let int_end = neg + digits;
+    put_digits(s, int_end, int, digits);
+    s[int_end] = b'.';
+    // All `max` decimals, then the trailing zeros beyond `min` dropped (with the point when
+    // no decimal is left).
+    let mut end = int_end + 1 + max;
+    put_digits(s, end, frac, max);
+    let keep = int_end + 1 + min;
+    while end > keep && s[end - 1] == b'0' {
+        end -= 1;
+    }
+    if end == int_end + 1 {
+        end = int_end;
+    }
+    Some(end)
+}
+
+/// Write exactly `count` decimal digits of `v` (zero-padded; `v < 10^count`) ending just
+/// before `s[end]`, two at a time (a fixed number of steps for a fixed `count`, so the
+/// decimals of a row's numbers unroll without branches).
+#[inline(always)]
+fn put_digits(s: &mut [u8; FIXED_ROOM], end: usize, mut v: u64, count: usize) {
+    let mut k = end;
+    for _ in 0..count / 2 {
         let r = (v % 100) as usize * 2;
         v /= 100;
         k -= 2;
-        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
+        s[k] = DIGIT_PAIRS[r];
+        s[k + 1] = DIGIT_PAIRS[r + 1];
     }
-    if v >= 10 {
-        let r = v as usize * 2;
-        k -= 2;
-        buf[k..k + 2].copy_from_slice(&DIGIT_PAIRS[r..r + 2]);
-    } else {
-        k -= 1;
-        buf[k] = b'0' + v as u8;
+    if count % 2 == 1 {
+        s[k - 1] = b'0' + (v % 10) as u8;
     }
-    out.extend_from_slice(&buf[k..]);
 }
 
 /// "00", "01", …, "99".
@@ -183,6 +190,31 @@ pub const CONTACT12_HEADER: &str = "x,y,z,i,j,k,cx,cy,cz,nx,ny,nz";
 pub struct Contact12Writer {
     all_moves: bool,
     line: Vec<u8>,
+    /// One row, built in place: 12 numbers of at most 17 bytes and their separators, and
+    /// the room of one more number's scratch.
+    row: [u8; ROW_ROOM],
+}
+
+/// Bytes of [`Contact12Writer`]'s row buffer.
+const ROW_ROOM: usize = 12 * 18 + 1 + FIXED_ROOM;
+
+/// Append one number of a row at `at` (followed by `sep` when it is not 0); `None` when the
+/// number needs `format!` (then the row is printed by the slow path).
+#[inline(always)]
+fn put_number(
+    row: &mut [u8; ROW_ROOM],
+    at: usize,
+    v: f64,
+    d: (u32, u32),
+    sep: u8,
+) -> Option<usize> {
+    let s: &mut [u8; FIXED_ROOM] = row.get_mut(at..at + FIXED_ROOM)?.try_into().ok()?;
+    let n = fixed_digits(s, v, d)?;
+    if sep == 0 {
+        return Some(at + n);
+    }
+    s[n] = sep;
+    Some(at + n + 1)
 }
 
 impl Contact12Writer {
@@ -192,6 +224,7 @@ impl Contact12Writer {
         Contact12Writer {
             all_moves,
             line: Vec::with_capacity(160),
+            row: [0; ROW_ROOM],
         }
     }
 
@@ -207,6 +240,43 @@ impl Contact12Writer {
         if !(self.all_moves || cutting_contact) {
             return Ok(());
         }
+        match self.fast_row(p) {
+            Some(n) => out.write_all(&self.row[..n]),
+            None => self.slow_row(p, out),
+        }
+    }
+
+    /// The row of `p` in [`Self::row`] (its length), or `None` when a number needs
+    /// `format!`.
+    #[inline]
+    fn fast_row(&mut self, p: &Posture) -> Option<usize> {
+        let r = &mut self.row;
+        let mut at = 0;
+        for v in [p.position.x, p.position.y, p.position.z] {
+            at = put_number(r, at, v, LENGTH_DECIMALS, b',')?;
+        }
+        for v in [p.axis.x, p.axis.y, p.axis.z] {
+            at = put_number(r, at, v, UNIT_DECIMALS, b',')?;
+        }
+        match &p.contact {
+            Some(c) => {
+                for v in [c.point.x, c.point.y, c.point.z] {
+                    at = put_number(r, at, v, LENGTH_DECIMALS, b',')?;
+                }
+                at = put_number(r, at, c.normal.x, UNIT_DECIMALS, b',')?;
+                at = put_number(r, at, c.normal.y, UNIT_DECIMALS, b',')?;
+                at = put_number(r, at, c.normal.z, UNIT_DECIMALS, b'\n')?;
+            }
+            None => {
+                r.get_mut(at..at + 6)?.copy_from_slice(b",,,,,\n");
+                at += 6;
+            }
+        }
+        Some(at)
+    }
+
+    /// The row of `p` through [`push_fixed`] (any value).
+    fn slow_row(&mut self, p: &Posture, out: &mut dyn Write) -> io::Result<()> {
         let l = &mut self.line;
         l.clear();
         for v in [p.position.x, p.position.y, p.position.z] {
@@ -520,6 +590,53 @@ mod tests {
             let again: f64 = printed.parse().unwrap_or(f64::NAN);
             assert_eq!(fixed(again, LENGTH_DECIMALS), printed);
             assert_eq!(again, v, "{s}");
+        }
+    }
+
+    #[test]
+    fn rows_in_place_print_as_push_fixed_does() {
+        let mut seed: u64 = 11;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut values = vec![
+            0.0, -0.0, 0.5, -0.5, 1e-12, -1e-12, 9.9999995, 2.79e8, -2.79e8,
+        ];
+        for _ in 0..50_000 {
+            let mag = 10f64.powf(next() * 12.0 - 4.0);
+            values.push((next() - 0.5) * mag);
+        }
+        for v in values {
+            for d in [LENGTH_DECIMALS, UNIT_DECIMALS, (0, 6), (0, 9), (0, 0)] {
+                let mut s = [0u8; FIXED_ROOM];
+                let n = fixed_digits(&mut s, v, d).unwrap_or(0);
+                let mut want = Vec::new();
+                push_fixed(&mut want, v, d);
+                if n == 0 {
+                    // Beyond the fixed-point range: `format!`'s shortest form.
+                    assert_eq!(want, format!("{v}").into_bytes());
+                    continue;
+                }
+                assert_eq!(&s[..n], &want[..], "{v} {d:?}");
+                // The digits are those of the plain algorithm: scaled, rounded, split.
+                let max = d.1;
+                let q = (v.abs() * 10f64.powi(max as i32) + 0.5) as u64;
+                let (int, mut frac, mut dec) = (q / 10u64.pow(max), q % 10u64.pow(max), max);
+                while dec > d.0 && frac % 10 == 0 {
+                    frac /= 10;
+                    dec -= 1;
+                }
+                let sign = if v < 0.0 && q != 0 { "-" } else { "" };
+                let plain = if dec == 0 {
+                    format!("{sign}{int}")
+                } else {
+                    format!("{sign}{int}.{frac:0w$}", w = dec as usize)
+                };
+                assert_eq!(String::from_utf8_lossy(&want), plain, "{v} {d:?}");
+            }
         }
     }
 

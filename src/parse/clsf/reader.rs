@@ -46,7 +46,49 @@ impl<R: BufRead> ClsfReader<R> {
         self.line
     }
 
+    /// The bulk of a file, without copying or validating the line: a whole `GOTO/` line of
+    /// bare-comma numbers (3, 6, 9 or 12) in the reader's buffer, parsed where it lies.
+    /// `None` (nothing consumed) for anything else, which [`Self::next_record`] reads
+    /// line by line.
+    fn next_goto_in_place(&mut self) -> Result<Option<Record>, ParseError> {
+        let avail = self.src.fill_buf()?;
+        let Some(nl) = memchr::memchr(b'\n', avail) else {
+            return Ok(None);
+        };
+        let mut end = nl;
+        if end > 0 && avail[end - 1] == b'\r' {
+            end -= 1;
+        }
+        if !avail.starts_with(b"GOTO/") {
+            return Ok(None);
+        }
+        // Numbers and commas up to the line end: no blank, no `$`, no other byte, so the
+        // record starts in column 1 and the slow path would take its own fast path too.
+        // The scan sees the buffer past the line (the line end stops every number), so the
+        // last number too is read eight bytes at a time.
+        match fast_numbers(&avail[5..], MAX_NUMBERS, false) {
+            Some((n, used)) if used + 5 == end && matches!(n.len(), 3 | 6 | 9 | 12) => {
+                self.src.consume(nl + 1);
+                self.line = self.line.saturating_add(1);
+                Ok(Some(Record {
+                    kind: RecordKind::Goto(n),
+                    line: self.line,
+                    column: 1,
+                }))
+            }
+            _ => Ok(None),
+        }
+    }
+
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
+        // After the first line (which may carry a byte-order mark) and outside a
+        // continued record.
+        if self.line > 0
+            && self.joined.is_empty()
+            && let Some(r) = self.next_goto_in_place()?
+        {
+            return Ok(Some(r));
+        }
         loop {
             self.buf.clear();
             let n = self.src.read_until(b'\n', &mut self.buf)?;
