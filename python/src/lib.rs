@@ -658,6 +658,8 @@ fn request_of(
     model: &str,
     dtheta_deg: f64,
     grid_um: Option<f64>,
+    chord_tol_um: Option<f64>,
+    band_um: Option<f64>,
     ap_mm: Option<f64>,
     path: Option<usize>,
     teeth: Option<usize>,
@@ -738,8 +740,8 @@ fn request_of(
         model,
         dtheta_deg,
         grid_um,
-        chord_tol_um: None,
-        band_um: None,
+        chord_tol_um,
+        band_um,
         grid,
         ap_mm,
         path,
@@ -753,7 +755,7 @@ fn request_of(
 /// `Cutter` or the path of a `tool.toml` (default: the file's TLDATA with `teeth`). Returns
 /// a `HeightMap` (window, patch) or a `PartMap`. The GIL is released while it runs.
 #[pyfunction]
-#[pyo3(signature = (file, *, tool = None, window = None, patch_at = None, patch_near = None, patch_mm = None, map_mm = None, region = None, part = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+#[pyo3(signature = (file, *, tool = None, window = None, patch_at = None, patch_near = None, patch_mm = None, map_mm = None, region = None, part = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, chord_tol_um = None, band_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     py: Python<'_>,
@@ -775,6 +777,8 @@ fn simulate(
     model: &str,
     dtheta_deg: f64,
     grid_um: Option<f64>,
+    chord_tol_um: Option<f64>,
+    band_um: Option<f64>,
     ap_mm: Option<f64>,
     path: Option<usize>,
     teeth: Option<usize>,
@@ -800,6 +804,8 @@ fn simulate(
         model,
         dtheta_deg,
         grid_um,
+        chord_tol_um,
+        band_um,
         ap_mm,
         path,
         teeth,
@@ -1087,7 +1093,7 @@ fn study_tasks<'py>(
 /// plain dicts (picklable), task k simulating cells k, k+tasks, … of the map. The file
 /// paths are made absolute; every worker must see the files there.
 #[pyfunction]
-#[pyo3(signature = (file, *, tasks, map_mm, part, region = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+#[pyo3(signature = (file, *, tasks, map_mm, part, region = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, chord_tol_um = None, band_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
 #[allow(clippy::too_many_arguments)]
 fn map_tasks<'py>(
     py: Python<'py>,
@@ -1106,6 +1112,8 @@ fn map_tasks<'py>(
     model: &str,
     dtheta_deg: f64,
     grid_um: Option<f64>,
+    chord_tol_um: Option<f64>,
+    band_um: Option<f64>,
     ap_mm: Option<f64>,
     path: Option<usize>,
     teeth: Option<usize>,
@@ -1135,6 +1143,8 @@ fn map_tasks<'py>(
         model,
         dtheta_deg,
         grid_um,
+        chord_tol_um,
+        band_um,
         ap_mm,
         path,
         teeth,

@@ -296,3 +296,34 @@ def test_part_maps_pickle_exactly():
     assert back.nodes_cut == 4
     with pytest.raises(ValueError, match="shape"):
         crest.PartMap(pts[:4], nrm, h)
+
+
+def test_swept_model_and_mesh_options_are_the_cli_bytes(cli, tmp_path):
+    """`model="swept"` and the speed options (`chord_tol_um`, `band_um`) reach the same code
+    as the CLI's `--model swept --chord-tol-um --band-um`."""
+    ball = ROOT / "samples" / "synth" / "ball-r5.toml"
+    cls = tmp_path / "raster.cls"
+    p = cli(
+        "synth", "plane", "--tool", ball, "--stepover-mm", "0.4", "--size-mm", "3,3",
+        "--point-step-mm", "0.05", "--feed-mm-min", "1000", "--rpm", "20000", "-o", cls,
+    )
+    assert p.returncode == 0, p.stderr
+    for model, extra, kw in (
+        ("swept", ["--band-um", "15"], dict(band_um=15.0)),
+        ("dome", ["--chord-tol-um", "1"], dict(chord_tol_um=1.0)),
+    ):
+        theirs = tmp_path / f"cli-{model}.gsf"
+        p = cli(
+            "simulate", cls, "--tool", ball, "--model", model, "--grid-um", "10",
+            "--fz-mm", "0.05", "--window=-0.5,-0.5,0.5,0.5", *extra, "-o", theirs,
+        )
+        assert p.returncode == 0, p.stderr
+        m = crest.simulate(
+            cls, tool=str(ball), model=model, grid_um=10.0, fz_mm=0.05,
+            window=(-0.5, -0.5, 0.5, 0.5), **kw,
+        )
+        ours = tmp_path / f"py-{model}.gsf"
+        m.to_gsf(ours)
+        assert ours.read_bytes() == theirs.read_bytes(), model
+    with pytest.raises(crest.CrestError, match="chord-tol-um"):
+        crest.simulate(cls, tool=str(ball), model="dome", window=(0, 0, 0.1, 0.1), chord_tol_um=0.0)
