@@ -58,7 +58,7 @@ enum Command {
     /// Run-out what-if study.
     Runout(runout::Args),
     /// Simulate the machined surface as a height map.
-    Simulate(simulate::Args),
+    Simulate(Box<simulate::Args>),
     /// Profile and ISO 25178 areal roughness parameters of a height map.
     Metrics(metrics::Args),
     /// Plots: trochoids, run-out, height maps, profiles, feed.
@@ -168,7 +168,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Resample(a) => resample::run(a),
         Command::Tool(a) => tool::run(a),
         Command::Runout(a) => runout::run(a),
-        Command::Simulate(a) => simulate::run(a),
+        Command::Simulate(a) => simulate::run(*a),
         Command::Metrics(a) => metrics::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Report(a) => report::run(a),
