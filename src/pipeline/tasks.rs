@@ -297,6 +297,51 @@ pub fn shard(tasks: Vec<Task>, k: usize, n: usize) -> Vec<Task> {
         .collect()
 }
 
+/// Check the shards of a split task list (`crest merge`): each shard `1..=shards` given
+/// once, each holding exactly the items `i` (0-based, of `total`) with `i % shards + 1` its
+/// number (`items`: the shard and its item indices in order; `what`: "cells", "cases").
+pub(crate) fn check_shards(
+    file: &str,
+    shards: usize,
+    total: usize,
+    items: impl IntoIterator<Item = (usize, Vec<usize>)>,
+    what: &str,
+) -> miette::Result<()> {
+    let mut seen = vec![false; shards];
+    for (shard, got) in items {
+        let slot = shard
+            .checked_sub(1)
+            .and_then(|i| seen.get_mut(i))
+            .ok_or_else(|| miette!("{file}: shard {shard} is out of range 1..={shards}"))?;
+        if *slot {
+            return Err(miette!("{file}: shard {shard} of {shards} is given twice"));
+        }
+        *slot = true;
+        let want: Vec<usize> = (0..total).filter(|i| i % shards + 1 == shard).collect();
+        if got != want {
+            return Err(miette!(
+                "{file}: shard {shard} of {shards} does not hold its {what} ({} of {} expected)",
+                got.len(),
+                want.len()
+            ));
+        }
+    }
+    let missing: Vec<String> = seen
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !**s)
+        .map(|(i, _)| (i + 1).to_string())
+        .collect();
+    if !missing.is_empty() {
+        return Err(miette!(
+            "{file}: {} of {shards} shards are missing: {}",
+            missing.len(),
+            missing.join(", ")
+        ));
+    }
+    Ok(())
+}
+
 /// Parse `K/N` (1 ≤ K ≤ N).
 pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     let bad = || format!("'{s}' is not a shard K/N with 1 ≤ K ≤ N (e.g. 2/8)");

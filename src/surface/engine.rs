@@ -236,7 +236,7 @@ pub fn simulate_with(
         let centres: Vec<Vec3> = (0..samples.len()).map(|k| setup.ball_centre(k)).collect();
         let runs: Vec<usize> = samples.iter().map(|s| s.run).collect();
         Setup {
-            swept_end: straight_stretches(&centres, &runs, d),
+            swept_end: super::swept::straight_stretches(&centres, &runs, d),
             ..setup
         }
     } else {
@@ -863,48 +863,12 @@ impl Setup<'_> {
         (vec![strip], vec![bb])
     }
 
-    /// Lower `tile` to the ball swept along strip `s` ([`swept::lowest`] at every node the
-    /// ball can bring below `cull`).
+    /// Lower `tile` to the ball swept along strip `s` (nodes the ball can bring below
+    /// `cull`).
     fn sweep_ball(&self, s: &Strip, tile: &mut Tile, cull: f64) {
         let k = s.k as usize;
-        let d = self.d;
-        let to_mm = |c: Vec3| [c.x * d, c.y * d, c.z];
-        let c0 = self.ball_centre(k);
-        let c1 = self.ball_centre(k + s.b as usize);
-        let r = self.ball_mm;
-        // Horizontal reach of the ball's cap below `cull`, nodes (+1 for rounding).
-        let h = cull - (c0.z.min(c1.z) - r);
-        if h < 0.0 {
-            return;
-        }
-        let reach = if h >= r {
-            r
-        } else {
-            (h * (2.0 * r - h)).sqrt()
-        } / d
-            + 1.0;
-        let lo_i = (c0.x.min(c1.x) - reach).floor().max(tile.i0 as f64) as usize;
-        let lo_j = (c0.y.min(c1.y) - reach).floor().max(tile.j0 as f64) as usize;
-        let hi_i = (c0.x.max(c1.x) + reach)
-            .ceil()
-            .min((tile.i0 + tile.w) as f64 - 1.0);
-        let hi_j = (c0.y.max(c1.y) + reach)
-            .ceil()
-            .min((tile.j0 + tile.h) as f64 - 1.0);
-        if hi_i < lo_i as f64 || hi_j < lo_j as f64 {
-            return;
-        }
-        let (a, b) = (to_mm(c0), to_mm(c1));
-        for j in lo_j..=hi_j as usize {
-            for i in lo_i..=hi_i as usize {
-                if let Some(z) = super::swept::lowest(a, b, (i as f64 * d, j as f64 * d), r) {
-                    let cell = &mut tile.z[(j - tile.j0) * tile.w + (i - tile.i0)];
-                    if z < *cell {
-                        *cell = z;
-                    }
-                }
-            }
-        }
+        let (c0, c1) = (self.ball_centre(k), self.ball_centre(k + s.b as usize));
+        super::swept::lower_tile(tile, c0, c1, self.ball_mm, self.d, cull);
     }
 
     fn bin(
@@ -1220,56 +1184,6 @@ impl Default for Scratch {
     }
 }
 
-/// Most moves (sample to sample) in one straight stretch of the swept model (bounds the work of finding
-/// them).
-const STRETCH_MAX: usize = 512;
-
-/// Largest distance of a ball centre from the straight stretch that replaces it, mm: the
-/// heights move by at most this much.
-const STRETCH_TOL_MM: f64 = 1e-7;
-
-/// The swept model's straight stretches: for each sample, the last sample of the stretch
-/// that starts there, `u32::MAX` for samples inside one. A stretch follows its run while
-/// every ball centre it passes lies within [`STRETCH_TOL_MM`] of the chord from its first
-/// to its last centre (and forward along it), at most [`STRETCH_MAX`] moves; the ball
-/// swept along the chord then covers what the samples' moves cover. `centres` in node
-/// space (x, y in nodes of `d` mm, z in mm).
-fn straight_stretches(centres: &[Vec3], runs: &[usize], d: f64) -> Vec<u32> {
-    let mm = |c: &Vec3| Vec3::new(c.x * d, c.y * d, c.z);
-    let n = centres.len();
-    let mut end = vec![u32::MAX; n];
-    let mut k = 0;
-    while k < n {
-        let a = mm(&centres[k]);
-        let mut m = k;
-        while m + 1 < n && runs[m + 1] == runs[k] && m + 1 - k <= STRETCH_MAX {
-            let b = mm(&centres[m + 1]);
-            let chord = b - a;
-            let len = chord.norm();
-            let ok = len > 0.0
-                && (k + 1..=m).all(|i| {
-                    let p = mm(&centres[i]) - a;
-                    let t = p.dot(&chord) / len;
-                    t >= -STRETCH_TOL_MM
-                        && t <= len + STRETCH_TOL_MM
-                        && (p - chord * (t / len)).norm() <= STRETCH_TOL_MM
-                });
-            if !ok {
-                break;
-            }
-            m += 1;
-        }
-        end[k] = m as u32;
-        // The next stretch starts where this one ends, unless the run ended here.
-        k = if m > k && m + 1 < n && runs[m + 1] == runs[m] {
-            m
-        } else {
-            m + 1
-        };
-    }
-    end
-}
-
 /// [`Setup::candidates`] for levels along a meridian that is not convex: every level is
 /// tested, the range runs from the first to the last within `lim` (one more each side).
 fn scan_candidates(f: &dyn Fn(usize) -> f64, n: usize, lim: f64) -> Option<(usize, usize)> {
@@ -1283,54 +1197,4 @@ fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
     bb[1] = bb[1].min(p[1]);
     bb[2] = bb[2].max(p[0]);
     bb[3] = bb[3].max(p[1]);
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{STRETCH_MAX, straight_stretches};
-    use crate::math::Vec3;
-
-    #[test]
-    fn straight_stretches_follow_lines_and_break_at_corners_runs_and_curves() {
-        // Two runs: a line of 1200 samples with a corner after 700, then a circle arc.
-        let d = 0.01;
-        let mut c = Vec::new();
-        let mut runs = Vec::new();
-        for i in 0..700 {
-            c.push(Vec3::new(i as f64 * 0.5, 0.0, 3.0)); // node space: 0.005 mm steps
-            runs.push(0);
-        }
-        for i in 1..=500 {
-            c.push(Vec3::new(699.0 * 0.5, i as f64 * 0.5, 3.0));
-            runs.push(0);
-        }
-        for i in 0..100 {
-            let a = i as f64 * 0.01; // R 5 mm = 500 nodes, 0.05 mm steps
-            c.push(Vec3::new(500.0 * a.cos(), 500.0 * a.sin(), 3.0));
-            runs.push(1);
-        }
-        let end = straight_stretches(&c, &runs, d);
-        let starts: Vec<(usize, u32)> = end
-            .iter()
-            .enumerate()
-            .filter(|(_, e)| **e != u32::MAX)
-            .map(|(k, e)| (k, *e))
-            .collect();
-        // The first leg in stretches of at most STRETCH_MAX moves, ending at the corner.
-        assert_eq!(starts[0], (0, STRETCH_MAX as u32));
-        assert_eq!(starts[1], (STRETCH_MAX, 699));
-        assert_eq!(starts[2], (699, 1199));
-        // Consecutive stretches share their ends; the arc's sagitta over one 0.05 mm step
-        // already exceeds the tolerance, so each of its moves is its own stretch, and the
-        // second run starts afresh.
-        for w in starts.windows(2) {
-            if runs[w[1].0] == runs[w[0].0] {
-                assert_eq!(w[0].1 as usize, w[1].0);
-            }
-        }
-        let arc: Vec<_> = starts.iter().filter(|(k, _)| *k >= 1200).collect();
-        assert_eq!(arc.len(), 99);
-        assert!(arc.iter().all(|(k, e)| *e as usize == k + 1 || *k == 1299));
-        assert!(starts.iter().all(|(k, e)| *e as usize >= *k));
-    }
 }

@@ -22,9 +22,9 @@ fn no_progress(_: usize, _: usize) {}
 // The dome and ICE models against closed forms and model.md R2/R3
 // ---------------------------------------------------------------------------------------
 
-#[test]
-fn dome_raster_lateral_crest_matches_closed_form() {
-    // 3-axis ball-end raster, R 5, stepover 0.2 mm, fz 0.05 mm, 2 teeth.
+/// A 3-axis ball-end raster, R 5, 2 teeth, fz 0.05 mm, five passes 0.2 mm apart along +x
+/// (y = −0.2 … 0.6), and a window of 0.1 × 0.4 mm over the middle ones.
+fn ball_raster() -> (Cutter, f64, Vec<Sample>, GridSpec) {
     let cutter = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
     let fz = 0.05;
     let mut samples = Vec::new();
@@ -47,6 +47,13 @@ fn dome_raster_lateral_crest_matches_closed_form() {
         x1_mm: 0.1,
         y1_mm: 0.4,
     };
+    (cutter, fz, samples, grid)
+}
+
+#[test]
+fn dome_raster_lateral_crest_matches_closed_form() {
+    // 3-axis ball-end raster, R 5, stepover 0.2 mm, fz 0.05 mm, 2 teeth.
+    let (cutter, _, samples, grid) = ball_raster();
     let sim = simulate(
         &samples,
         &cutter,
@@ -74,28 +81,7 @@ fn swept_ball_gives_the_exact_scallop_and_lies_under_the_dome_by_at_most_the_fee
     // The raster of the test above, R 5, stepover 0.2 mm: the swept ball leaves, at a node
     // dy from the nearest pass, exactly R − √(R² − dy²) (no feed marks); the dome stamps
     // every fz lie above it by at most the feed-mark cusp fz²/(8R) (+ its 0.01 µm mesh).
-    let cutter = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
-    let fz = 0.05;
-    let mut samples = Vec::new();
-    for (run, y) in [-0.2, 0.0, 0.2, 0.4, 0.6].iter().enumerate() {
-        samples.extend(pass(
-            &cutter,
-            run,
-            Point3::new(-1.2, *y, 0.0),
-            Vec3::x(),
-            Vec3::z(),
-            2.5,
-            fz,
-            fz,
-            0.0,
-        ));
-    }
-    let grid = GridSpec::Window {
-        x0_mm: 0.0,
-        y0_mm: 0.0,
-        x1_mm: 0.1,
-        y1_mm: 0.4,
-    };
+    let (cutter, fz, samples, grid) = ball_raster();
     let run = |model| {
         simulate(
             &samples,

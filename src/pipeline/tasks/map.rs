@@ -177,30 +177,16 @@ pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
             first.shard
         ));
     }
-    let mut seen = vec![false; shards];
+    super::check_shards(
+        &file,
+        shards,
+        total,
+        results
+            .iter()
+            .map(|r| (r.shard, r.cells.iter().map(|c| c.cell).collect())),
+        "cells",
+    )?;
     for r in &results {
-        let slot = r
-            .shard
-            .checked_sub(1)
-            .and_then(|i| seen.get_mut(i))
-            .ok_or_else(|| miette!("{file}: shard {} is out of range 1..={shards}", r.shard))?;
-        if *slot {
-            return Err(miette!(
-                "{file}: shard {} of {shards} is given twice",
-                r.shard
-            ));
-        }
-        *slot = true;
-        let want: Vec<usize> = (0..total).filter(|i| i % shards + 1 == r.shard).collect();
-        let got: Vec<usize> = r.cells.iter().map(|c| c.cell).collect();
-        if got != want {
-            return Err(miette!(
-                "{file}: shard {} of {shards} does not hold its cells ({} of {} expected)",
-                r.shard,
-                got.len(),
-                want.len()
-            ));
-        }
         if let Some(c) = r.cells.iter().find(|c| c.points.len() != c.height_um.len()) {
             return Err(miette!(
                 "{file}: cell {} has {} points but {} heights",
@@ -209,19 +195,6 @@ pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
                 c.height_um.len()
             ));
         }
-    }
-    let missing: Vec<String> = seen
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| !**s)
-        .map(|(i, _)| (i + 1).to_string())
-        .collect();
-    if !missing.is_empty() {
-        return Err(miette!(
-            "{file}: {} of {shards} shards are missing: {}",
-            missing.len(),
-            missing.join(", ")
-        ));
     }
     let mut cells: Vec<MapCell> = results.into_iter().flat_map(|r| r.cells).collect();
     cells.sort_by_key(|c| c.cell);

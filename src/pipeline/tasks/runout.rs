@@ -269,44 +269,15 @@ pub fn merge_runout(results: Vec<RunoutResult>) -> miette::Result<RunoutRun> {
             cases.len()
         ));
     }
-    let mut seen = vec![false; shards];
-    for r in &results {
-        let slot = r
-            .shard
-            .checked_sub(1)
-            .and_then(|i| seen.get_mut(i))
-            .ok_or_else(|| miette!("{file}: shard {} is out of range 1..={shards}", r.shard))?;
-        if *slot {
-            return Err(miette!(
-                "{file}: shard {} of {shards} is given twice",
-                r.shard
-            ));
-        }
-        *slot = true;
-        let want: Vec<usize> = (0..total).filter(|i| i % shards + 1 == r.shard).collect();
-        let got: Vec<usize> = r.cases.iter().map(|c| c.case).collect();
-        if got != want {
-            return Err(miette!(
-                "{file}: shard {} of {shards} does not hold its cases ({} of {} expected)",
-                r.shard,
-                got.len(),
-                want.len()
-            ));
-        }
-    }
-    let missing: Vec<String> = seen
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| !**s)
-        .map(|(i, _)| (i + 1).to_string())
-        .collect();
-    if !missing.is_empty() {
-        return Err(miette!(
-            "{file}: {} of {shards} shards are missing: {}",
-            missing.len(),
-            missing.join(", ")
-        ));
-    }
+    super::check_shards(
+        &file,
+        shards,
+        total,
+        results
+            .iter()
+            .map(|r| (r.shard, r.cases.iter().map(|c| c.case).collect())),
+        "cases",
+    )?;
     let mut got: Vec<RunoutCaseResult> = results.into_iter().flat_map(|r| r.cases).collect();
     got.sort_by_key(|c| c.case);
     let rule = p.study.rule.name();
