@@ -99,8 +99,9 @@ struct Setup<'a> {
     dome_repeat: Vec<bool>,
     /// Swept model: the ball's radius, mm.
     ball_mm: f64,
-    /// Swept model: per sample, the last sample of the straight stretch that starts there
-    /// (`u32::MAX` inside a stretch); empty for the other models.
+    /// Swept model (empty for the others): per sample, the ball centre in node space and the
+    /// last sample of the straight stretch that starts there (`u32::MAX` inside one).
+    swept_centre: Vec<Vec3>,
     swept_end: Vec<u32>,
 }
 
@@ -230,13 +231,16 @@ pub fn simulate_with(
             .map(|t| TextureField::new(&t)),
         dome_repeat,
         ball_mm: cutter.radius_mm,
+        swept_centre: Vec::new(),
         swept_end: Vec::new(),
     };
     let setup = if opts.model == Model::Swept {
-        let centres: Vec<Vec3> = (0..samples.len()).map(|k| setup.ball_centre(k)).collect();
-        let runs: Vec<usize> = samples.iter().map(|s| s.run).collect();
+        let shift = Vec3::new(x0 / d, y0 / d, 0.0);
+        let (g, f) = (&setup.g, &setup.frame);
+        let (centre, end) = super::swept::plan(samples, cutter.radius_mm, g, f, shift, d);
         Setup {
-            swept_end: super::swept::straight_stretches(&centres, &runs, d),
+            swept_centre: centre,
+            swept_end: end,
             ..setup
         }
     } else {
@@ -813,14 +817,6 @@ impl Setup<'_> {
         (strips, boxes)
     }
 
-    /// Strip indices per tile, for the tiles in `pending`.
-    /// The ball centre of sample `k` in node space (i, j in nodes, w in mm).
-    fn ball_centre(&self, k: usize) -> Vec3 {
-        let a = &self.samples[k];
-        let c = a.position + a.axis.normalize() * self.ball_mm;
-        self.g * (c - self.frame.origin) - Vec3::new(self.x0 / self.d, self.y0 / self.d, 0.0)
-    }
-
     /// The swept model's strip of sample `k` when a straight stretch of its run starts
     /// there ([`straight_stretches`]; a lone sample is a stretch of length 0), with the
     /// node-space box within which the ball can come below the band over the nominal.
@@ -829,8 +825,7 @@ impl Setup<'_> {
         if end == u32::MAX {
             return (Vec::new(), Vec::new());
         }
-        let c0 = self.ball_centre(k);
-        let c1 = self.ball_centre(end as usize);
+        let (c0, c1) = (self.swept_centre[k], self.swept_centre[end as usize]);
         let mid = (c0 + c1) * 0.5;
         let half = 0.5 * (c1.xy() - c0.xy()).norm();
         let r = self.ball_mm / self.d;
@@ -867,10 +862,11 @@ impl Setup<'_> {
     /// `cull`).
     fn sweep_ball(&self, s: &Strip, tile: &mut Tile, cull: f64) {
         let k = s.k as usize;
-        let (c0, c1) = (self.ball_centre(k), self.ball_centre(k + s.b as usize));
+        let (c0, c1) = (self.swept_centre[k], self.swept_centre[k + s.b as usize]);
         super::swept::lower_tile(tile, c0, c1, self.ball_mm, self.d, cull);
     }
 
+    /// Strip indices per tile, for the tiles in `pending`.
     fn bin(
         &self,
         strips: &[Strip],

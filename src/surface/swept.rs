@@ -52,6 +52,26 @@ pub(crate) fn lowest(c0: [f64; 3], c1: [f64; 3], p: (f64, f64), r: f64) -> Optio
     at(t.clamp(lo, hi))
 }
 
+/// The swept model's plan of `samples` for a ball of radius `r_mm`: the ball centres in
+/// node space (`g` the grid rows scaled to nodes of `d` mm, `shift` node (0, 0)'s offset; i,
+/// j in nodes, w in mm) and their [`straight_stretches`].
+pub(crate) fn plan(
+    samples: &[crate::resample::Sample],
+    r_mm: f64,
+    g: &nalgebra::Matrix3<f64>,
+    frame: &super::GridFrame,
+    shift: Vec3,
+    d: f64,
+) -> (Vec<Vec3>, Vec<u32>) {
+    let centres: Vec<Vec3> = samples
+        .iter()
+        .map(|a| g * (a.position + a.axis.normalize() * r_mm - frame.origin) - shift)
+        .collect();
+    let runs: Vec<usize> = samples.iter().map(|s| s.run).collect();
+    let end = straight_stretches(&centres, &runs, d);
+    (centres, end)
+}
+
 /// Lower `tile` to the ball of radius `r` mm swept from centre `c0` to `c1` (node space: x,
 /// y in nodes of `d` mm, z in mm) at the nodes where it can come below `cull`.
 pub(crate) fn lower_tile(tile: &mut Tile, c0: Vec3, c1: Vec3, r: f64, d: f64, cull: f64) {
