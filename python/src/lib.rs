@@ -711,7 +711,11 @@ fn request_of(
         "ice" => crest::surface::ModelKind::Ice,
         "dome" => crest::surface::ModelKind::Dome,
         "swept" => crest::surface::ModelKind::Swept,
-        m => return Err(bad(&format!("model must be 'ice', 'dome' or 'swept', got '{m}'"))),
+        m => {
+            return Err(bad(&format!(
+                "model must be 'ice', 'dome' or 'swept', got '{m}'"
+            )));
+        }
     };
     let feed = match feed {
         None => None,
