@@ -20,9 +20,10 @@
 //! With `--monte-carlo N` every run is also simulated N times with its inputs drawn from the
 //! design's `[uncertainty]` (run-out, spindle phase of every pass; sample i from stream i of
 //! the seed S, `crate::study::montecarlo::run_bands`), and `runs.csv` gets the columns
-//! `X_p5`, `X_p50`, `X_p95` after each response `X` (`--json`: `bands` per run); the
-//! deterministic columns and the effects are those of the run without it. Shards carry the
-//! setting, so merged shards give the same bytes.
+//! `X_p5`, `X_p50`, `X_p95` after each response `X` (`--json`: `bands` per run), and
+//! `bands.svg` draws them (a panel per response: the band, its median and the deterministic
+//! run); the deterministic columns and the effects are those of the run without it. Shards
+//! carry the setting, so merged shards give the same bytes.
 
 use super::Outcome;
 use crest::pipeline::design::{DesignRun, effects_json, run_json};

@@ -156,8 +156,9 @@ pub fn finish(
 }
 
 /// The files `crest study` writes for a finished design, rendered in memory, in writing
-/// order: `runs.csv`, `effects.csv`, `effects.svg` (when it has a series) and
-/// `effects-<factor>.svg` for each factor with more than two levels.
+/// order: `runs.csv`, `effects.csv`, `effects.svg` (when it has a series), `bands.svg`
+/// (with Monte Carlo bands) and `effects-<factor>.svg` for each factor with more than two
+/// levels.
 pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>> {
     use crate::io::tables::{write_effects_csv, write_runs_csv};
     use crate::plot::effects::{effects_chart, level_chart};
@@ -179,6 +180,18 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
             crate::plot::effects::bar_chart_svg(&chart)
                 .map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
         ));
+    }
+    if let Some(c) =
+        crate::plot::effects::bands_chart(design, results, done.monte_carlo.map_or(0, |m| m.0))
+    {
+        let svg = c
+            .check_finite()
+            .map_err(|e| miette!("cannot draw bands.svg: {e}"))
+            .and_then(|()| {
+                crate::plot::chart::render_svg(&c)
+                    .map_err(|e| miette!("cannot draw bands.svg: {e}"))
+            })?;
+        files.push(("bands.svg".to_string(), svg.into_bytes()));
     }
     for (i, f) in design.factors().iter().enumerate() {
         if f.levels.len() <= 2 {

@@ -61,6 +61,8 @@ pub struct Chart {
     pub columns: usize,
     /// Lines of explanation under the panels (what the series mean), or none.
     pub notes: Vec<String>,
+    /// Integer x ticks (run numbers, counts).
+    pub x_integer: bool,
 }
 
 /// Legend labels of a panel's series, where a series that lies exactly on an earlier one
@@ -132,6 +134,7 @@ impl Chart {
             size: (1000, 560),
             columns: 1,
             notes: Vec::new(),
+            x_integer: false,
         }
     }
 
@@ -449,7 +452,19 @@ impl Draw for Chart {
                     tick_label(*v, dy)
                 }
             };
-            let x_fmt = move |v: &f64| tick_label(*v, dx);
+            let x_integer = chart.x_integer;
+            let x_fmt = move |v: &f64| {
+                if x_integer {
+                    format!("{v:.0}")
+                } else {
+                    tick_label(*v, dx)
+                }
+            };
+            let x_ticks = if x_integer {
+                ((x1 - x0).round() as usize + 1).clamp(2, 12)
+            } else {
+                10
+            };
             let y_ticks = if y_integer {
                 ((y1 - y0).round() as usize + 1).clamp(2, 12)
             } else {
@@ -462,7 +477,7 @@ impl Draw for Chart {
                     .x_label_formatter(&x_fmt)
                     .y_label_formatter(&y_fmt)
                     .y_labels(y_ticks)
-                    .x_labels(10),
+                    .x_labels(x_ticks),
             )
             .draw()?;
             for (s, label) in panel.series.iter().zip(&labels) {
@@ -583,6 +598,7 @@ mod tests {
             x_label: "x (mm)".into(),
             columns: 1,
             notes: Vec::new(),
+            x_integer: false,
             panels: vec![Panel {
                 caption: String::new(),
                 y_label: "y (µm)".into(),

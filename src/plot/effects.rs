@@ -1,13 +1,15 @@
 //! The designed experiment's figures: relative first-level effects per roughness
-//! parameter as grouped bars, one bar per factor (Lavernhe et al., Fig 11), and the effect
-//! of one factor at each of its levels as lines (their Fig 12).
+//! parameter as grouped bars, one bar per factor (Lavernhe et al., Fig 11), the effect
+//! of one factor at each of its levels as lines (their Fig 12), and with Monte Carlo the
+//! P5-P95 band of every run's responses.
 
+use super::chart::Panel;
 use super::chart::{
     Chart, Series, color, draw_legend, finite_range, legend_box, legend_headroom, style_mesh,
     tick_decimals, tick_label, title_font,
 };
 use super::{Draw, DrawResult, Format, PlotError, render_bytes};
-use crate::study::design::{Design, Effects};
+use crate::study::design::{Design, Effects, RunResult};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -223,4 +225,77 @@ pub fn level_chart(design: &Design, effects: &[Effects], factor: usize) -> Optio
         "change from the mean of all runs [%]",
         series,
     ))
+}
+
+/// With Monte Carlo bands (`crest study --monte-carlo N`): one panel per response, x = the
+/// run, the P5 and P95 of each run as a dashed band, its P50 as a line and the
+/// deterministic run (nominal inputs) as markers. `None` when no run has bands.
+pub fn bands_chart(design: &Design, results: &[RunResult], samples: usize) -> Option<Chart> {
+    if !results.iter().any(|r| r.bands.is_some()) {
+        return None;
+    }
+    let x: Vec<f64> = results.iter().map(|r| r.point.run as f64).collect();
+    let panels: Vec<Panel> = design
+        .responses
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let band = |f: fn(&crate::study::montecarlo::Band) -> f64| -> Vec<f64> {
+                results
+                    .iter()
+                    .map(|r| r.bands.as_ref().and_then(|b| b.get(k)).map_or(f64::NAN, f))
+                    .collect()
+            };
+            let det: Vec<f64> = results
+                .iter()
+                .map(|r| r.responses.get(k).copied().unwrap_or(f64::NAN))
+                .collect();
+            let mut p5 = Series::line("P5 / P95", &x, &band(|b| b.p5), 2);
+            p5.dashed = true;
+            let mut p95 = Series::line("", &x, &band(|b| b.p95), 2);
+            p95.dashed = true;
+            let p50 = Series::line("P50", &x, &band(|b| b.p50), 2);
+            let mut nominal = Series::line("deterministic run", &x, &det, 0);
+            nominal.line = false;
+            nominal.markers = true;
+            let unit = crate::metrics::Param::from_symbol(name).map_or("", |p| p.unit());
+            Panel {
+                caption: name.clone(),
+                y_label: if unit.is_empty() || unit == "1" {
+                    name.clone()
+                } else {
+                    format!("{name} [{unit}]")
+                },
+                y_range: None,
+                y_integer: false,
+                series: vec![p5, p95, p50, nominal],
+            }
+        })
+        .collect();
+    let columns = if panels.len() > 3 { 2 } else { 1 };
+    let rows = panels.len().div_ceil(columns);
+    let title = if design.title.is_empty() {
+        "Monte Carlo bands of every run".to_string()
+    } else {
+        format!("{}: Monte Carlo bands of every run", design.title)
+    };
+    let mut chart = Chart::lines(title, "run", "", Vec::new());
+    chart.panels = panels;
+    chart.columns = columns;
+    chart.x_integer = true;
+    chart.notes = vec![
+        format!(
+            "{samples} Monte Carlo samples per run (the inputs drawn within their [uncertainty]): \
+             dashed, their P5 and P95; line, their median."
+        ),
+        "Markers: the deterministic run (nominal inputs, every pass starting at spindle phase 0). \
+         With the spindle phase drawn per pass the passes' feed marks no longer line up, so it \
+         can lie outside the band."
+            .to_string(),
+    ];
+    chart.size = (
+        if columns > 1 { 1400 } else { 1000 },
+        120 + 260 * rows as u32 + 21 * chart.notes.len() as u32,
+    );
+    Some(chart)
 }

@@ -222,6 +222,7 @@ pub fn teeth_chart(rows: &[RunoutRow], study: &Study, teeth: usize, tool_name: &
         size: with_notes(size(cols, 2), &notes),
         columns: cols,
         notes,
+        x_integer: false,
     }
 }
 
@@ -284,6 +285,7 @@ pub fn crest_chart(rows: &[RunoutRow], study: &Study, tool_name: &str) -> Chart 
         size: with_notes(size(cols, 1), &notes),
         columns: cols,
         notes,
+        x_integer: false,
     }
 }
 
@@ -321,6 +323,7 @@ pub fn lateral_chart(curves: &[LateralCurve], tool_name: &str) -> Chart {
         }],
         size: (1000, 640),
         notes: Vec::new(),
+        x_integer: false,
     }
 }
 

@@ -570,12 +570,25 @@ fn monte_carlo_shards_in_two_processes_merge_to_the_single_process_bytes() {
         .output()
         .unwrap();
     let j = output_json(&o);
-    for name in ["runs.csv", "effects.csv"] {
+    for name in ["runs.csv", "effects.csv", "bands.svg"] {
         assert_eq!(
             bytes(&merged.join(name)),
             bytes(&single.join(name)),
             "{name} differs"
         );
+    }
+    // The bands' figure: a panel per response, the band, its median and the deterministic run.
+    let svg = read(&single.join("bands.svg"));
+    for text in [
+        "mc: Monte Carlo bands of every run",
+        ">\nSz\n<",
+        ">\nSa\n<",
+        "P5 / P95",
+        "P50",
+        "deterministic run",
+        "5 Monte Carlo samples per run",
+    ] {
+        assert!(svg.contains(text), "bands.svg lacks {text}");
     }
     assert_eq!(s["runs"], j["runs"]);
     assert_eq!(s["monte_carlo"], j["monte_carlo"]);
@@ -602,6 +615,8 @@ fn monte_carlo_shards_in_two_processes_merge_to_the_single_process_bytes() {
         .unwrap();
     let plain = output_json(&plain);
     assert!(plain.get("monte_carlo").is_none());
+    assert!(!dir.path().join("plain").join("bands.svg").exists());
+    assert!(dir.path().join("plain").join("runs.csv").exists());
     for (p, m) in plain["runs"]
         .as_array()
         .unwrap()
