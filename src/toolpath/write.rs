@@ -297,17 +297,24 @@ pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
 /// The contact12 CSV header.
 pub const CONTACT12_HEADER: &str = "x,y,z,i,j,k,cx,cy,cz,nx,ny,nz";
 
-/// Streams contact12 rows.
+/// Streams contact12 rows. Rows are collected in the writer and handed to the output in
+/// pieces of about 128 KiB: call [`Contact12Writer::flush`] after the last posture.
 pub struct Contact12Writer {
     all_moves: bool,
     line: Vec<u8>,
-    /// One row, built in place: 12 numbers of at most 17 bytes and their separators, and
-    /// the room of one more number's scratch.
-    row: [u8; ROW_ROOM],
+    /// Rows not yet handed on, `used` bytes of them, each built in place (the buffer's
+    /// length is fixed; it keeps room for one more row after `used`).
+    pending: Vec<u8>,
+    used: usize,
 }
 
-/// Bytes of [`Contact12Writer`]'s row buffer.
+/// Bytes of one row built in place: 12 numbers of at most 17 bytes and their separators,
+/// and the room of one more number's scratch.
 const ROW_ROOM: usize = 12 * 18 + 1 + FIXED_ROOM;
+
+/// Bytes of [`Contact12Writer`]'s collected rows: more than a 64 KiB `BufWriter` holds,
+/// so that one passes them on without copying.
+const PENDING_ROOM: usize = 1 << 17;
 
 /// Append one number of a row at `at` (followed by `sep` when it is not 0); `None` when the
 /// number needs `format!` (then the row is printed by the slow path).
@@ -328,6 +335,33 @@ fn put_number(
     Some(at + n + 1)
 }
 
+/// The row of `p` built in `r` (its length), or `None` when a number needs `format!`.
+#[inline]
+fn fast_row(r: &mut [u8; ROW_ROOM], p: &Posture) -> Option<usize> {
+    // Written out, not looped: a loop of three mispredicts its exit, once a triple.
+    let at = put_number(r, 0, p.position.x, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.position.y, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.position.z, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.axis.x, UNIT_DECIMALS, b',')?;
+    let at = put_number(r, at, p.axis.y, UNIT_DECIMALS, b',')?;
+    let mut at = put_number(r, at, p.axis.z, UNIT_DECIMALS, b',')?;
+    match &p.contact {
+        Some(c) => {
+            at = put_number(r, at, c.point.x, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.point.y, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.point.z, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.x, UNIT_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.y, UNIT_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.z, UNIT_DECIMALS, b'\n')?;
+        }
+        None => {
+            r.get_mut(at..at + 6)?.copy_from_slice(b",,,,,\n");
+            at += 6;
+        }
+    }
+    Some(at)
+}
+
 impl Contact12Writer {
     /// A writer; `all_moves` writes every posture (CC/normal empty without contact),
     /// otherwise only cutting moves with contact data.
@@ -335,55 +369,49 @@ impl Contact12Writer {
         Contact12Writer {
             all_moves,
             line: Vec::with_capacity(160),
-            row: [0; ROW_ROOM],
+            pending: vec![0; PENDING_ROOM],
+            used: 0,
         }
     }
 
     /// Write the header line.
     pub fn header(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        self.flush(out)?;
         out.write_all(CONTACT12_HEADER.as_bytes())?;
         out.write_all(b"\n")
     }
 
-    /// Write the row of one posture, if it qualifies.
+    /// Write the row of one posture, if it qualifies (collected; see [`Self::flush`]).
     pub fn posture(&mut self, p: &Posture, out: &mut dyn Write) -> io::Result<()> {
         let cutting_contact = p.motion == MotionKind::Cut && p.contact.is_some();
         if !(self.all_moves || cutting_contact) {
             return Ok(());
         }
-        match self.fast_row(p) {
-            Some(n) => out.write_all(&self.row[..n]),
-            None => self.slow_row(p, out),
+        if self.used + ROW_ROOM > self.pending.len() {
+            self.flush(out)?;
+        }
+        let at = self.used;
+        let row = self
+            .pending
+            .get_mut(at..at + ROW_ROOM)
+            .and_then(|r| <&mut [u8; ROW_ROOM]>::try_from(r).ok());
+        match row.and_then(|r| fast_row(r, p)) {
+            Some(n) => {
+                self.used += n;
+                Ok(())
+            }
+            None => {
+                self.flush(out)?;
+                self.slow_row(p, out)
+            }
         }
     }
 
-    /// The row of `p` in [`Self::row`] (its length), or `None` when a number needs
-    /// `format!`.
-    #[inline]
-    fn fast_row(&mut self, p: &Posture) -> Option<usize> {
-        let r = &mut self.row;
-        // Written out, not looped: a loop of three mispredicts its exit, once a triple.
-        let at = put_number(r, 0, p.position.x, LENGTH_DECIMALS, b',')?;
-        let at = put_number(r, at, p.position.y, LENGTH_DECIMALS, b',')?;
-        let at = put_number(r, at, p.position.z, LENGTH_DECIMALS, b',')?;
-        let at = put_number(r, at, p.axis.x, UNIT_DECIMALS, b',')?;
-        let at = put_number(r, at, p.axis.y, UNIT_DECIMALS, b',')?;
-        let mut at = put_number(r, at, p.axis.z, UNIT_DECIMALS, b',')?;
-        match &p.contact {
-            Some(c) => {
-                at = put_number(r, at, c.point.x, LENGTH_DECIMALS, b',')?;
-                at = put_number(r, at, c.point.y, LENGTH_DECIMALS, b',')?;
-                at = put_number(r, at, c.point.z, LENGTH_DECIMALS, b',')?;
-                at = put_number(r, at, c.normal.x, UNIT_DECIMALS, b',')?;
-                at = put_number(r, at, c.normal.y, UNIT_DECIMALS, b',')?;
-                at = put_number(r, at, c.normal.z, UNIT_DECIMALS, b'\n')?;
-            }
-            None => {
-                r.get_mut(at..at + 6)?.copy_from_slice(b",,,,,\n");
-                at += 6;
-            }
-        }
-        Some(at)
+    /// Hand the collected rows to `out` (after the last posture, and before writing to
+    /// `out` directly).
+    pub fn flush(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        let n = std::mem::take(&mut self.used);
+        out.write_all(&self.pending[..n])
     }
 
     /// The row of `p` through [`push_fixed`] (any value).
