@@ -58,7 +58,9 @@ fn fixed_digits(s: &mut [u8; FIXED_ROOM], v: f64, (min, max): (u32, u32)) -> Opt
     let max = max.min(9) as usize;
     let min = (min as usize).min(max);
     let scaled = v * POW10[max] as f64;
-    if !scaled.is_finite() || scaled.abs() >= 2.8e14 {
+    // Not finite, or too large: as `fixed_digits_wide` (NaN fails the comparison).
+    let in_range = scaled.abs() < 2.8e14;
+    if !in_range {
         return None;
     }
     // As in `fixed_digits_wide`: round half away from zero, split at the point.
