@@ -53,6 +53,9 @@ fn lower_all(text: &str, out: Option<&mut Vec<u8>>) -> usize {
         low.push(&r, &mut sink).unwrap_or_else(|e| panic!("{e}"));
     }
     low.finish(&mut sink).unwrap_or_else(|e| panic!("{e}"));
+    if let Some(b) = buf {
+        w.flush(b).unwrap_or_else(|e| panic!("{e}"));
+    }
     n
 }
 
@@ -111,6 +114,7 @@ fn bench(c: &mut Criterion) {
             for p in black_box(&postures) {
                 w.posture(p, &mut out).unwrap_or_else(|e| panic!("{e}"));
             }
+            w.flush(&mut out).unwrap_or_else(|e| panic!("{e}"));
             out.len()
         })
     });

@@ -85,6 +85,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             for p in run.program.paths.iter().flat_map(|t| t.postures.iter()) {
                 cw.posture(p, w)?;
             }
+            cw.flush(w)?;
         }
         Ok(())
     })

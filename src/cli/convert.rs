@@ -160,7 +160,11 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
                 }
                 cw.posture(p, w)
             };
-            stream_from(input, kind, reader, opts, &mut sink)
+            let r = stream_from(input, kind, reader, opts, &mut sink);
+            if r.is_ok() {
+                cw.flush(w)?;
+            }
+            r
         };
         match result {
             Ok(program) => {

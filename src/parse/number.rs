@@ -85,6 +85,80 @@ fn eight_digits(d: u64) -> u64 {
     d.wrapping_mul(10_000).wrapping_add(d >> 32) & 0xFFFF_FFFF
 }
 
+/// Bytes [`scan_short`] is given: a number of up to 16 bytes, the byte after it, and room
+/// for whole-word reads (indices are masked to the window, so no read needs a bounds
+/// check).
+pub const SHORT_WINDOW: usize = 32;
+
+/// The little-endian word of the eight bytes of `c` from `k & 15` (the mask keeps every
+/// read inside the window, so the compiler needs no bounds check).
+#[inline(always)]
+fn word_at(c: &[u8; SHORT_WINDOW], k: usize) -> u64 {
+    let k = k & 15;
+    let mut w = [0u8; 8];
+    w.copy_from_slice(&c[k..k + 8]);
+    u64::from_le_bytes(w)
+}
+
+/// The digit values (0-9, one per byte) of the first `n < 8` bytes of `w` (ASCII digits,
+/// first lowest), moved to the top of the word with zeros below: an eight-digit number
+/// with leading zeros, as [`eight_digits`] reads it. Two shifts, so that `n = 0` shifts
+/// everything out.
+#[inline(always)]
+fn top_digits(w: u64, n: usize) -> u64 {
+    (w.wrapping_sub(0x3030_3030_3030_3030) << (8 * (7 - n))) << 8
+}
+
+/// The common short number `[+|-] digits . digits` (fewer than 8 digits on each side of
+/// the point, or digits alone, no exponent) in the window `c`: the value and the bytes
+/// used. `None` when the number is anything else, which [`scan_number`] then reads; when
+/// this returns a value, [`scan_number`] returns the same (the digits form an integer
+/// below 10^14, exact in `f64`, and the value is one correctly rounded division by an
+/// exact power of ten, as on its fast path). A handful of word operations and no branch
+/// per digit: this is the inner loop of reading a CLSF.
+#[inline(always)]
+pub fn scan_short(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
+    let first = c[0];
+    let negative = first == b'-';
+    let s = usize::from(negative || first == b'+');
+    let w1 = word_at(c, s);
+    let n1 = leading_digits(w1);
+    let dot = s + n1;
+    // n1 < 8, so dot ≤ 8 and every index below stays inside the window.
+    if n1 == 8 {
+        return None;
+    }
+    let int = top_digits(w1, n1);
+    let (mantissa, scale, end) = if c[dot] == b'.' {
+        let w2 = word_at(c, dot + 1);
+        let n2 = leading_digits(w2);
+        if n2 == 8 || n1 + n2 == 0 {
+            return None;
+        }
+        let frac = top_digits(w2, n2);
+        let m = if n1 + n2 <= 8 {
+            // Both runs in one eight-digit word: the integer digits right above the
+            // fraction's.
+            eight_digits((int >> (8 * n2)) | frac)
+        } else {
+            eight_digits(int) * POW10_U64[n2] + eight_digits(frac)
+        };
+        (m, n2, dot + 1 + n2)
+    } else {
+        if n1 == 0 {
+            return None;
+        }
+        (eight_digits(int), 0, dot)
+    };
+    if c[end & 31] | 0x20 == b'e' {
+        return None;
+    }
+    // mantissa < 10^14: the signed conversion is exact and one instruction.
+    let v = mantissa as i64 as f64 / POW10[scale];
+    let v = f64::from_bits(v.to_bits() | (u64::from(negative) << 63));
+    Some((v, end))
+}
+
 /// Scan one number at the start of `bytes`.
 ///
 /// Returns the value and the number of bytes consumed, or `None` when `bytes` does not
@@ -92,6 +166,17 @@ fn eight_digits(d: u64) -> u64 {
 /// caller decides whether that is an error.
 #[inline]
 pub fn scan_number(bytes: &[u8]) -> Option<(f64, usize)> {
+    if let Some(c) = bytes.first_chunk::<SHORT_WINDOW>()
+        && let Some(r) = scan_short(c)
+    {
+        return Some(r);
+    }
+    scan_general(bytes)
+}
+
+/// [`scan_number`] for any input.
+#[inline]
+fn scan_general(bytes: &[u8]) -> Option<(f64, usize)> {
     let len = bytes.len();
     // The sign without a branch (signs of coordinates follow no pattern).
     let first = bytes.first().copied().unwrap_or(0);
@@ -234,5 +319,78 @@ mod tests {
             assert_eq!(v.to_bits(), want.to_bits(), "{s}");
         }
         assert!(scan_number(b"1e400").unwrap().0.is_infinite());
+    }
+
+    /// `scan_short` on `text` padded to a window with `tail`, against `str::parse`.
+    fn short_agrees(text: &str, tail: u8) {
+        let mut c = [tail; SHORT_WINDOW];
+        c[..text.len()].copy_from_slice(text.as_bytes());
+        let general = scan_general(&c);
+        if let Some((v, n)) = scan_short(&c) {
+            let want: f64 = std::str::from_utf8(&c[..n]).unwrap().parse().unwrap();
+            assert_eq!(v.to_bits(), want.to_bits(), "{text:?}");
+            assert_eq!(Some((v, n)), general, "{text:?}");
+            assert_eq!(scan_number(&c), general, "{text:?}");
+        } else {
+            assert_eq!(scan_number(&c), general, "{text:?}");
+        }
+    }
+
+    #[test]
+    fn short_numbers_agree_with_std() {
+        for s in [
+            "0",
+            "-0",
+            "+0",
+            "-0.0000",
+            "0.0600",
+            "-297.5000",
+            "1.",
+            "-1.",
+            ".5",
+            "-.5",
+            "+.25",
+            "1234567",
+            "12345678",
+            "1234567.1234567",
+            "-9999999.9999999",
+            "0.12345678",
+            "1.5E3",
+            "1.5e-3",
+            "7e",
+            "-",
+            "+",
+            ".",
+            "-.",
+            "",
+            "1..2",
+            "12.34.5",
+            "99999999.5",
+        ] {
+            for tail in [b',', b'\n', b'0', b'.', b'e', b'x', b' '] {
+                if s.len() < SHORT_WINDOW {
+                    short_agrees(s, tail);
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn short_fixed_point_numbers_agree_with_std(
+            sign in 0usize..3, int in 0u64..100_000_000, int_len in 0usize..9,
+            frac in 0u64..100_000_000, frac_len in 0usize..9, dot: bool,
+            tail in proptest::sample::select(vec![b',', b'\n', b'\r', b'5', b'E', b'$', b' ']),
+        ) {
+            let int = format!("{int:08}");
+            let frac = format!("{frac:08}");
+            let mut text = String::from(["", "-", "+"][sign]);
+            text.push_str(&int[8 - int_len..]);
+            if dot {
+                text.push('.');
+                text.push_str(&frac[..frac_len]);
+            }
+            short_agrees(&text, tail);
+        }
     }
 }

@@ -262,7 +262,7 @@ pub fn write_contact12(
     for p in &path.postures {
         w.posture(p, out)?;
     }
-    Ok(())
+    w.flush(out)
 }
 
 #[cfg(test)]

@@ -47,10 +47,123 @@ const FIXED_ROOM: usize = 32;
 /// [`push_fixed`]'s digits, left-aligned in `s`; returns their length, or `None` for the
 /// values [`push_fixed`] prints with `format!` (not finite, or 2.8e14 and more once scaled
 /// by `10^max`). Writing into a fixed array (no `Vec` growth checks, no `memcpy` call per
-/// number, a fixed number of digit steps for the decimals) is what makes contact12 rows
-/// cheap.
+/// number) is what makes contact12 rows cheap.
+///
+/// The integer part below 10^8 and the decimals are made eight digits at a time by word
+/// operations ([`digit_values`]), written as whole words, and the leading and trailing
+/// zeros counted from the word, with no loop and no branch per digit; larger integer parts
+/// take [`fixed_digits_wide`], which gives the same bytes (unit test).
 #[inline(always)]
 fn fixed_digits(s: &mut [u8; FIXED_ROOM], v: f64, (min, max): (u32, u32)) -> Option<usize> {
+    let max = max.min(9) as usize;
+    let min = (min as usize).min(max);
+    let scaled = v * POW10[max] as f64;
+    // Not finite, or too large: as `fixed_digits_wide` (NaN fails the comparison).
+    let in_range = scaled.abs() < 2.8e14;
+    if !in_range {
+        return None;
+    }
+    // As in `fixed_digits_wide`: round half away from zero, split at the point.
+    let q = (scaled.abs() + 0.5) as i64 as u64;
+    let neg = usize::from(scaled < 0.0 && q != 0);
+    s[0] = b'-';
+    if (1..=7).contains(&max) && q < 100_000_000 {
+        // All digits in one word: 8 - max of the integer part, then the decimals.
+        let d = digit_values(q);
+        let lead = ((d.trailing_zeros() / 8) as usize).min(7 - max);
+        put_word(s, neg, (d | ASCII_ZEROS) >> (8 * lead));
+        let int_end = neg + 8 - max - lead;
+        let f = d >> (8 * (8 - max));
+        s[int_end & 15] = b'.';
+        put_word(s, int_end + 1, f | ASCII_ZEROS);
+        let trailing = (f.leading_zeros() / 8) as usize - (8 - max);
+        let keep = (max - trailing).max(min);
+        return Some(if keep == 0 {
+            int_end
+        } else {
+            int_end + 1 + keep
+        });
+    }
+    if max == 9 && q < 1_000_000_000 {
+        // "0." and nine decimals: eight in one word, then the last.
+        let d = digit_values(q / 10);
+        let last = (q % 10) as u8;
+        s[neg] = b'0';
+        s[neg + 1] = b'.';
+        put_word(s, neg + 2, d | ASCII_ZEROS);
+        s[neg + 10] = b'0' + last;
+        let trailing = if last == 0 {
+            1 + (d.leading_zeros() / 8) as usize
+        } else {
+            0
+        };
+        let keep = (9 - trailing).max(min);
+        return Some(if keep == 0 { neg + 1 } else { neg + 2 + keep });
+    }
+    let p = POW10[max];
+    let int = q / p;
+    let frac = q % p;
+    if int >= 100_000_000 || max == 0 {
+        return fixed_digits_wide(s, v, (min as u32, max as u32));
+    }
+    // The integer part: eight digits with leading zeros, the zeros shifted out (one digit
+    // kept), stored as one word.
+    let d = digit_values(int);
+    let lead = ((d.trailing_zeros() / 8) as usize).min(7);
+    put_word(s, neg, (d | ASCII_ZEROS) >> (8 * lead));
+    let int_end = neg + 8 - lead;
+    s[int_end & 15] = b'.';
+    let at = (int_end + 1) & 15;
+    // The decimals, all `max` of them, then the trailing zeros beyond `min` dropped.
+    let trailing = if max <= 8 {
+        // Eight digits of which the first 8 - max are zeros: shifted out.
+        let f = digit_values(frac) >> (8 * (8 - max));
+        put_word(s, at, f | ASCII_ZEROS);
+        // Zero bytes above the digits, then the digits' trailing zeros (all for 0).
+        (f.leading_zeros() / 8) as usize - (8 - max)
+    } else {
+        // Nine: the first digit, then eight.
+        let head = frac / 100_000_000;
+        let f = digit_values(frac % 100_000_000);
+        s[at] = b'0' + head as u8;
+        put_word(s, at + 1, f | ASCII_ZEROS);
+        let t = (f.leading_zeros() / 8) as usize;
+        t + usize::from(t == 8 && head == 0)
+    };
+    let keep = (max - trailing).max(min);
+    // No decimal left: no point either.
+    Some(if keep == 0 { int_end } else { at + keep })
+}
+
+/// Eight ASCII zeros.
+const ASCII_ZEROS: u64 = 0x3030_3030_3030_3030;
+
+/// Store `w`'s eight bytes (lowest first) at `s[at..]` (`at` masked into the scratch).
+#[inline(always)]
+fn put_word(s: &mut [u8; FIXED_ROOM], at: usize, w: u64) {
+    let at = at & 15;
+    s[at..at + 8].copy_from_slice(&w.to_le_bytes());
+}
+
+/// The eight decimal digits of `n < 10^8` (with leading zeros) as byte values 0-9, the
+/// most significant in the lowest byte: halves of four digits, quarters of two, then
+/// single digits, each step a multiply-shift division on all lanes at once.
+#[inline(always)]
+fn digit_values(n: u64) -> u64 {
+    // 32-bit lanes: the first four digits, the last four.
+    let x = (n / 10_000) | ((n % 10_000) << 32);
+    // 16-bit lanes: ⌊x/100⌋ then x mod 100 (x·10486 >> 20 = ⌊x/100⌋ for x < 10^4).
+    let h = ((x * 10_486) >> 20) & 0x0000_007F_0000_007F;
+    let x = h | ((x - h * 100) << 16);
+    // Bytes: ⌊x/10⌋ then x mod 10 (x·103 >> 10 = ⌊x/10⌋ for x < 100).
+    let t = ((x * 103) >> 10) & 0x000F_000F_000F_000F;
+    t | ((x - t * 10) << 8)
+}
+
+/// [`fixed_digits`] with a digit loop: any integer part (the reference of its fast
+/// form, and the way for integer parts of 10^8 and more).
+#[inline(never)]
+fn fixed_digits_wide(s: &mut [u8; FIXED_ROOM], v: f64, (min, max): (u32, u32)) -> Option<usize> {
     let max = max.min(9) as usize;
     let min = (min as usize).min(max);
     let scaled = v * POW10[max] as f64;
@@ -186,17 +299,24 @@ pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
 /// The contact12 CSV header.
 pub const CONTACT12_HEADER: &str = "x,y,z,i,j,k,cx,cy,cz,nx,ny,nz";
 
-/// Streams contact12 rows.
+/// Streams contact12 rows. Rows are collected in the writer and handed to the output in
+/// pieces of about 128 KiB: call [`Contact12Writer::flush`] after the last posture.
 pub struct Contact12Writer {
     all_moves: bool,
     line: Vec<u8>,
-    /// One row, built in place: 12 numbers of at most 17 bytes and their separators, and
-    /// the room of one more number's scratch.
-    row: [u8; ROW_ROOM],
+    /// Rows not yet handed on, `used` bytes of them, each built in place (the buffer's
+    /// length is fixed; it keeps room for one more row after `used`).
+    pending: Vec<u8>,
+    used: usize,
 }
 
-/// Bytes of [`Contact12Writer`]'s row buffer.
+/// Bytes of one row built in place: 12 numbers of at most 17 bytes and their separators,
+/// and the room of one more number's scratch.
 const ROW_ROOM: usize = 12 * 18 + 1 + FIXED_ROOM;
+
+/// Bytes of [`Contact12Writer`]'s collected rows: more than a 64 KiB `BufWriter` holds,
+/// so that one passes them on without copying.
+const PENDING_ROOM: usize = 1 << 17;
 
 /// Append one number of a row at `at` (followed by `sep` when it is not 0); `None` when the
 /// number needs `format!` (then the row is printed by the slow path).
@@ -217,6 +337,33 @@ fn put_number(
     Some(at + n + 1)
 }
 
+/// The row of `p` built in `r` (its length), or `None` when a number needs `format!`.
+#[inline]
+fn fast_row(r: &mut [u8; ROW_ROOM], p: &Posture) -> Option<usize> {
+    // Written out, not looped: a loop of three mispredicts its exit, once a triple.
+    let at = put_number(r, 0, p.position.x, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.position.y, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.position.z, LENGTH_DECIMALS, b',')?;
+    let at = put_number(r, at, p.axis.x, UNIT_DECIMALS, b',')?;
+    let at = put_number(r, at, p.axis.y, UNIT_DECIMALS, b',')?;
+    let mut at = put_number(r, at, p.axis.z, UNIT_DECIMALS, b',')?;
+    match &p.contact {
+        Some(c) => {
+            at = put_number(r, at, c.point.x, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.point.y, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.point.z, LENGTH_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.x, UNIT_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.y, UNIT_DECIMALS, b',')?;
+            at = put_number(r, at, c.normal.z, UNIT_DECIMALS, b'\n')?;
+        }
+        None => {
+            r.get_mut(at..at + 6)?.copy_from_slice(b",,,,,\n");
+            at += 6;
+        }
+    }
+    Some(at)
+}
+
 impl Contact12Writer {
     /// A writer; `all_moves` writes every posture (CC/normal empty without contact),
     /// otherwise only cutting moves with contact data.
@@ -224,55 +371,49 @@ impl Contact12Writer {
         Contact12Writer {
             all_moves,
             line: Vec::with_capacity(160),
-            row: [0; ROW_ROOM],
+            pending: vec![0; PENDING_ROOM],
+            used: 0,
         }
     }
 
     /// Write the header line.
     pub fn header(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        self.flush(out)?;
         out.write_all(CONTACT12_HEADER.as_bytes())?;
         out.write_all(b"\n")
     }
 
-    /// Write the row of one posture, if it qualifies.
+    /// Write the row of one posture, if it qualifies (collected; see [`Self::flush`]).
     pub fn posture(&mut self, p: &Posture, out: &mut dyn Write) -> io::Result<()> {
         let cutting_contact = p.motion == MotionKind::Cut && p.contact.is_some();
         if !(self.all_moves || cutting_contact) {
             return Ok(());
         }
-        match self.fast_row(p) {
-            Some(n) => out.write_all(&self.row[..n]),
-            None => self.slow_row(p, out),
+        if self.used + ROW_ROOM > self.pending.len() {
+            self.flush(out)?;
+        }
+        let at = self.used;
+        let row = self
+            .pending
+            .get_mut(at..at + ROW_ROOM)
+            .and_then(|r| <&mut [u8; ROW_ROOM]>::try_from(r).ok());
+        match row.and_then(|r| fast_row(r, p)) {
+            Some(n) => {
+                self.used += n;
+                Ok(())
+            }
+            None => {
+                self.flush(out)?;
+                self.slow_row(p, out)
+            }
         }
     }
 
-    /// The row of `p` in [`Self::row`] (its length), or `None` when a number needs
-    /// `format!`.
-    #[inline]
-    fn fast_row(&mut self, p: &Posture) -> Option<usize> {
-        let r = &mut self.row;
-        let mut at = 0;
-        for v in [p.position.x, p.position.y, p.position.z] {
-            at = put_number(r, at, v, LENGTH_DECIMALS, b',')?;
-        }
-        for v in [p.axis.x, p.axis.y, p.axis.z] {
-            at = put_number(r, at, v, UNIT_DECIMALS, b',')?;
-        }
-        match &p.contact {
-            Some(c) => {
-                for v in [c.point.x, c.point.y, c.point.z] {
-                    at = put_number(r, at, v, LENGTH_DECIMALS, b',')?;
-                }
-                at = put_number(r, at, c.normal.x, UNIT_DECIMALS, b',')?;
-                at = put_number(r, at, c.normal.y, UNIT_DECIMALS, b',')?;
-                at = put_number(r, at, c.normal.z, UNIT_DECIMALS, b'\n')?;
-            }
-            None => {
-                r.get_mut(at..at + 6)?.copy_from_slice(b",,,,,\n");
-                at += 6;
-            }
-        }
-        Some(at)
+    /// Hand the collected rows to `out` (after the last posture, and before writing to
+    /// `out` directly).
+    pub fn flush(&mut self, out: &mut dyn Write) -> io::Result<()> {
+        let n = std::mem::take(&mut self.used);
+        out.write_all(&self.pending[..n])
     }
 
     /// The row of `p` through [`push_fixed`] (any value).
@@ -687,6 +828,99 @@ mod tests {
                 let near_tie = ((scaled - scaled.floor()) - 0.5).abs() < 1e-9;
                 assert!(got == want || near_tie, "{v} {dec}: {got} vs {want}");
             }
+        }
+    }
+
+    /// The word-wise digits give the bytes of the digit loop.
+    fn same_as_wide(v: f64, d: (u32, u32)) {
+        let mut a = [0u8; FIXED_ROOM];
+        let mut b = [0u8; FIXED_ROOM];
+        let n = fixed_digits(&mut a, v, d);
+        let m = fixed_digits_wide(&mut b, v, d);
+        assert_eq!(n, m, "{v} {d:?}");
+        if let Some(n) = n {
+            assert_eq!(&a[..n], &b[..n], "{v} {d:?}");
+        }
+    }
+
+    const ALL_DECIMALS: [(u32, u32); 12] = [
+        LENGTH_DECIMALS,
+        UNIT_DECIMALS,
+        (0, 0),
+        (0, 1),
+        (1, 1),
+        (0, 6),
+        (0, 8),
+        (3, 8),
+        (0, 9),
+        (9, 9),
+        (2, 5),
+        (12, 12),
+    ];
+
+    #[test]
+    fn digits_made_by_words_match_the_digit_loop() {
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1e-12,
+            -4e-10,
+            5e-10,
+            9.9999995,
+            99_999_999.999_999_5,
+            99_999_999.4,
+            100_000_000.0,
+            -99_999_999.0,
+            12_345_678.9,
+            0.000_000_001,
+            0.999_999_999_6,
+            2.79e8,
+            2.8e5,
+            -2.8e5,
+            1e300,
+            f64::NAN,
+            f64::INFINITY,
+        ];
+        for k in 0..=9 {
+            let p = 10f64.powi(k);
+            for v in [1.0, 0.5, 0.05, 1.5, 9.5, 99.5, 123.25] {
+                values.extend([v / p, -v / p, v * p, -v * p]);
+            }
+        }
+        for v in values {
+            for d in ALL_DECIMALS {
+                same_as_wide(v, d);
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn words_match_the_digit_loop_anywhere(
+            mantissa in -1.0f64..1.0, exp in -10i32..10, any in proptest::num::f64::ANY,
+        ) {
+            let v = mantissa * 10f64.powi(exp);
+            for d in ALL_DECIMALS {
+                same_as_wide(v, d);
+                same_as_wide(any, d);
+            }
+        }
+
+        #[test]
+        fn fixed_decimals_read_back_to_their_digits(
+            int in 0u64..280_000, frac in 0u64..1_000_000_000, neg: bool,
+        ) {
+            // A number written with 9 decimals, read, and printed with (0, 9).
+            let text = format!("{}{int}.{frac:09}", if neg { "-" } else { "" });
+            let v: f64 = text.parse().unwrap();
+            let mut s = [0u8; FIXED_ROOM];
+            let n = fixed_digits(&mut s, v, (9, 9)).unwrap();
+            let zero = int == 0 && frac == 0;
+            let want = if neg && !zero { text.clone() } else { text.trim_start_matches('-').to_string() };
+            // At most 15 significant digits: the printed digits are those read.
+            proptest::prop_assert_eq!(std::str::from_utf8(&s[..n]).unwrap(), want);
         }
     }
 }

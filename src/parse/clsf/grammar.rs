@@ -2,7 +2,7 @@
 
 use super::record::{Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, RecordKind};
 use crate::parse::error::describe_found;
-use crate::parse::number::scan_number;
+use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short};
 use nom::IResult;
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char as ch, space0, space1};
@@ -140,32 +140,53 @@ fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
 /// blanks). Returns `None` whenever the general parser must decide (blanks, errors, too
 /// many numbers); when it returns a value, the general parser would return the same.
 pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Numbers, usize)> {
-    let mut out = Numbers {
-        values: [0.0; MAX_NUMBERS],
-        len: 0,
-    };
+    let max = max.min(MAX_NUMBERS);
+    let mut values = [0.0; MAX_NUMBERS];
+    let mut len = 0;
     let mut pos = 0;
     loop {
-        let (v, used) = scan_number(&b[pos..])?;
-        if !v.is_finite() {
-            return None;
-        }
-        out.values[out.len()] = v;
-        out.len += 1;
+        // Short numbers with a window of bytes after them (all but the last of a line
+        // that lies alone in its buffer) are read by word operations; the rest, or what
+        // that does not cover, by the general scanner.
+        let (v, used) = match b
+            .get(pos..)
+            .and_then(|r| r.first_chunk::<SHORT_WINDOW>())
+            .and_then(scan_short)
+        {
+            Some(r) => r,
+            None => {
+                let (v, used) = scan_number(b.get(pos..)?)?;
+                if !v.is_finite() {
+                    return None;
+                }
+                (v, used)
+            }
+        };
+        *values.get_mut(len)? = v;
+        len += 1;
         pos += used;
+        let done = |len| {
+            Some((
+                Numbers {
+                    values,
+                    len: len as u8,
+                },
+                pos,
+            ))
+        };
         match b.get(pos) {
-            None => return Some((out, pos)),
+            None => return done(len),
             Some(b',') => {
                 if word_tail && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
-                    return Some((out, pos));
+                    return done(len);
                 }
-                if out.len() >= max {
+                if len >= max {
                     return None;
                 }
                 pos += 1;
             }
             Some(b' ' | b'\t') => return None,
-            Some(_) => return Some((out, pos)),
+            Some(_) => return done(len),
         }
     }
 }
