@@ -33,6 +33,7 @@ mod material;
 mod params;
 mod profile;
 mod spatial;
+mod stream;
 
 pub use areal::{
     Grid, Height, HeightStats, height_stats, height_stats_of, sdq, sdq_of, sdr_percent,
@@ -49,6 +50,7 @@ pub use profile::{
     Profile, ProfileSpec, extract_profile, profile_values, rz_ra, sampling_length_mm,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
+pub use stream::RowStream;
 
 /// Errors of the metrics stage.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
