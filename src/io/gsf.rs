@@ -493,6 +493,60 @@ mod tests {
     }
 
     #[test]
+    fn rows_in_pieces_are_the_float32_values() {
+        let (nx, ny) = (301, 40);
+        let z: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                if k % 97 == 5 {
+                    f64::NAN
+                } else {
+                    (k as f64 * 0.01).cos() * 2.5
+                }
+            })
+            .collect();
+        let map = HeightMap::from_rows(nx, ny, 0.5, 0.5, z).unwrap();
+        let mut bytes = Vec::new();
+        write(&mut bytes, &map).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.gsf");
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        let (f, _) = read_f32(&file, 1e6).ok().unwrap();
+        let rows = GsfRows::open(std::fs::File::open(&path).unwrap(), &path)
+            .ok()
+            .unwrap();
+        assert_eq!((rows.nx, rows.ny, rows.dx_um), (f.nx, f.ny, f.dx_um));
+        for k in [1, 3, 7, ny, ny + 5] {
+            let (mut all, mut firsts) = (Vec::new(), Vec::new());
+            let r = rows.for_each_piece(k, 1e6, |first, piece| {
+                assert_eq!(piece.len() % nx, 0);
+                firsts.push(first);
+                all.extend_from_slice(piece);
+            });
+            assert!(r.is_ok());
+            assert_eq!(firsts, (0..ny).step_by(k).collect::<Vec<_>>());
+            assert_eq!(all.len(), f.z_um.len());
+            assert!(
+                all.iter()
+                    .zip(&f.z_um)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+        }
+        // A height beyond the limit stops the reading before its piece is handed on.
+        let (_, bad) = read_f32(&file, 2.0).ok().unwrap();
+        let bad = bad.unwrap();
+        let mut seen = 0;
+        match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
+            Err(PieceError::Beyond((k, v))) => {
+                assert_eq!(k, bad);
+                assert_eq!(v.to_bits(), f.z_um[bad].to_bits());
+            }
+            _ => panic!("height beyond the limit accepted"),
+        }
+        assert!(seen <= bad / (3 * nx) * 3 * nx);
+    }
+
+    #[test]
     fn float32_reading_holds_the_values_parse_widens() {
         let (nx, ny) = (1500, 900); // more than one piece of PIECE bytes
         let z: Vec<f64> = (0..nx * ny)
