@@ -106,7 +106,7 @@ impl Loaded {
 
 /// Bytes of heights per piece of a streamed `.gsf` (whole rows; a few of these are in
 /// memory at once, small enough to stay in the caches).
-const PIECE_BYTES: usize = 1 << 20;
+const PIECE_BYTES: usize = 4 << 20;
 
 /// The plain-pass parameters of a streamed `.gsf` and its number of valid nodes.
 fn streamed(

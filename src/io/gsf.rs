@@ -385,10 +385,20 @@ impl GsfRows {
             .read_exact_at(bytemuck::cast_slice_mut(buf), off)
             .map_err(PieceError::Io)?;
         let scale = self.z_um;
+        // Compared in float32 when the limit is a float32 value (±1e6 µm is): the same
+        // answer as in f64, four values per instruction.
+        let lim32 = limit_um as f32;
         let mut over = false;
-        for v in buf.iter_mut() {
-            *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
-            over |= f64::from(v.abs()) > limit_um && v.is_finite();
+        if f64::from(lim32) == limit_um {
+            for v in buf.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
+                over |= v.abs() > lim32 && v.is_finite();
+            }
+        } else {
+            for v in buf.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
+                over |= f64::from(v.abs()) > limit_um && v.is_finite();
+            }
         }
         if over {
             let i = buf
