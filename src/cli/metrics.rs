@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use miette::miette;
 
 use super::Outcome;
-use crest::io::{GsfField, HeightMapFormat, ReadOptions, read_gsf_f32, read_heightmap};
+use crest::io::{GsfRows, HeightMapFormat, ReadOptions, open_gsf_rows, read_heightmap};
 use crest::metrics::{
-    EndEffects, Grid, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters,
-    areal_parameters_of, extract_profile, preprocess_map, preprocess_profile, profile_parameters,
+    EndEffects, Level, ParamSet, Preprocess, ProfileSpec, RowStream, areal_parameters,
+    extract_profile, preprocess_map, preprocess_profile, profile_parameters,
 };
 use crest::surface::HeightMap;
 
@@ -88,34 +88,44 @@ fn spec_label(s: ProfileSpec) -> String {
     }
 }
 
-/// The map as read: a [`HeightMap`], or a `.gsf` kept as float32 when only plain-pass
-/// parameters are asked for without preprocessing (half the memory, the same values).
+/// The map as read: a [`HeightMap`], or a `.gsf` read in pieces of rows when only plain-pass
+/// parameters are asked for without preprocessing (a few rows of memory, the same values).
 enum Loaded {
     Map(HeightMap),
-    Field(GsfField),
+    Rows(GsfRows),
 }
 
 impl Loaded {
     fn dims(&self) -> (usize, usize, f64, f64) {
         match self {
             Loaded::Map(m) => (m.nx, m.ny, m.dx_um, m.dy_um),
-            Loaded::Field(f) => (f.nx, f.ny, f.dx_um, f.dy_um),
+            Loaded::Rows(f) => (f.nx, f.ny, f.dx_um, f.dy_um),
         }
     }
+}
 
-    fn known(&self) -> usize {
-        match self {
-            Loaded::Map(m) => m.known(),
-            Loaded::Field(f) => {
-                // Fixed chunks, each counted branch-free (a vector loop), on all threads.
-                use rayon::prelude::*;
-                f.z_um
-                    .par_chunks(1 << 16)
-                    .map(|c| c.iter().map(|v| usize::from(v.is_finite())).sum::<usize>())
-                    .sum()
-            }
-        }
+/// Bytes of heights per piece of a streamed `.gsf` (whole rows; a few of these are in
+/// memory at once, small enough to stay in the caches).
+const PIECE_BYTES: usize = 4 << 20;
+
+/// The plain-pass parameters of a streamed `.gsf` and its number of valid nodes.
+fn streamed(
+    rows: &GsfRows,
+    set: &ParamSet,
+) -> miette::Result<(Vec<(crest::metrics::Param, f64)>, usize)> {
+    let file = rows.path().display().to_string();
+    let mut s = RowStream::<f32>::new(rows.nx, rows.ny, rows.dx_um, rows.dy_um, set)
+        .map_err(|e| miette!("{file}: {e}"))?;
+    let k = s.rows_per_piece(PIECE_BYTES);
+    rows.read_rows(k, |_, piece| s.first(piece))
+        .map_err(|e| miette!("{e}"))?;
+    if s.end_first() {
+        rows.read_rows(k, |_, piece| s.second(piece))
+            .map_err(|e| miette!("{e}"))?;
     }
+    let valid = s.valid();
+    let values = s.finish().map_err(|e| miette!("{file}: {e}"))?;
+    Ok((values, valid))
 }
 
 fn num(v: f64) -> serde_json::Value {
@@ -154,7 +164,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         && !filtered
         && set.passes_only();
     let loaded = if as_stored {
-        Loaded::Field(read_gsf_f32(&args.file, &opts).map_err(|e| miette!("{e}"))?)
+        Loaded::Rows(open_gsf_rows(&args.file, &opts).map_err(|e| miette!("{e}"))?)
     } else {
         Loaded::Map(read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?)
     };
@@ -167,7 +177,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("ny".into(), ny.into());
     info.insert("dx_um".into(), num(dx_um));
     info.insert("dy_um".into(), num(dy_um));
-    info.insert("valid_nodes".into(), loaded.known().into());
+    // The streamed parameters are computed first: the count of valid nodes comes with them.
+    let streamed = match &loaded {
+        Loaded::Rows(rows) => Some(streamed(rows, &set)?),
+        Loaded::Map(_) => None,
+    };
+    let known = match (&loaded, &streamed) {
+        (_, Some((_, valid))) => *valid,
+        (Loaded::Map(m), None) => m.known(),
+        (Loaded::Rows(_), None) => 0,
+    };
+    info.insert("valid_nodes".into(), known.into());
     info.insert("level".into(), pp.level.label().into());
     info.insert(
         "lambda_s_um".into(),
@@ -189,17 +209,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("trimmed_um".into(), num(pp.trim_um()));
 
     let values = match (&loaded, args.profile) {
-        (Loaded::Field(f), _) => {
+        (Loaded::Rows(_), _) => {
             info.insert("evaluated_nx".into(), nx.into());
             info.insert("evaluated_ny".into(), ny.into());
-            let grid = Grid {
-                nx,
-                ny,
-                dx_um,
-                dy_um,
-                z: &f.z_um,
-            };
-            areal_parameters_of(grid, &set).map_err(|e| miette!("{file}: {e}"))?
+            streamed.map(|(v, _)| v).unwrap_or_default()
         }
         (Loaded::Map(map), Some(spec)) => {
             let raw = extract_profile(map, spec).map_err(|e| miette!("{file}: {e}"))?;

@@ -220,23 +220,7 @@ pub(crate) fn read_f32(
     limit_um: f64,
 ) -> Result<(GsfField, Option<usize>), ReadError> {
     use std::os::unix::fs::FileExt;
-    let len = file.metadata()?.len();
-    let len = usize::try_from(len)
-        .map_err(|_| FormatError::file("the file is too large for this machine"))?;
-    // The header: read growing prefixes until the NUL padding is in (or the file ends).
-    let mut head = vec![0u8; len.min(4096)];
-    file.read_exact_at(&mut head, 0)?;
-    while head.len() < len {
-        match head.iter().position(|&b| b == 0) {
-            Some(h) if head.len() >= h + 4 => break,
-            _ => {
-                let old = head.len();
-                head.resize(len.min(old * 2), 0);
-                file.read_exact_at(&mut head[old..], old as u64)?;
-            }
-        }
-    }
-    let h = header(&head, len)?;
+    let h = read_header(file)?;
     let mut z = vec![0f32; h.nx * h.ny];
     let scale = h.z_um;
     let start = h.data_start as u64;
@@ -271,6 +255,160 @@ pub(crate) fn read_f32(
         z_um: z,
     };
     Ok((field, bad.into_iter().flatten().next()))
+}
+
+/// A `.gsf` opened for reading its rows in pieces ([`GsfRows::for_each_piece`]): the header
+/// read, the heights not yet.
+#[derive(Debug)]
+pub struct GsfRows {
+    /// Columns (x).
+    pub nx: usize,
+    /// Rows (y).
+    pub ny: usize,
+    /// Spacing along x, µm.
+    pub dx_um: f64,
+    /// Spacing along y, µm.
+    pub dy_um: f64,
+    /// x of column 0, mm.
+    pub x0_mm: f64,
+    /// y of row 0, mm.
+    pub y0_mm: f64,
+    file: std::fs::File,
+    path: std::path::PathBuf,
+    z_um: f32,
+    data_start: u64,
+}
+
+/// Read the header of the `.gsf` in `file` (growing prefixes until the NUL padding is in).
+fn read_header(file: &std::fs::File) -> Result<Header, ReadError> {
+    use std::os::unix::fs::FileExt;
+    let len = file.metadata()?.len();
+    let len = usize::try_from(len)
+        .map_err(|_| FormatError::file("the file is too large for this machine"))?;
+    let mut head = vec![0u8; len.min(4096)];
+    file.read_exact_at(&mut head, 0)?;
+    while head.len() < len {
+        match head.iter().position(|&b| b == 0) {
+            Some(h) if head.len() >= h + 4 => break,
+            _ => {
+                let old = head.len();
+                head.resize(len.min(old * 2), 0);
+                file.read_exact_at(&mut head[old..], old as u64)?;
+            }
+        }
+    }
+    Ok(header(&head, len)?)
+}
+
+/// A height beyond the limit: its index in the map and its value (µm).
+pub(crate) type Beyond = (usize, f32);
+
+/// Why [`GsfRows::for_each_piece`] stopped.
+pub(crate) enum PieceError {
+    Io(std::io::Error),
+    Beyond(Beyond),
+}
+
+/// Pieces being read ahead: read while the one before is handed on.
+const AHEAD: usize = 2;
+
+impl GsfRows {
+    pub(crate) fn open(file: std::fs::File, path: &std::path::Path) -> Result<GsfRows, ReadError> {
+        let h = read_header(&file)?;
+        Ok(GsfRows {
+            nx: h.nx,
+            ny: h.ny,
+            dx_um: h.dx_um,
+            dy_um: h.dy_um,
+            x0_mm: h.x0_mm,
+            y0_mm: h.y0_mm,
+            file,
+            path: path.to_path_buf(),
+            z_um: h.z_um,
+            data_start: h.data_start as u64,
+        })
+    }
+
+    /// Hand the heights (µm, scaled in float32 as [`read_f32`] scales them) to `each` in
+    /// pieces of `rows` whole rows (the last piece may be shorter), in order, with the index
+    /// of each piece's first row. One thread reads the next pieces (`pread` into a few
+    /// reused buffers) while `each` runs on the caller's thread; memory: those buffers. Stops
+    /// at the first piece holding a finite height beyond `±limit_um` (before handing it on).
+    pub(crate) fn for_each_piece(
+        &self,
+        rows: usize,
+        limit_um: f64,
+        mut each: impl FnMut(usize, &[f32]),
+    ) -> Result<(), PieceError> {
+        use std::sync::mpsc;
+        let (nx, ny) = (self.nx, self.ny);
+        let rows = rows.max(1);
+        std::thread::scope(|scope| {
+            let (full_tx, full_rx) =
+                mpsc::sync_channel::<Result<(usize, Vec<f32>), PieceError>>(AHEAD);
+            let (free_tx, free_rx) = mpsc::channel::<Vec<f32>>();
+            for _ in 0..=AHEAD {
+                let _ = free_tx.send(Vec::with_capacity(rows * nx));
+            }
+            scope.spawn(move || {
+                for first in (0..ny).step_by(rows) {
+                    let Ok(mut buf) = free_rx.recv() else { return };
+                    let n = rows.min(ny - first) * nx;
+                    buf.resize(n, 0.0);
+                    let r = self.read_piece(first * nx, &mut buf, limit_um);
+                    let stop = r.is_err();
+                    if full_tx.send(r.map(|()| (first, buf))).is_err() || stop {
+                        return;
+                    }
+                }
+            });
+            for piece in full_rx {
+                let (first, buf) = piece?;
+                each(first, &buf);
+                let _ = free_tx.send(buf);
+            }
+            Ok(())
+        })
+    }
+
+    /// The file's path.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+
+    /// Read the heights from index `start` on into `buf`, scaled to µm, checked against
+    /// `±limit_um`.
+    fn read_piece(&self, start: usize, buf: &mut [f32], limit_um: f64) -> Result<(), PieceError> {
+        use std::os::unix::fs::FileExt;
+        let off = self.data_start + 4 * start as u64;
+        self.file
+            .read_exact_at(bytemuck::cast_slice_mut(buf), off)
+            .map_err(PieceError::Io)?;
+        let scale = self.z_um;
+        // Compared in float32 when the limit is a float32 value (±1e6 µm is): the same
+        // answer as in f64, four values per instruction.
+        let lim32 = limit_um as f32;
+        let mut over = false;
+        if f64::from(lim32) == limit_um {
+            for v in buf.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
+                over |= v.abs() > lim32 && v.is_finite();
+            }
+        } else {
+            for v in buf.iter_mut() {
+                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
+                over |= f64::from(v.abs()) > limit_um && v.is_finite();
+            }
+        }
+        if over {
+            let i = buf
+                .iter()
+                .position(|v| v.is_finite() && f64::from(v.abs()) > limit_um)
+                .unwrap_or(0);
+            return Err(PieceError::Beyond((start + i, buf[i])));
+        }
+        Ok(())
+    }
 }
 
 pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
@@ -362,6 +500,60 @@ mod tests {
         assert_eq!(e.at, Location::Line { line: 3, field: 0 });
         let e = parse(b"Gwyddion Simple").unwrap_err();
         assert_eq!(e.at, Location::Byte(0));
+    }
+
+    #[test]
+    fn rows_in_pieces_are_the_float32_values() {
+        let (nx, ny) = (301, 40);
+        let z: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                if k % 97 == 5 {
+                    f64::NAN
+                } else {
+                    (k as f64 * 0.01).cos() * 2.5
+                }
+            })
+            .collect();
+        let map = HeightMap::from_rows(nx, ny, 0.5, 0.5, z).unwrap();
+        let mut bytes = Vec::new();
+        write(&mut bytes, &map).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.gsf");
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::open(&path).unwrap();
+        let (f, _) = read_f32(&file, 1e6).ok().unwrap();
+        let rows = GsfRows::open(std::fs::File::open(&path).unwrap(), &path)
+            .ok()
+            .unwrap();
+        assert_eq!((rows.nx, rows.ny, rows.dx_um), (f.nx, f.ny, f.dx_um));
+        for k in [1, 3, 7, ny, ny + 5] {
+            let (mut all, mut firsts) = (Vec::new(), Vec::new());
+            let r = rows.for_each_piece(k, 1e6, |first, piece| {
+                assert_eq!(piece.len() % nx, 0);
+                firsts.push(first);
+                all.extend_from_slice(piece);
+            });
+            assert!(r.is_ok());
+            assert_eq!(firsts, (0..ny).step_by(k).collect::<Vec<_>>());
+            assert_eq!(all.len(), f.z_um.len());
+            assert!(
+                all.iter()
+                    .zip(&f.z_um)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            );
+        }
+        // A height beyond the limit stops the reading before its piece is handed on.
+        let (_, bad) = read_f32(&file, 2.0).ok().unwrap();
+        let bad = bad.unwrap();
+        let mut seen = 0;
+        match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
+            Err(PieceError::Beyond((k, v))) => {
+                assert_eq!(k, bad);
+                assert_eq!(v.to_bits(), f.z_um[bad].to_bits());
+            }
+            _ => panic!("height beyond the limit accepted"),
+        }
+        assert!(seen <= bad / (3 * nx) * 3 * nx);
     }
 
     #[test]

@@ -33,7 +33,7 @@ use std::path::{Path, PathBuf};
 
 use crate::surface::HeightMap;
 
-pub use gsf::GsfField;
+pub use gsf::{GsfField, GsfRows};
 pub use output::write_atomic;
 
 /// Write a set of files into the folder `dir`, whole or not at all (see [`output::write_set`]).
@@ -209,16 +209,69 @@ pub fn read_gsf_f32(path: &Path, opts: &ReadOptions) -> Result<GsfField, HeightM
         gsf::ReadError::Format(e) => format(e),
     })?;
     if let Some(k) = bad {
-        return Err(format(FormatError::file(format!(
-            "the height at row {}, column {} is {} µm, beyond ±{MAX_HEIGHT_UM} µm (1 m): not a surface height",
-            k / field.nx.max(1),
-            k % field.nx.max(1),
-            f64::from(field.z_um[k])
-        ))));
+        return Err(format(beyond(k, field.z_um[k], field.nx)));
     }
     check_against(opts.dx_um, field.dx_um, "dx").map_err(format)?;
     check_against(opts.dy_um, field.dy_um, "dy").map_err(format)?;
     Ok(field)
+}
+
+/// Open a Gwyddion `.gsf` for reading its heights in pieces of rows ([`GsfRows::read_rows`]),
+/// in a few rows of memory: the header is read and checked (spacing against `opts`) now,
+/// the heights (the very float32 values of [`read_gsf_f32`]) as they are handed on.
+pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightMapError> {
+    output::register_input(path);
+    let io = |source| HeightMapError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let format = |error| HeightMapError::Format {
+        path: path.to_path_buf(),
+        error,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let rows = GsfRows::open(file, path).map_err(|e| match e {
+        gsf::ReadError::Io(e) => io(e),
+        gsf::ReadError::Format(e) => format(e),
+    })?;
+    check_against(opts.dx_um, rows.dx_um, "dx").map_err(format)?;
+    check_against(opts.dy_um, rows.dy_um, "dy").map_err(format)?;
+    Ok(rows)
+}
+
+impl GsfRows {
+    /// Hand every height (µm, row-major, `NaN` for missing nodes) to `each` in pieces of
+    /// `rows` whole rows (the last may be shorter), in order, with the index of each piece's
+    /// first row; may be called again for another pass. The next pieces are read on another
+    /// thread while `each` runs. A finite height beyond ±1 m is an error (as in
+    /// [`read_gsf_f32`]), raised before its piece is handed on.
+    pub fn read_rows(
+        &self,
+        rows: usize,
+        each: impl FnMut(usize, &[f32]),
+    ) -> Result<(), HeightMapError> {
+        self.for_each_piece(rows, MAX_HEIGHT_UM, each)
+            .map_err(|e| match e {
+                gsf::PieceError::Io(source) => HeightMapError::Io {
+                    path: self.path().to_path_buf(),
+                    source,
+                },
+                gsf::PieceError::Beyond((k, v)) => HeightMapError::Format {
+                    path: self.path().to_path_buf(),
+                    error: beyond(k, v, self.nx),
+                },
+            })
+    }
+}
+
+/// The error of a height beyond ±1 m at index `k` of a map `nx` wide.
+fn beyond(k: usize, v: f32, nx: usize) -> FormatError {
+    FormatError::file(format!(
+        "the height at row {}, column {} is {} µm, beyond ±{MAX_HEIGHT_UM} µm (1 m): not a surface height",
+        k / nx.max(1),
+        k % nx.max(1),
+        f64::from(v)
+    ))
 }
 
 /// Parse a height map from memory (see [`read_heightmap`]). A `.csv` whose first line is

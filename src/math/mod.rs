@@ -9,6 +9,7 @@ pub mod limits;
 use nalgebra as na;
 
 pub mod rng;
+pub mod wide;
 
 /// A point in a Cartesian frame, mm.
 pub type Point3 = na::Point3<f64>;

@@ -1,6 +1,7 @@
 //! Height (Sa … Sku) and hybrid (Sdq, Sdr) parameters: plain passes over the valid nodes of
 //! `f64` or `f32` grids, on all threads, deterministic for any thread count.
 
+use crate::math::wide;
 use crate::surface::HeightMap;
 
 /// Height statistics of the valid values, relative to their mean (µm).
@@ -59,7 +60,7 @@ impl Height for f32 {
 
 /// Values per block of the height sums. The blocks are fixed, their partial sums are added
 /// in block order, so the result does not depend on the number of threads.
-const BLOCK: usize = 4096;
+pub(crate) const BLOCK: usize = 4096;
 
 /// Independent partial sums per block (heights) or row (Sdr cells): value `k` goes to lane
 /// `k % LANES`, the lanes are added in order at the end (fixed, so deterministic; the
@@ -71,142 +72,250 @@ pub fn height_stats(z: &[f64]) -> Option<HeightStats> {
     height_stats_of(z)
 }
 
+/// Pass 1 of the height statistics on one block: the sum and the count of its finite
+/// values. Value k goes to lane k % LANES; the lanes are added in order (fixed, so the
+/// result does not depend on the threads; independent lanes let the loop run as vector
+/// code).
+// The lane loops index several accumulator arrays by lane (struct of arrays, which the
+// compiler turns into vector code).
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn block_sum<T: Height>(chunk: &[T]) -> (f64, usize) {
+    let (mut s, mut c) = ([0.0f64; LANES], [0usize; LANES]);
+    let mut it = chunk.chunks_exact(LANES);
+    for g in &mut it {
+        for l in 0..LANES {
+            let v = g[l].get();
+            let ok = v.is_finite();
+            s[l] += if ok { v } else { 0.0 };
+            c[l] += usize::from(ok);
+        }
+    }
+    let (mut sum, mut n) = (0.0, 0usize);
+    for &v in it.remainder() {
+        let v = v.get();
+        if v.is_finite() {
+            sum += v;
+            n += 1;
+        }
+    }
+    for l in 0..LANES {
+        sum += s[l];
+        n += c[l];
+    }
+    (sum, n)
+}
+
+/// Pass 2 of the height statistics on one block that holds `c` finite values: the sums of
+/// `|η|, η², η³, η⁴` (`η = z − mean`), the lowest and the highest value.
+#[allow(clippy::needless_range_loop)]
+#[inline(always)]
+fn block_moments<T: Height>(chunk: &[T], c: usize, mean: f64) -> [f64; 6] {
+    let (mut a1, mut a2, mut a3, mut a4) = (0.0, 0.0, 0.0, 0.0);
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    let mut rest = chunk;
+    if c == chunk.len() {
+        // No missing value: branch-free lanes (as in the first pass).
+        let mut m = [[0.0f64; LANES]; 4];
+        let mut mn = [f64::INFINITY; LANES];
+        let mut mx = [f64::NEG_INFINITY; LANES];
+        let mut it = chunk.chunks_exact(LANES);
+        for g in &mut it {
+            for l in 0..LANES {
+                let v = g[l].get();
+                let e = v - mean;
+                let e2 = e * e;
+                m[0][l] += e.abs();
+                m[1][l] += e2;
+                m[2][l] += e2 * e;
+                m[3][l] += e2 * e2;
+                mn[l] = mn[l].min(v);
+                mx[l] = mx[l].max(v);
+            }
+        }
+        for l in 0..LANES {
+            a1 += m[0][l];
+            a2 += m[1][l];
+            a3 += m[2][l];
+            a4 += m[3][l];
+            lo = lo.min(mn[l]);
+            hi = hi.max(mx[l]);
+        }
+        rest = it.remainder();
+    }
+    for &v in rest {
+        let v = v.get();
+        if v.is_finite() {
+            let e = v - mean;
+            let e2 = e * e;
+            a1 += e.abs();
+            a2 += e2;
+            a3 += e2 * e;
+            a4 += e2 * e2;
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    [a1, a2, a3, a4, lo, hi]
+}
+
+/// [`block_sum`] of every block of `z` (blocks of [`BLOCK`] values from its start).
+struct BlockSums<'a, T>(&'a [T]);
+
+impl<T: Height> wide::Kernel for BlockSums<'_, T> {
+    type Output = Vec<(f64, usize)>;
+    #[inline(always)]
+    fn call(self) -> Self::Output {
+        // A plain loop, not an iterator chain: the chain's `fold` would be a function of its
+        // own, compiled without the vector instructions of this copy.
+        let mut out = Vec::with_capacity(self.0.len().div_ceil(BLOCK));
+        for chunk in self.0.chunks(BLOCK) {
+            out.push(block_sum(chunk));
+        }
+        out
+    }
+}
+
+/// [`block_moments`] of every block of `z`, with the counts of pass 1.
+struct BlockMoments<'a, T>(&'a [T], &'a [usize], f64);
+
+impl<T: Height> wide::Kernel for BlockMoments<'_, T> {
+    type Output = Vec<[f64; 6]>;
+    #[inline(always)]
+    fn call(self) -> Self::Output {
+        let BlockMoments(z, counts, mean) = self;
+        let mut out = Vec::with_capacity(counts.len());
+        for (k, chunk) in z.chunks(BLOCK).enumerate() {
+            out.push(block_moments(chunk, counts[k], mean));
+        }
+        out
+    }
+}
+
+/// Blocks per rayon task of the height passes (fixed; results do not depend on it).
+const TASK_BLOCKS: usize = 16;
+
+/// Pass 1 over `z` (whole blocks from a block boundary, the last one may be short): the
+/// sum and count of each block, on all threads.
+pub(crate) fn sums_of<T: Height>(isa: wide::Isa, z: &[T]) -> Vec<(f64, usize)> {
+    use rayon::prelude::*;
+    z.par_chunks(BLOCK * TASK_BLOCKS)
+        .flat_map_iter(|task| wide::run_on(isa, BlockSums(task)))
+        .collect()
+}
+
+/// Pass 2 over `z` (as [`sums_of`]) with the counts of its blocks from pass 1.
+pub(crate) fn moments_of<T: Height>(
+    isa: wide::Isa,
+    z: &[T],
+    counts: &[usize],
+    mean: f64,
+) -> Vec<[f64; 6]> {
+    use rayon::prelude::*;
+    z.par_chunks(BLOCK * TASK_BLOCKS)
+        .zip(counts.par_chunks(TASK_BLOCKS))
+        .flat_map_iter(|(task, c)| wide::run_on(isa, BlockMoments(task, c, mean)))
+        .collect()
+}
+
+/// Running totals of the two height passes, fed with block results in block order (so the
+/// same bits whichever way the blocks were cut into tasks or pieces).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct HeightSums {
+    sum: f64,
+    n: usize,
+    s: [f64; 4],
+    lo: f64,
+    hi: f64,
+}
+
+impl HeightSums {
+    pub(crate) fn new() -> Self {
+        HeightSums {
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            ..Default::default()
+        }
+    }
+
+    /// Add the pass-1 results of the next blocks.
+    pub(crate) fn add_sums(&mut self, sums: &[(f64, usize)]) {
+        for &(s, c) in sums {
+            self.sum += s;
+            self.n += c;
+        }
+    }
+
+    /// The number of finite values (after pass 1).
+    pub(crate) fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The mean after pass 1 (`None` when no value is finite).
+    pub(crate) fn mean(&self) -> Option<f64> {
+        (self.n > 0).then(|| self.sum / self.n as f64)
+    }
+
+    /// Add the pass-2 results of the next blocks.
+    pub(crate) fn add_moments(&mut self, moments: &[[f64; 6]]) {
+        for m in moments {
+            self.s[0] += m[0];
+            self.s[1] += m[1];
+            self.s[2] += m[2];
+            self.s[3] += m[3];
+            self.lo = self.lo.min(m[4]);
+            self.hi = self.hi.max(m[5]);
+        }
+    }
+
+    /// The statistics after both passes.
+    pub(crate) fn stats(&self) -> Option<HeightStats> {
+        let mean = self.mean()?;
+        let n = self.n;
+        let [s1, s2, s3, s4] = self.s;
+        let (min, max) = (self.lo, self.hi);
+        let (lo, hi) = (min - mean, max - mean);
+        let nf = n as f64;
+        let sq = (s2 / nf).sqrt();
+        let (ssk, sku) = if sq > 0.0 {
+            (s3 / nf / (sq * sq * sq), s4 / nf / (sq * sq * sq * sq))
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        Some(HeightStats {
+            n,
+            mean,
+            sa: s1 / nf,
+            sq,
+            sp: hi,
+            sv: -lo,
+            ssk,
+            sku,
+            min,
+            max,
+        })
+    }
+}
+
 /// [`height_stats`] of `f64` or `f32` heights (the same bits for the same values).
 ///
 /// Two passes, each over fixed blocks of 4096 values on all threads: the mean, then the
 /// moments of `η = z − mean`. Per-block sums keep the rounding small on large maps and are
 /// reduced in block order (deterministic for any thread count).
-// The lane loops index several accumulator arrays by lane (struct of arrays, which the
-// compiler turns into vector code).
-#[allow(clippy::needless_range_loop)]
 pub fn height_stats_of<T: Height>(z: &[T]) -> Option<HeightStats> {
-    use rayon::prelude::*;
-    let sums: Vec<(f64, usize)> = z
-        .par_chunks(BLOCK)
-        .map(|chunk| {
-            // Value k goes to lane k % LANES; the lanes are added in order (fixed, so the
-            // result does not depend on the threads; independent lanes let the loop run as
-            // vector code).
-            let (mut s, mut c) = ([0.0f64; LANES], [0usize; LANES]);
-            let mut it = chunk.chunks_exact(LANES);
-            for g in &mut it {
-                for l in 0..LANES {
-                    let v = g[l].get();
-                    let ok = v.is_finite();
-                    s[l] += if ok { v } else { 0.0 };
-                    c[l] += usize::from(ok);
-                }
-            }
-            let (mut sum, mut n) = (0.0, 0usize);
-            for &v in it.remainder() {
-                let v = v.get();
-                if v.is_finite() {
-                    sum += v;
-                    n += 1;
-                }
-            }
-            for l in 0..LANES {
-                sum += s[l];
-                n += c[l];
-            }
-            (sum, n)
-        })
-        .collect();
-    let mut n = 0usize;
-    let mut sum = 0.0;
-    for &(s, c) in &sums {
-        sum += s;
-        n += c;
-    }
-    if n == 0 {
-        return None;
-    }
-    let mean = sum / n as f64;
-    let moments: Vec<[f64; 6]> = z
-        .par_chunks(BLOCK)
-        .zip(sums.par_iter())
-        .map(|(chunk, &(_, c))| {
-            let (mut a1, mut a2, mut a3, mut a4) = (0.0, 0.0, 0.0, 0.0);
-            let mut lo = f64::INFINITY;
-            let mut hi = f64::NEG_INFINITY;
-            let mut rest = chunk;
-            if c == chunk.len() {
-                // No missing value: branch-free lanes (as in the first pass).
-                let mut m = [[0.0f64; LANES]; 4];
-                let mut mn = [f64::INFINITY; LANES];
-                let mut mx = [f64::NEG_INFINITY; LANES];
-                let mut it = chunk.chunks_exact(LANES);
-                for g in &mut it {
-                    for l in 0..LANES {
-                        let v = g[l].get();
-                        let e = v - mean;
-                        let e2 = e * e;
-                        m[0][l] += e.abs();
-                        m[1][l] += e2;
-                        m[2][l] += e2 * e;
-                        m[3][l] += e2 * e2;
-                        mn[l] = mn[l].min(v);
-                        mx[l] = mx[l].max(v);
-                    }
-                }
-                for l in 0..LANES {
-                    a1 += m[0][l];
-                    a2 += m[1][l];
-                    a3 += m[2][l];
-                    a4 += m[3][l];
-                    lo = lo.min(mn[l]);
-                    hi = hi.max(mx[l]);
-                }
-                rest = it.remainder();
-            }
-            for &v in rest {
-                let v = v.get();
-                if v.is_finite() {
-                    let e = v - mean;
-                    let e2 = e * e;
-                    a1 += e.abs();
-                    a2 += e2;
-                    a3 += e2 * e;
-                    a4 += e2 * e2;
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-            }
-            [a1, a2, a3, a4, lo, hi]
-        })
-        .collect();
-    let (mut s1, mut s2, mut s3, mut s4) = (0.0, 0.0, 0.0, 0.0);
-    let mut lo = f64::INFINITY;
-    let mut hi = f64::NEG_INFINITY;
-    for m in &moments {
-        s1 += m[0];
-        s2 += m[1];
-        s3 += m[2];
-        s4 += m[3];
-        lo = lo.min(m[4]);
-        hi = hi.max(m[5]);
-    }
-    let (min, max) = (lo, hi);
-    let (lo, hi) = (lo - mean, hi - mean);
-    let nf = n as f64;
-    let sq = (s2 / nf).sqrt();
-    let (ssk, sku) = if sq > 0.0 {
-        (s3 / nf / (sq * sq * sq), s4 / nf / (sq * sq * sq * sq))
-    } else {
-        (f64::NAN, f64::NAN)
-    };
-    Some(HeightStats {
-        n,
-        mean,
-        sa: s1 / nf,
-        sq,
-        sp: hi,
-        sv: -lo,
-        ssk,
-        sku,
-        min,
-        max,
-    })
+    height_stats_on(wide::Isa::Best, z)
+}
+
+/// [`height_stats_of`] with the instruction set `isa`.
+pub(crate) fn height_stats_on<T: Height>(isa: wide::Isa, z: &[T]) -> Option<HeightStats> {
+    let sums = sums_of(isa, z);
+    let mut acc = HeightSums::new();
+    acc.add_sums(&sums);
+    let mean = acc.mean()?;
+    let counts: Vec<usize> = sums.iter().map(|s| s.1).collect();
+    acc.add_moments(&moments_of(isa, z, &counts, mean));
+    acc.stats()
 }
 
 /// A row-major grid of heights borrowed from a [`HeightMap`] or an `f32` field.
@@ -258,47 +367,116 @@ pub fn sdq_of<T: Height>(g: Grid<'_, T>) -> f64 {
         .with_min_len(16)
         .map(|r| {
             let row = g.row(r);
-            let (mut sx, mut cx, mut sy, mut cy) = (0.0, 0usize, 0.0, 0usize);
-            for w in row.windows(2) {
-                let d = w[1].get() - w[0].get();
-                if d.is_finite() {
-                    sx += d * d;
-                    cx += 1;
-                }
-            }
-            if r + 1 < ny {
-                for (a, b) in row.iter().zip(g.row(r + 1)) {
-                    let d = b.get() - a.get();
-                    if d.is_finite() {
-                        sy += d * d;
-                        cy += 1;
-                    }
-                }
-            }
+            let (sx, cx) = sdq_along(row);
+            let (sy, cy) = if r + 1 < ny {
+                sdq_across(row, g.row(r + 1))
+            } else {
+                (0.0, 0)
+            };
             (sx, cx, sy, cy)
         })
         .collect();
-    let (mut sx, mut cx, mut sy, mut cy) = (0.0, 0usize, 0.0, 0usize);
+    let mut acc = SdqSums::default();
     for &(a, b, c, d) in &rows {
-        sx += a;
-        cx += b;
-        sy += c;
-        cy += d;
+        acc.add_along(a, b);
+        acc.add_across(c, d);
     }
-    if cx == 0 && cy == 0 {
-        return f64::NAN;
+    acc.sdq(g.dx_um, g.dy_um)
+}
+
+/// The squared forward differences along a row and their count.
+#[inline]
+pub(crate) fn sdq_along<T: Height>(row: &[T]) -> (f64, usize) {
+    let (mut sx, mut cx) = (0.0, 0usize);
+    for w in row.windows(2) {
+        let d = w[1].get() - w[0].get();
+        if d.is_finite() {
+            sx += d * d;
+            cx += 1;
+        }
     }
-    let mx = if cx > 0 {
-        sx / cx as f64 / (g.dx_um * g.dx_um)
-    } else {
-        0.0
-    };
-    let my = if cy > 0 {
-        sy / cy as f64 / (g.dy_um * g.dy_um)
-    } else {
-        0.0
-    };
-    (mx + my).sqrt()
+    (sx, cx)
+}
+
+/// The squared differences from row `top` to the next row `bot` and their count.
+#[inline]
+pub(crate) fn sdq_across<T: Height>(top: &[T], bot: &[T]) -> (f64, usize) {
+    let (mut sy, mut cy) = (0.0, 0usize);
+    for (a, b) in top.iter().zip(bot) {
+        let d = b.get() - a.get();
+        if d.is_finite() {
+            sy += d * d;
+            cy += 1;
+        }
+    }
+    (sy, cy)
+}
+
+/// [`sdq_along`] of every row of `rows` (whole rows of `nx` values), in order, on all threads.
+pub(crate) fn sdq_along_of<T: Height>(rows: &[T], nx: usize) -> Vec<(f64, usize)> {
+    use rayon::prelude::*;
+    rows.par_chunks(nx.max(1))
+        .with_min_len(16)
+        .map(sdq_along)
+        .collect()
+}
+
+/// [`sdq_across`] of every pair of consecutive rows of `rows`, in order, on all threads.
+pub(crate) fn sdq_across_of<T: Height>(rows: &[T], nx: usize) -> Vec<(f64, usize)> {
+    use rayon::prelude::*;
+    let pairs = (rows.len() / nx.max(1)).saturating_sub(1);
+    (0..pairs)
+        .into_par_iter()
+        .with_min_len(16)
+        .map(|r| {
+            sdq_across(
+                &rows[r * nx..(r + 1) * nx],
+                &rows[(r + 1) * nx..(r + 2) * nx],
+            )
+        })
+        .collect()
+}
+
+/// Running sums of Sdq, fed row by row in row order.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SdqSums {
+    sx: f64,
+    cx: usize,
+    sy: f64,
+    cy: usize,
+}
+
+impl SdqSums {
+    /// Add a row's [`sdq_along`].
+    pub(crate) fn add_along(&mut self, s: f64, c: usize) {
+        self.sx += s;
+        self.cx += c;
+    }
+
+    /// Add a row pair's [`sdq_across`].
+    pub(crate) fn add_across(&mut self, s: f64, c: usize) {
+        self.sy += s;
+        self.cy += c;
+    }
+
+    /// Sdq from the sums.
+    pub(crate) fn sdq(&self, dx_um: f64, dy_um: f64) -> f64 {
+        let &SdqSums { sx, cx, sy, cy } = self;
+        if cx == 0 && cy == 0 {
+            return f64::NAN;
+        }
+        let mx = if cx > 0 {
+            sx / cx as f64 / (dx_um * dx_um)
+        } else {
+            0.0
+        };
+        let my = if cy > 0 {
+            sy / cy as f64 / (dy_um * dy_um)
+        } else {
+            0.0
+        };
+        (mx + my).sqrt()
+    }
 }
 
 /// `|u × v| − dx·dy` for a triangle spanning half a cell, from the two components `p`, `q`
@@ -318,22 +496,19 @@ pub fn sdr_percent(map: &HeightMap) -> f64 {
     sdr_percent_of(Grid::of(map))
 }
 
-/// [`sdr_percent`] of any grid, in one pass over the heights (no copy): row pairs on all
-/// threads, per-row sums reduced in row order (deterministic for any thread count).
-pub fn sdr_percent_of<T: Height>(g: Grid<'_, T>) -> f64 {
-    use rayon::prelude::*;
-    let (nx, ny) = (g.nx, g.ny);
-    if nx < 2 || ny < 2 {
-        return f64::NAN;
-    }
-    let (dx, dy) = (g.dx_um, g.dy_um);
+/// The summed excess area (four half-cell triangles per cell, not yet × 1/4) of the cells
+/// between row `top` and the next row `bot` (spacing `dx`, `dy`), and the number of complete
+/// cells.
+#[inline(always)]
+fn sdr_pair<T: Height>(top: &[T], bot: &[T], dx: f64, dy: f64) -> (f64, usize) {
+    let nx = top.len();
     let d = dx * dy;
     let d2 = d * d;
     // With A = (r, j), B = (r, j+1), C = (r+1, j+1), D = (r+1, j) and the edge differences
     // ab = B − A, dc = C − D (along x), ad = D − A, bc = C − B (along y), the doubled
     // triangle areas are |(dy·ab, dx·bc, dxdy)| (ABC), |(dy·dc, dx·ad, dxdy)| (ACD),
     // |(dy·ab, dx·ad, dxdy)| (ABD) and |(dy·dc, dx·bc, dxdy)| (BCD).
-    let cell = |top: &[T], bot: &[T], j: usize| -> f64 {
+    let cell = |j: usize| -> f64 {
         let (a, b) = (top[j].get(), top[j + 1].get());
         let (dd, c) = (bot[j].get(), bot[j + 1].get());
         let ab = dy * (b - a);
@@ -346,54 +521,153 @@ pub fn sdr_percent_of<T: Height>(g: Grid<'_, T>) -> f64 {
             + excess(ab2, ad2, d2, d)
             + excess(dc2, bc2, d2, d)
     };
-    let rows: Vec<(f64, usize)> = (0..ny - 1)
-        .into_par_iter()
-        .with_min_len(8)
-        .map(|r| {
-            let (top, bot) = (g.row(r), g.row(r + 1));
-            // Without a short cut (`all` stops at the first NaN, so it runs value by
-            // value): one vector loop per row.
-            let finite = |row: &[T]| row.iter().fold(true, |ok, v| ok & v.get().is_finite());
-            if finite(top) && finite(bot) {
-                let mut lanes = [0.0f64; LANES];
-                let groups = (nx - 1) / LANES;
-                for k in 0..groups {
-                    let j0 = k * LANES;
-                    for (l, acc) in lanes.iter_mut().enumerate() {
-                        *acc += cell(top, bot, j0 + l);
-                    }
-                }
-                let mut acc = 0.0;
-                for j in groups * LANES..nx - 1 {
-                    acc += cell(top, bot, j);
-                }
-                for l in lanes {
-                    acc += l;
-                }
-                (acc, nx - 1)
-            } else {
-                let (mut acc, mut cells) = (0.0, 0usize);
-                for j in 0..nx - 1 {
-                    let e = cell(top, bot, j);
-                    if e.is_finite() {
-                        acc += e;
-                        cells += 1;
-                    }
-                }
-                (acc, cells)
+    // Without a short cut (`all` stops at the first NaN, so it runs value by value): one
+    // vector loop per row.
+    let finite = |row: &[T]| {
+        let mut ok = true;
+        for v in row {
+            ok &= v.get().is_finite();
+        }
+        ok
+    };
+    if finite(top) && finite(bot) {
+        // The excess of each cell into a small buffer (a plain element-wise loop, which the
+        // compiler vectorises at any width), then the buffer summed into the lanes: cell j
+        // goes to lane j % LANES, in order, as a loop over the cells would add it.
+        let mut lanes = [0.0f64; LANES];
+        let whole = (nx - 1) / LANES * LANES;
+        let mut e = [0.0f64; STRIP];
+        let mut j0 = 0;
+        while j0 < whole {
+            let m = STRIP.min(whole - j0);
+            for (j, o) in e[..m].iter_mut().enumerate() {
+                *o = cell(j0 + j);
             }
-        })
-        .collect();
-    let mut total = 0.0;
-    let mut cells = 0usize;
-    for &(acc, c) in &rows {
-        total += 0.25 * acc;
-        cells += c;
+            for g in e[..m].chunks_exact(LANES) {
+                for (acc, v) in lanes.iter_mut().zip(g) {
+                    *acc += v;
+                }
+            }
+            j0 += m;
+        }
+        let mut acc = 0.0;
+        for j in whole..nx - 1 {
+            acc += cell(j);
+        }
+        for l in lanes {
+            acc += l;
+        }
+        (acc, nx - 1)
+    } else {
+        let (mut acc, mut cells) = (0.0, 0usize);
+        for j in 0..nx - 1 {
+            let e = cell(j);
+            if e.is_finite() {
+                acc += e;
+                cells += 1;
+            }
+        }
+        (acc, cells)
     }
-    if cells == 0 {
+}
+
+/// [`sdr_pair`] of the row pairs `(r, r + 1)` of `rows` (whole rows of `nx` values).
+struct SdrPairs<'a, T> {
+    rows: &'a [T],
+    nx: usize,
+    dx: f64,
+    dy: f64,
+}
+
+impl<T: Height> wide::Kernel for SdrPairs<'_, T> {
+    type Output = Vec<(f64, usize)>;
+    #[inline(always)]
+    fn call(self) -> Self::Output {
+        let SdrPairs { rows, nx, dx, dy } = self;
+        let n = (rows.len() / nx).saturating_sub(1);
+        let mut out = Vec::with_capacity(n);
+        for r in 0..n {
+            let top = &rows[r * nx..(r + 1) * nx];
+            let bot = &rows[(r + 1) * nx..(r + 2) * nx];
+            out.push(sdr_pair(top, bot, dx, dy));
+        }
+        out
+    }
+}
+
+/// Cells per strip of [`sdr_pair`]'s buffer (a multiple of [`LANES`]).
+const STRIP: usize = 256;
+
+/// Row pairs per rayon task of Sdr (fixed; results do not depend on it).
+const TASK_PAIRS: usize = 8;
+
+/// [`sdr_pair`] of every pair of consecutive rows of `rows` (whole rows of `nx ≥ 2` values),
+/// in order, on all threads.
+pub(crate) fn sdr_pairs_of<T: Height>(
+    isa: wide::Isa,
+    rows: &[T],
+    nx: usize,
+    dx: f64,
+    dy: f64,
+) -> Vec<(f64, usize)> {
+    use rayon::prelude::*;
+    let pairs = (rows.len() / nx).saturating_sub(1);
+    (0..pairs.div_ceil(TASK_PAIRS))
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let r0 = t * TASK_PAIRS;
+            let r1 = (r0 + TASK_PAIRS).min(pairs);
+            let rows = &rows[r0 * nx..(r1 + 1) * nx];
+            wide::run_on(isa, SdrPairs { rows, nx, dx, dy })
+        })
+        .collect()
+}
+
+/// Running sums of Sdr, fed with row pairs in row order.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SdrSums {
+    total: f64,
+    cells: usize,
+}
+
+impl SdrSums {
+    /// Add the results of the next row pairs.
+    pub(crate) fn add(&mut self, pairs: &[(f64, usize)]) {
+        for &(acc, c) in pairs {
+            self.total += 0.25 * acc;
+            self.cells += c;
+        }
+    }
+
+    /// Sdr in % from the sums.
+    pub(crate) fn percent(&self, dx_um: f64, dy_um: f64) -> f64 {
+        if self.cells == 0 {
+            return f64::NAN;
+        }
+        self.total / (self.cells as f64 * (dx_um * dy_um)) * 100.0
+    }
+}
+
+/// [`sdr_percent`] of any grid, in one pass over the heights (no copy): row pairs on all
+/// threads, per-row sums reduced in row order (deterministic for any thread count).
+pub fn sdr_percent_of<T: Height>(g: Grid<'_, T>) -> f64 {
+    sdr_percent_on(wide::Isa::Best, g)
+}
+
+/// [`sdr_percent_of`] with the instruction set `isa`.
+pub(crate) fn sdr_percent_on<T: Height>(isa: wide::Isa, g: Grid<'_, T>) -> f64 {
+    if g.nx < 2 || g.ny < 2 {
         return f64::NAN;
     }
-    total / (cells as f64 * d) * 100.0
+    let mut acc = SdrSums::default();
+    acc.add(&sdr_pairs_of(
+        isa,
+        &g.z[..g.nx * g.ny],
+        g.nx,
+        g.dx_um,
+        g.dy_um,
+    ));
+    acc.percent(g.dx_um, g.dy_um)
 }
 
 #[cfg(test)]

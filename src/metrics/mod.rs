@@ -24,6 +24,8 @@
 //!
 //! Only the parameters asked for are computed ([`ParamSet`]): a quick `Sa` costs two passes
 //! over the data, the ACF and the sort are only done for the parameters that need them.
+//! [`RowStream`] computes the plain-pass ones of a map fed in pieces of rows (as a file is
+//! read), with the same values.
 
 mod areal;
 mod fft;
@@ -33,6 +35,7 @@ mod material;
 mod params;
 mod profile;
 mod spatial;
+mod stream;
 
 pub use areal::{
     Grid, Height, HeightStats, height_stats, height_stats_of, sdq, sdq_of, sdr_percent,
@@ -49,6 +52,7 @@ pub use profile::{
     Profile, ProfileSpec, extract_profile, profile_values, rz_ra, sampling_length_mm,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
+pub use stream::RowStream;
 
 /// Errors of the metrics stage.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -184,7 +184,7 @@ impl ParamSet {
         &self.0
     }
 
-    fn any(&self, ps: &[Param]) -> bool {
+    pub(crate) fn any(&self, ps: &[Param]) -> bool {
         self.0.iter().any(|p| ps.contains(p))
     }
 }
@@ -375,8 +375,18 @@ fn pass_values<T: areal::Height>(
     };
     let sdq = set.any(&[Sdq]).then(|| areal::sdq_of(g));
     let sdr = set.any(&[Sdr]).then(|| areal::sdr_percent_of(g));
-    Ok(set
-        .params()
+    Ok(pass_table(set, stats, sdq, sdr))
+}
+
+/// The pass parameters of `set` from what was computed (NaN for the others).
+pub(crate) fn pass_table(
+    set: &ParamSet,
+    stats: Option<areal::HeightStats>,
+    sdq: Option<f64>,
+    sdr: Option<f64>,
+) -> Vec<(Param, f64)> {
+    use Param::*;
+    set.params()
         .iter()
         .map(|&p| {
             let v = match p {
@@ -393,7 +403,7 @@ fn pass_values<T: areal::Height>(
             };
             (p, v.unwrap_or(f64::NAN))
         })
-        .collect())
+        .collect()
 }
 
 /// The pass parameters ([`PASS_PARAMS`]) in `set` of any grid, `f64` or `f32` (the same

@@ -547,6 +547,61 @@ fn gsf_all_areal_parameters_str_undefined_is_null() {
     assert_abs_diff_eq!(v["Sz"].as_f64().unwrap(), 4.0, epsilon = 1e-5);
 }
 
+/// The streamed `.gsf` path (plain-pass parameters only, read in pieces of rows) gives the
+/// values of the whole-map path (taken when a parameter needs the whole map, here Sal) bit
+/// for bit, on a map of several pieces with missing nodes.
+#[test]
+fn gsf_streamed_values_are_the_whole_map_values() {
+    let dir = tempdir();
+    let (nx, ny) = (1000, 700);
+    let z = (0..nx * ny)
+        .map(|k| {
+            let (x, y) = ((k % nx) as f64, (k / nx) as f64);
+            if k % 4999 == 7 {
+                f64::NAN
+            } else {
+                (0.05 * x).sin() + 0.4 * (0.031 * y).cos() + 1e-3 * ((k * 7919) % 89) as f64
+            }
+        })
+        .collect();
+    let m = HeightMap::from_rows(nx, ny, 0.5, 0.25, z).unwrap();
+    let f = dir.path().join("n.gsf");
+    write_heightmap(&f, &m).unwrap();
+    let plain = "Sa,Sq,Sp,Sv,Sz,Ssk,Sku,Sdq,Sdr";
+    let a = success_json(
+        crest()
+            .args(["metrics"])
+            .arg(&f)
+            .args(["--params", plain, "--json"]),
+    );
+    let b = success_json(crest().args(["metrics"]).arg(&f).args([
+        "--params",
+        &format!("{plain},Sal"),
+        "--json",
+    ]));
+    for k in plain
+        .split(',')
+        .chain(["valid_nodes", "nx", "ny", "dx_um", "dy_um"])
+    {
+        assert!(a[k].is_number(), "{k}: {}", a[k]);
+        assert_eq!(a[k], b[k], "{k}");
+    }
+    assert_eq!(a["valid_nodes"], m.known());
+    assert!(a.get("Sal").is_none());
+    // A height beyond ±1 m is refused on this path too.
+    let mut far = m.clone();
+    far.z_um[nx * 650 + 3] = 2e6;
+    let g = dir.path().join("far.gsf");
+    write_heightmap(&g, &far).unwrap();
+    crest()
+        .args(["metrics"])
+        .arg(&g)
+        .args(["--params", "Sa,Sdr"])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("row 650, column 3"));
+}
+
 #[test]
 fn profile_rz_over_five_sampling_lengths() {
     let dir = tempdir();
