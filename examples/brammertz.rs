@@ -68,6 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         size: (900, 560),
         columns: 1,
         notes: Vec::new(),
+        x_integer: false,
     };
     let svg = render_svg(&chart)?;
     let dir = std::path::Path::new("reports/process-brammertz");
