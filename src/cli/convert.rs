@@ -161,8 +161,12 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
                 cw.posture(p, w)
             };
             let r = stream_from(input, kind, reader, opts, &mut sink);
+            // The rows collected so far are handed on even when the input fails later, as a
+            // `BufWriter` would: a FIFO or device gets every row before the bad line (a file
+            // is not kept on failure anyway).
+            let flushed = cw.flush(w);
             if r.is_ok() {
-                cw.flush(w)?;
+                flushed?;
             }
             r
         };

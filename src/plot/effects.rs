@@ -288,9 +288,10 @@ pub fn bands_chart(design: &Design, results: &[RunResult], samples: usize) -> Op
             "{samples} Monte Carlo samples per run (the inputs drawn within their [uncertainty]): \
              dashed, their P5 and P95; line, their median."
         ),
-        "Markers: the deterministic run (nominal inputs, every pass starting at spindle phase 0). \
-         With the spindle phase drawn per pass the passes' feed marks no longer line up, so it \
-         can lie outside the band."
+        "Markers: the deterministic run (nominal inputs, every pass starting at spindle phase 0)."
+            .to_string(),
+        "With the spindle phase drawn per pass the feed marks of neighbouring passes no longer \
+         line up, so it can lie outside the band."
             .to_string(),
     ];
     chart.size = (

@@ -285,3 +285,64 @@ fn missing_file_is_exit_2() {
         .code(2)
         .stderr(predicate::str::contains("cannot open"));
 }
+
+/// Converting into a FIFO streams the rows (no temporary file): when the input fails part
+/// way, the rows before the bad line have reached the reader (as before the contact12
+/// writer collected rows itself; 128 KiB of them were lost for a while), and the command
+/// still exits 2 naming the line.
+#[cfg(unix)]
+#[test]
+fn a_failed_convert_into_a_fifo_hands_on_every_row_before_the_bad_line() {
+    let dir = tempdir();
+    let good =
+        std::fs::read_to_string(crate::util::repo("samples/clsf/ball_lead15_contact.cls")).unwrap();
+    // The whole path converted to a file: the rows the FIFO must get.
+    let whole = dir.path().join("whole.csv");
+    crest()
+        .arg("convert")
+        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
+        .arg("-o")
+        .arg(&whole)
+        .assert()
+        .success();
+    let expected = read(&whole);
+    assert!(expected.lines().count() > 100);
+    // The same path with a bad GOTO after its last one.
+    let cut = good.rfind("RAPID\n").unwrap();
+    let bad_line = good[..cut].lines().count() + 1;
+    let bad = write(
+        dir.path(),
+        "bad.cls",
+        format!("{}GOTO/1.0,2.0,abc\n{}", &good[..cut], &good[cut..]),
+    );
+    let fifo = dir.path().join("rows.fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read_to_string(fifo).unwrap())
+    };
+    let out = crest()
+        .arg("convert")
+        .arg(&bad)
+        .arg("-o")
+        .arg(&fifo)
+        .output()
+        .unwrap();
+    let got = reader.join().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = flat(&out.stderr);
+    assert!(err.contains(&format!("bad.cls:{bad_line}")), "{err}");
+    // Every row but the last good GOTO's: the lowering holds a posture until the next
+    // record (here the bad one) settles how it ends.
+    let last = expected.trim_end_matches('\n').rfind('\n').unwrap() + 1;
+    assert!(
+        got == expected[..last],
+        "{} lines through the FIFO, {} expected",
+        got.lines().count(),
+        expected[..last].lines().count()
+    );
+}
