@@ -346,3 +346,32 @@ fn a_failed_convert_into_a_fifo_hands_on_every_row_before_the_bad_line() {
         expected[..last].lines().count()
     );
 }
+
+/// `-o /dev/stdout` with stdout a pipe (`crest convert … -o /dev/stdout | …`): the rows go
+/// down the pipe. `/dev/stdout` links to `/proc/self/fd/1`, which links to `pipe:[…]`, no
+/// path: following the links to the end looked for a temporary file in `/proc/self/fd`.
+#[cfg(target_os = "linux")]
+#[test]
+fn output_to_dev_stdout_as_a_pipe_goes_down_the_pipe() {
+    let dir = tempdir();
+    let file = dir.path().join("rows.csv");
+    crest()
+        .arg("convert")
+        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
+        .arg("-o")
+        .arg(&file)
+        .assert()
+        .success();
+    let out = crest()
+        .arg("convert")
+        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
+        .args(["-o", "/dev/stdout"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), read(&file));
+}
