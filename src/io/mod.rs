@@ -189,25 +189,50 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
     })
 }
 
+/// Open a `.gsf` input (registered as an input, so no output may replace it) and the
+/// mapping of a format error in it to [`HeightMapError`].
+fn open_gsf(
+    path: &Path,
+) -> Result<
+    (
+        std::fs::File,
+        impl Fn(FormatError) -> HeightMapError + Copy + '_,
+    ),
+    HeightMapError,
+> {
+    output::register_input(path);
+    let file = std::fs::File::open(path).map_err(|source| HeightMapError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let format = move |error| HeightMapError::Format {
+        path: path.to_path_buf(),
+        error,
+    };
+    Ok((file, format))
+}
+
+/// The mapping of a `.gsf` reader's error to [`HeightMapError`].
+fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
+    move |e| match e {
+        gsf::ReadError::Io(source) => HeightMapError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        gsf::ReadError::Format(error) => HeightMapError::Format {
+            path: path.to_path_buf(),
+            error,
+        },
+    }
+}
+
 /// Read a Gwyddion `.gsf` as it is stored, float32 ([`GsfField`]): half the memory of
 /// [`read_heightmap`] and the same heights (`f64::from` of each value gives exactly the
 /// value `read_heightmap` holds). The same checks as [`read_heightmap`] (spacing against
 /// `opts`, heights within ±1 m).
 pub fn read_gsf_f32(path: &Path, opts: &ReadOptions) -> Result<GsfField, HeightMapError> {
-    output::register_input(path);
-    let io = |source| HeightMapError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let format = |error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let (field, bad) = gsf::read_f32(&file, MAX_HEIGHT_UM).map_err(|e| match e {
-        gsf::ReadError::Io(e) => io(e),
-        gsf::ReadError::Format(e) => format(e),
-    })?;
+    let (file, format) = open_gsf(path)?;
+    let (field, bad) = gsf::read_f32(&file, MAX_HEIGHT_UM).map_err(gsf_error(path))?;
     if let Some(k) = bad {
         return Err(format(beyond(k, field.z_um[k], field.nx)));
     }
@@ -220,20 +245,8 @@ pub fn read_gsf_f32(path: &Path, opts: &ReadOptions) -> Result<GsfField, HeightM
 /// in a few rows of memory: the header is read and checked (spacing against `opts`) now,
 /// the heights (the very float32 values of [`read_gsf_f32`]) as they are handed on.
 pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightMapError> {
-    output::register_input(path);
-    let io = |source| HeightMapError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let format = |error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let rows = GsfRows::open(file, path).map_err(|e| match e {
-        gsf::ReadError::Io(e) => io(e),
-        gsf::ReadError::Format(e) => format(e),
-    })?;
+    let (file, format) = open_gsf(path)?;
+    let rows = GsfRows::open(file, path).map_err(gsf_error(path))?;
     check_against(opts.dx_um, rows.dx_um, "dx").map_err(format)?;
     check_against(opts.dy_um, rows.dy_um, "dy").map_err(format)?;
     Ok(rows)
