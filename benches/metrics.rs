@@ -6,7 +6,7 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
-use crest::io::{ReadOptions, read_gsf_f32, read_heightmap, write_heightmap};
+use crest::io::{ReadOptions, open_gsf_rows, read_heightmap, write_heightmap};
 use crest::metrics::{
     Grid, Level, ParamSet, Preprocess, areal_parameters, areal_parameters_of, gaussian_filter_map,
     preprocess_map,
@@ -81,8 +81,13 @@ fn bench(c: &mut Criterion) {
     g.bench_function("read_gsf_2000x2000", |b| {
         b.iter(|| read_heightmap(black_box(&path), &ReadOptions::default()).unwrap())
     });
-    g.bench_function("read_gsf_f32_2000x2000", |b| {
-        b.iter(|| read_gsf_f32(black_box(&path), &ReadOptions::default()).unwrap())
+    g.bench_function("read_gsf_rows_2000x2000", |b| {
+        b.iter(|| {
+            let rows = open_gsf_rows(black_box(&path), &ReadOptions::default()).unwrap();
+            let mut n = 0usize;
+            rows.read_rows(256, |_, piece| n += piece.len()).unwrap();
+            n
+        })
     });
     g.finish();
 }

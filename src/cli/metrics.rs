@@ -88,18 +88,23 @@ fn spec_label(s: ProfileSpec) -> String {
     }
 }
 
-/// The map as read: a [`HeightMap`], or a `.gsf` read in pieces of rows when only plain-pass
-/// parameters are asked for without preprocessing (a few rows of memory, the same values).
+/// The map as read: a [`HeightMap`], or, when only plain-pass parameters are asked for
+/// without preprocessing, a `.gsf` streamed in pieces of rows (a few rows of memory, the same
+/// values): its grid, its parameters and its number of valid nodes.
 enum Loaded {
     Map(HeightMap),
-    Rows(GsfRows),
+    Streamed {
+        dims: (usize, usize, f64, f64),
+        values: Vec<(crest::metrics::Param, f64)>,
+        valid: usize,
+    },
 }
 
 impl Loaded {
     fn dims(&self) -> (usize, usize, f64, f64) {
         match self {
             Loaded::Map(m) => (m.nx, m.ny, m.dx_um, m.dy_um),
-            Loaded::Rows(f) => (f.nx, f.ny, f.dx_um, f.dy_um),
+            Loaded::Streamed { dims, .. } => *dims,
         }
     }
 }
@@ -164,7 +169,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         && !filtered
         && set.passes_only();
     let loaded = if as_stored {
-        Loaded::Rows(open_gsf_rows(&args.file, &opts).map_err(|e| miette!("{e}"))?)
+        let rows = open_gsf_rows(&args.file, &opts).map_err(|e| miette!("{e}"))?;
+        let (values, valid) = streamed(&rows, &set)?;
+        Loaded::Streamed {
+            dims: (rows.nx, rows.ny, rows.dx_um, rows.dy_um),
+            values,
+            valid,
+        }
     } else {
         Loaded::Map(read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?)
     };
@@ -177,15 +188,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("ny".into(), ny.into());
     info.insert("dx_um".into(), num(dx_um));
     info.insert("dy_um".into(), num(dy_um));
-    // The streamed parameters are computed first: the count of valid nodes comes with them.
-    let streamed = match &loaded {
-        Loaded::Rows(rows) => Some(streamed(rows, &set)?),
-        Loaded::Map(_) => None,
-    };
-    let known = match (&loaded, &streamed) {
-        (_, Some((_, valid))) => *valid,
-        (Loaded::Map(m), None) => m.known(),
-        (Loaded::Rows(_), None) => 0,
+    let known = match &loaded {
+        Loaded::Map(m) => m.known(),
+        Loaded::Streamed { valid, .. } => *valid,
     };
     info.insert("valid_nodes".into(), known.into());
     info.insert("level".into(), pp.level.label().into());
@@ -209,10 +214,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("trimmed_um".into(), num(pp.trim_um()));
 
     let values = match (&loaded, args.profile) {
-        (Loaded::Rows(_), _) => {
+        (Loaded::Streamed { values, .. }, _) => {
             info.insert("evaluated_nx".into(), nx.into());
             info.insert("evaluated_ny".into(), ny.into());
-            streamed.map(|(v, _)| v).unwrap_or_default()
+            values.clone()
         }
         (Loaded::Map(map), Some(spec)) => {
             let raw = extract_profile(map, spec).map_err(|e| miette!("{file}: {e}"))?;

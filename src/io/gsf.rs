@@ -171,27 +171,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
     Ok(map)
 }
 
-/// A `.gsf` kept as it is stored: the grid and the float32 heights in µm (the very values
-/// [`parse`] widens to `f64`), in half the memory of a [`HeightMap`].
-#[derive(Debug, Clone, PartialEq)]
-pub struct GsfField {
-    /// Columns (x).
-    pub nx: usize,
-    /// Rows (y).
-    pub ny: usize,
-    /// Spacing along x, µm.
-    pub dx_um: f64,
-    /// Spacing along y, µm.
-    pub dy_um: f64,
-    /// x of column 0, mm.
-    pub x0_mm: f64,
-    /// y of row 0, mm.
-    pub y0_mm: f64,
-    /// Row-major heights, µm, `NaN` for missing nodes.
-    pub z_um: Vec<f32>,
-}
-
-/// Why [`read_f32`] failed.
+/// Why opening a `.gsf` ([`GsfRows::open`]) failed.
 pub(crate) enum ReadError {
     Io(std::io::Error),
     Format(FormatError),
@@ -207,54 +187,6 @@ impl From<FormatError> for ReadError {
     fn from(e: FormatError) -> Self {
         ReadError::Format(e)
     }
-}
-
-/// Bytes per read of the float32 data.
-const PIECE: usize = 4 << 20;
-
-/// Read a `.gsf` into a [`GsfField`]: the header, then the data read straight into the
-/// float32 buffer (no byte copy of the file), piece by piece, each scaled to µm in place. Memory: the file's data size and a few KiB. Also returns the index of the first
-/// finite height beyond `±limit_um`, if any (checked in the same pass).
-pub(crate) fn read_f32(
-    file: &std::fs::File,
-    limit_um: f64,
-) -> Result<(GsfField, Option<usize>), ReadError> {
-    use std::os::unix::fs::FileExt;
-    let h = read_header(file)?;
-    let mut z = vec![0f32; h.nx * h.ny];
-    let scale = h.z_um;
-    let start = h.data_start as u64;
-    let bad: Vec<Option<usize>> = z
-        .chunks_mut(PIECE / 4)
-        .enumerate()
-        .map(|(k, piece)| -> std::io::Result<Option<usize>> {
-            let off = start + (k * PIECE) as u64;
-            file.read_exact_at(bytemuck::cast_slice_mut(piece), off)?;
-            let mut over = false;
-            for v in piece.iter_mut() {
-                *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
-                over |= f64::from(v.abs()) > limit_um && v.is_finite();
-            }
-            Ok(over
-                .then(|| {
-                    piece
-                        .iter()
-                        .position(|v| v.is_finite() && f64::from(v.abs()) > limit_um)
-                })
-                .flatten()
-                .map(|i| k * (PIECE / 4) + i))
-        })
-        .collect::<std::io::Result<_>>()?;
-    let field = GsfField {
-        nx: h.nx,
-        ny: h.ny,
-        dx_um: h.dx_um,
-        dy_um: h.dy_um,
-        x0_mm: h.x0_mm,
-        y0_mm: h.y0_mm,
-        z_um: z,
-    };
-    Ok((field, bad.into_iter().flatten().next()))
 }
 
 /// A `.gsf` opened for reading its rows in pieces ([`GsfRows::for_each_piece`]): the header
@@ -329,7 +261,8 @@ impl GsfRows {
         })
     }
 
-    /// Hand the heights (µm, scaled in float32 as [`read_f32`] scales them) to `each` in
+    /// Hand the heights (the stored float32 values scaled to µm in float32, which [`parse`]
+    /// widens to `f64` exactly) to `each` in
     /// pieces of `rows` whole rows (the last piece may be shorter), in order, with the index
     /// of each piece's first row. One thread reads the next pieces (`pread` into a few
     /// reused buffers) while `each` runs on the caller's thread; memory: those buffers. Stops
@@ -520,8 +453,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("m.gsf");
         std::fs::write(&path, &bytes).unwrap();
-        let file = std::fs::File::open(&path).unwrap();
-        let (f, _) = read_f32(&file, 1e6).ok().unwrap();
+        // `parse` widens each stored float32 value to f64 exactly: the oracle.
+        let f = parse(&bytes).unwrap();
         let rows = GsfRows::open(std::fs::File::open(&path).unwrap(), &path)
             .ok()
             .unwrap();
@@ -539,17 +472,16 @@ mod tests {
             assert!(
                 all.iter()
                     .zip(&f.z_um)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                    .all(|(a, b)| f64::from(*a).to_bits() == b.to_bits())
             );
         }
         // A height beyond the limit stops the reading before its piece is handed on.
-        let (_, bad) = read_f32(&file, 2.0).ok().unwrap();
-        let bad = bad.unwrap();
+        let bad = f.z_um.iter().position(|v| v.abs() > 2.0).unwrap();
         let mut seen = 0;
         match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
             Err(PieceError::Beyond((k, v))) => {
                 assert_eq!(k, bad);
-                assert_eq!(v.to_bits(), f.z_um[bad].to_bits());
+                assert_eq!(f64::from(v).to_bits(), f.z_um[bad].to_bits());
             }
             _ => panic!("height beyond the limit accepted"),
         }
@@ -557,8 +489,8 @@ mod tests {
     }
 
     #[test]
-    fn float32_reading_holds_the_values_parse_widens() {
-        let (nx, ny) = (1500, 900); // more than one piece of PIECE bytes
+    fn rows_of_a_large_map_hold_the_values_parse_widens_and_a_truncated_file_is_refused() {
+        let (nx, ny) = (1500, 900); // several 4 MiB pieces
         let z: Vec<f64> = (0..nx * ny)
             .map(|k| {
                 if k % 1001 == 5 {
@@ -575,25 +507,32 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("m.gsf");
         std::fs::write(&path, &bytes).unwrap();
-        let file = std::fs::File::open(&path).unwrap();
-        let (f, bad) = read_f32(&file, 1e6).ok().unwrap();
+        let rows = GsfRows::open(std::fs::File::open(&path).unwrap(), &path)
+            .ok()
+            .unwrap();
         let m = parse(&bytes).unwrap();
-        assert_eq!(bad, None);
         assert_eq!(
-            (f.nx, f.ny, f.dx_um, f.dy_um),
+            (rows.nx, rows.ny, rows.dx_um, rows.dy_um),
             (m.nx, m.ny, m.dx_um, m.dy_um)
         );
-        assert_eq!((f.x0_mm, f.y0_mm), (m.x0_mm, m.y0_mm));
-        for (a, b) in f.z_um.iter().zip(&m.z_um) {
+        assert_eq!((rows.x0_mm, rows.y0_mm), (m.x0_mm, m.y0_mm));
+        let mut all = Vec::new();
+        assert!(
+            rows.for_each_piece(700, 1e6, |_, p| all.extend_from_slice(p))
+                .is_ok()
+        );
+        assert_eq!(all.len(), m.z_um.len());
+        for (a, b) in all.iter().zip(&m.z_um) {
             assert_eq!(f64::from(*a).to_bits(), b.to_bits());
         }
-        let (_, bad) = read_f32(&file, 3.0).ok().unwrap();
         let first = m.z_um.iter().position(|v| v.abs() > 3.0).unwrap();
-        assert_eq!(bad, Some(first));
+        match rows.for_each_piece(700, 3.0, |_, _| {}) {
+            Err(PieceError::Beyond((k, _))) => assert_eq!(k, first),
+            _ => panic!("height beyond the limit accepted"),
+        }
         // A truncated file is a format error at a byte offset, as with `parse`.
         std::fs::write(&path, &bytes[..bytes.len() - 2]).unwrap();
-        let file = std::fs::File::open(&path).unwrap();
-        match read_f32(&file, 1e6) {
+        match GsfRows::open(std::fs::File::open(&path).unwrap(), &path) {
             Err(ReadError::Format(e)) => assert!(matches!(e.at, Location::Byte(_)), "{e}"),
             _ => panic!("truncated file accepted"),
         }

@@ -33,7 +33,7 @@ use std::path::{Path, PathBuf};
 
 use crate::surface::HeightMap;
 
-pub use gsf::{GsfField, GsfRows};
+pub use gsf::GsfRows;
 pub use output::write_atomic;
 
 /// Write a set of files into the folder `dir`, whole or not at all (see [`output::write_set`]).
@@ -189,29 +189,6 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
     })
 }
 
-/// Open a `.gsf` input (registered as an input, so no output may replace it) and the
-/// mapping of a format error in it to [`HeightMapError`].
-fn open_gsf(
-    path: &Path,
-) -> Result<
-    (
-        std::fs::File,
-        impl Fn(FormatError) -> HeightMapError + Copy + '_,
-    ),
-    HeightMapError,
-> {
-    output::register_input(path);
-    let file = std::fs::File::open(path).map_err(|source| HeightMapError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let format = move |error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
-    };
-    Ok((file, format))
-}
-
 /// The mapping of a `.gsf` reader's error to [`HeightMapError`].
 fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
     move |e| match e {
@@ -226,26 +203,20 @@ fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
     }
 }
 
-/// Read a Gwyddion `.gsf` as it is stored, float32 ([`GsfField`]): half the memory of
-/// [`read_heightmap`] and the same heights (`f64::from` of each value gives exactly the
-/// value `read_heightmap` holds). The same checks as [`read_heightmap`] (spacing against
-/// `opts`, heights within ±1 m).
-pub fn read_gsf_f32(path: &Path, opts: &ReadOptions) -> Result<GsfField, HeightMapError> {
-    let (file, format) = open_gsf(path)?;
-    let (field, bad) = gsf::read_f32(&file, MAX_HEIGHT_UM).map_err(gsf_error(path))?;
-    if let Some(k) = bad {
-        return Err(format(beyond(k, field.z_um[k], field.nx)));
-    }
-    check_against(opts.dx_um, field.dx_um, "dx").map_err(format)?;
-    check_against(opts.dy_um, field.dy_um, "dy").map_err(format)?;
-    Ok(field)
-}
-
 /// Open a Gwyddion `.gsf` for reading its heights in pieces of rows ([`GsfRows::read_rows`]),
 /// in a few rows of memory: the header is read and checked (spacing against `opts`) now,
-/// the heights (the very float32 values of [`read_gsf_f32`]) as they are handed on.
+/// the heights (the stored float32 values in µm, which [`read_heightmap`] widens to `f64`
+/// exactly) as they are handed on.
 pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightMapError> {
-    let (file, format) = open_gsf(path)?;
+    output::register_input(path);
+    let file = std::fs::File::open(path).map_err(|source| HeightMapError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let format = |error| HeightMapError::Format {
+        path: path.to_path_buf(),
+        error,
+    };
     let rows = GsfRows::open(file, path).map_err(gsf_error(path))?;
     check_against(opts.dx_um, rows.dx_um, "dx").map_err(format)?;
     check_against(opts.dy_um, rows.dy_um, "dy").map_err(format)?;
@@ -257,7 +228,7 @@ impl GsfRows {
     /// `rows` whole rows (the last may be shorter), in order, with the index of each piece's
     /// first row; may be called again for another pass. The next pieces are read on another
     /// thread while `each` runs. A finite height beyond ±1 m is an error (as in
-    /// [`read_gsf_f32`]), raised before its piece is handed on.
+    /// [`read_heightmap`]), raised before its piece is handed on.
     pub fn read_rows(
         &self,
         rows: usize,
