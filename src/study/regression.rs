@@ -449,18 +449,19 @@ fn processed_roughness(
         .flat_map(|m| marks.iter().map(move |&(p, d)| (p + m as f64 * period, d)))
         .collect();
     centres.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let field = process
+    let texture = process
         .texture
         .filter(|t| t.sq_mm > 0.0)
-        .map(|t| crate::surface::process::TextureField::new(&t));
+        .map(|t| crate::surface::process::texture_row(&t, dx, n));
     let heights: Vec<f64> = xs
         .iter()
-        .map(|&x| {
+        .enumerate()
+        .map(|(i, &x)| {
             let z = centres.iter().fold(f64::INFINITY, |z, &(c, d)| {
                 let w = mark_height(profile, d, x - c);
                 crate::surface::process::apply_pass(z, w, process.min_chip_mm, process.recovery)
             });
-            z + field.as_ref().map_or(0.0, |f| f.value(x, 0.0))
+            z + texture.as_ref().map_or(0.0, |t| t[i])
         })
         .collect();
     let lo = heights.iter().copied().fold(f64::INFINITY, f64::min);
