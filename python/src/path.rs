@@ -238,7 +238,7 @@ pub(crate) fn plan_feed<'py>(
     level: &str,
     absolute: bool,
 ) -> PyResult<Bound<'py, PyList>> {
-    use crest::kinematics::{Level, plan_input, plan_poses};
+    use crest::kinematics::Level;
     let level = match level {
         "jerk" => Level::Jerk,
         "acc" => Level::Acceleration,
@@ -251,35 +251,11 @@ pub(crate) fn plan_feed<'py>(
     let plans = py
         .allow_threads(|| -> miette::Result<_> {
             let machine = crest::pipeline::load_machine(&machine)?;
-            let read = crest::io::toolpath::ReadOptions {
-                lower: crest::toolpath::LowerOptions {
-                    apply_msys: absolute,
-                    ..Default::default()
-                },
-                machine: Some(machine.clone()),
-                rtcp: Default::default(),
-            };
-            let program = crest::io::toolpath::read_program_with(&file, read)?;
-            let name = file.display().to_string();
-            let mut plans = Vec::new();
-            for path in &program.paths {
-                let input = plan_input(path);
-                let plan = plan_poses(&input, &machine, level).map_err(|e| {
-                    let msg = e.to_string();
-                    let line = e.line();
-                    let msg = msg
-                        .strip_prefix(&format!("line {line}: "))
-                        .unwrap_or(&msg)
-                        .to_string();
-                    miette::miette!("{name}:{line}:1: {msg} (tool path \"{}\")", path.name)
-                })?;
-                plans.push((path.name.clone(), input, plan));
-            }
-            Ok(plans)
+            crest::pipeline::feed::plan_file(&file, &machine, level, absolute, Default::default())
         })
         .map_err(err)?;
     let out = PyList::empty(py);
-    for (name, input, plan) in plans {
+    for crest::pipeline::feed::PlannedPath { name, input, plan } in plans {
         let d = PyDict::new(py);
         d.set_item("name", name)?;
         d.set_item("total_time_s", plan.total_time_s)?;

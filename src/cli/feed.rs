@@ -6,7 +6,8 @@
 //! 1 when a path fails the §7 self-check (an interpolator fallback was needed).
 
 use super::Outcome;
-use crest::kinematics::{FeedPlan, Level, Machine, plan_input, plan_poses};
+use crest::kinematics::{FeedPlan, Level, Machine};
+use crest::pipeline::feed::PlannedPath;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -81,75 +82,35 @@ pub fn resolve_feed_source(
 /// Run `crest feed`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let machine = crest::pipeline::load_machine(&args.machine)?;
-    let opts = crest::toolpath::LowerOptions {
-        apply_msys: args.absolute,
-        ..Default::default()
-    };
-    let read = crest::io::toolpath::ReadOptions {
-        lower: opts,
-        machine: Some(machine.clone()),
-        rtcp: args.rtcp.into(),
-    };
-    let program = crest::io::toolpath::read_program_with(&args.file, read)?;
     let level = match args.level {
         LevelArg::Jerk => Level::Jerk,
         LevelArg::Acc => Level::Acceleration,
     };
     let file = args.file.display().to_string();
-    let mut plans = Vec::with_capacity(program.paths.len());
-    for path in &program.paths {
-        let input = plan_input(path);
-        let plan = plan_poses(&input, &machine, level).map_err(|e| {
-            let msg = e.to_string();
-            let line = e.line();
-            let msg = msg
-                .strip_prefix(&format!("line {line}: "))
-                .unwrap_or(&msg)
-                .to_string();
-            // A path in a tilted or flipped MCS meets the machine's travel limits the wrong
-            // way up: say so.
-            let hint = match (&path.msys, path.msys_applied) {
-                (Some(m), false) => {
-                    let (x, y) = (
-                        crest::math::Vec3::new(m[3], m[4], m[5]),
-                        crest::math::Vec3::new(m[6], m[7], m[8]),
-                    );
-                    let z = x.cross(&y);
-                    if msg.contains("travel limits") && (z - crest::math::Vec3::z()).norm() > 1e-6 {
-                        format!(
-                            "; the path is in the MCS of its MSYS, whose Z axis is ({:.3}, {:.3}, {:.3}) in the absolute frame: plan it in the absolute frame with --absolute",
-                            z.x, z.y, z.z
-                        )
-                    } else {
-                        String::new()
-                    }
-                }
-                _ => String::new(),
-            };
-            miette::miette!(
-                "{file}:{line}:1: {msg} (tool path \"{}\"){hint}",
-                path.name
-            )
-        })?;
-        plans.push((path, input, plan));
-    }
+    let plans = crest::pipeline::feed::plan_file(
+        &args.file,
+        &machine,
+        level,
+        args.absolute,
+        args.rtcp.into(),
+    )?;
     let names = machine.joint_names();
     if let Some(out) = &args.output {
         crest::io::write_atomic(out, |w| write_csv(w, &plans, &names))
             .map_err(|e| miette::miette!("{}: cannot write: {e}", out.display()))?;
     }
-    let total: f64 = plans.iter().map(|(_, _, p)| p.total_time_s).sum();
-    let programmed: f64 = plans.iter().map(|(_, _, p)| p.programmed_time_s).sum();
+    let total: f64 = plans.iter().map(|p| p.plan.total_time_s).sum();
+    let programmed: f64 = plans.iter().map(|p| p.plan.programmed_time_s).sum();
     let ratio = if programmed > 0.0 {
         total / programmed
     } else {
         f64::NAN
     };
-    let all_ok = plans.iter().all(|(_, _, p)| p.self_check_ok());
+    let all_ok = plans.iter().all(|p| p.plan.self_check_ok());
     if args.json {
         let paths: Vec<serde_json::Value> = plans
             .iter()
-            .map(|(path, input, plan)| path_json(&path.name, input, plan, &names))
+            .map(|p| path_json(&p.name, &p.input, &p.plan, &names))
             .collect();
         let v = serde_json::json!({
             "file": file,
@@ -165,12 +126,12 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     } else {
         let mut lines = String::new();
         lines.push_str(&format!("{file} on \"{}\"\n", machine.name));
-        for (path, _, plan) in &plans {
+        for PlannedPath { name, plan, .. } in &plans {
             let feeds: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
             let fmax = feeds.iter().copied().fold(0.0, f64::max);
             lines.push_str(&format!(
                 "  {:<24} {:>7} postures  time {:>10.3} s  programmed {:>10.3} s  ratio {:>6.3}  max feed {:>8.0} mm/min  switches {}  recoveries {}  fallbacks {}\n",
-                path.name,
+                name,
                 plan.postures.len(),
                 plan.total_time_s,
                 plan.programmed_time_s,
@@ -254,13 +215,7 @@ fn path_json(
     })
 }
 
-type Planned<'a> = (
-    &'a crest::toolpath::Toolpath,
-    Vec<crest::kinematics::PlanInput>,
-    FeedPlan,
-);
-
-fn write_csv(w: &mut dyn Write, plans: &[Planned], names: &[&str; 5]) -> std::io::Result<()> {
+fn write_csv(w: &mut dyn Write, plans: &[PlannedPath], names: &[&str; 5]) -> std::io::Result<()> {
     write!(
         w,
         "path,index,line,t_s,feed_mm_min,path_speed_mm_min,programmed_feed_mm_min,limit,branch"
@@ -269,8 +224,8 @@ fn write_csv(w: &mut dyn Write, plans: &[Planned], names: &[&str; 5]) -> std::io
         write!(w, ",{n}")?;
     }
     writeln!(w)?;
-    for (path, input, plan) in plans {
-        let name = path.name.replace([',', '"', '\n'], "_");
+    for PlannedPath { name, input, plan } in plans {
+        let name = name.replace([',', '"', '\n'], "_");
         for (i, (p, inp)) in plan.postures.iter().zip(input).enumerate() {
             let f = inp.feed_mm_s * 60.0;
             let f = if f.is_finite() {

@@ -11,6 +11,7 @@ pub use inputs::{
 pub use progress::{Progress, Silent};
 pub mod contact;
 pub mod design;
+pub mod feed;
 pub mod progress;
 pub mod report;
 pub mod runout;
