@@ -309,9 +309,16 @@ pub fn write_set(dir: &Path, files: &[(String, Vec<u8>)]) -> std::io::Result<Vec
             f.write_all(bytes)?;
             f.sync_all().or(Ok::<(), std::io::Error>(()))?;
         }
-        if !dir.exists() {
-            std::fs::rename(&staging, dir)?;
-        } else {
+        // The staging folder becomes `dir` when there is none. Another process may make
+        // `dir` in between (the shards of one run written into one folder at once): then
+        // the rename fails on the folder it made, and the files are moved in one by one.
+        let whole = !dir.exists()
+            && match std::fs::rename(&staging, dir) {
+                Ok(()) => true,
+                Err(_) if dir.is_dir() => false,
+                Err(e) => return Err(e),
+            };
+        if !whole {
             for (name, _) in files {
                 let (dest, special) = destination(&dir.join(name))?;
                 if special {
@@ -389,6 +396,30 @@ mod tests {
                 .file_type()
                 .is_char_device()
         );
+    }
+
+    #[test]
+    fn sets_written_into_one_new_folder_at_once_all_land() {
+        // Shards of one run write into the same folder, which none of them finds there.
+        for round in 0..20 {
+            let base = tempfile::tempdir().unwrap();
+            let dir = base.path().join("shards");
+            std::thread::scope(|s| {
+                for k in 0..4 {
+                    let dir = &dir;
+                    s.spawn(move || {
+                        let files = [(format!("shard-{k}.jsonl"), vec![b'0' + k as u8])];
+                        write_set(dir, &files).unwrap_or_else(|e| panic!("round {round}: {e}"));
+                    });
+                }
+            });
+            for k in 0..4u8 {
+                let got = std::fs::read(dir.join(format!("shard-{k}.jsonl"))).unwrap();
+                assert_eq!(got, [b'0' + k], "round {round}");
+            }
+            let left: Vec<_> = std::fs::read_dir(base.path()).unwrap().flatten().collect();
+            assert_eq!(left.len(), 1, "round {round}: no staging folder is left");
+        }
     }
 
     #[test]
