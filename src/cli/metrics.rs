@@ -110,8 +110,9 @@ impl Loaded {
 }
 
 /// Bytes of heights per piece of a streamed `.gsf` (whole rows; a few of these are in
-/// memory at once, small enough to stay in the caches).
-const PIECE_BYTES: usize = 4 << 20;
+/// memory at once, small enough to stay in the caches: the kernel's copy into a piece and
+/// the kernels reading it then hit the cache; 4 MiB pieces cost ~20 % more CPU time).
+const PIECE_BYTES: usize = 256 << 10;
 
 /// The plain-pass parameters of a streamed `.gsf` and its number of valid nodes.
 fn streamed(
@@ -122,12 +123,21 @@ fn streamed(
     let mut s = RowStream::<f32>::new(rows.nx, rows.ny, rows.dx_um, rows.dy_um, set)
         .map_err(|e| miette!("{file}: {e}"))?;
     let k = s.rows_per_piece(PIECE_BYTES);
-    rows.read_rows(k, |_, piece| s.first(piece))
-        .map_err(|e| miette!("{e}"))?;
-    if s.end_first() {
-        rows.read_rows(k, |_, piece| s.second(piece))
+    let passes = |s: &mut RowStream<f32>| -> miette::Result<()> {
+        rows.read_rows(k, |_, piece| s.first(piece))
             .map_err(|e| miette!("{e}"))?;
-    }
+        if s.end_first() {
+            rows.read_rows(k, |_, piece| s.second(piece))
+                .map_err(|e| miette!("{e}"))?;
+        }
+        Ok(())
+    };
+    // On one of rayon's workers, not the main thread: each piece's parallel work then starts
+    // there (the other worker steals) instead of waking a worker and putting the main
+    // thread to sleep for every piece (2-6 % less wall time, the same values).
+    let mut done = Ok(());
+    rayon::scope(|sc| sc.spawn(|_| done = passes(&mut s)));
+    done?;
     let valid = s.valid();
     let values = s.finish().map_err(|e| miette!("{file}: {e}"))?;
     Ok((values, valid))

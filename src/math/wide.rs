@@ -52,6 +52,22 @@ pub fn run_on<K: Kernel>(isa: Isa, k: K) -> K::Output {
     }
 }
 
+/// The AVX2 level of `pulp` (x86-64-v3), for kernels written with explicit vector
+/// operations. Each such kernel has a scalar twin that gives the same bits: the same IEEE
+/// operations in the same order, lane for lane.
+#[cfg(target_arch = "x86_64")]
+pub(crate) type V3 = pulp::x86::V3;
+
+/// [`V3`] when `isa` is [`Isa::Best`] and the CPU has it (detected once, cached by `std`).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn v3(isa: Isa) -> Option<V3> {
+    match isa {
+        Isa::Best => V3::try_new(),
+        Isa::Baseline => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

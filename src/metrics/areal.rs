@@ -42,12 +42,18 @@ impl HeightStats {
 pub trait Height: Copy + Send + Sync {
     /// The value as `f64` (exact).
     fn get(self) -> f64;
+    /// The values as `f32` when they are (for the kernels written for `f32` lanes).
+    fn as_f32s(z: &[Self]) -> Option<&[f32]>;
 }
 
 impl Height for f64 {
     #[inline(always)]
     fn get(self) -> f64 {
         self
+    }
+    #[inline(always)]
+    fn as_f32s(_: &[f64]) -> Option<&[f32]> {
+        None
     }
 }
 
@@ -56,6 +62,24 @@ impl Height for f32 {
     fn get(self) -> f64 {
         f64::from(self)
     }
+    #[inline(always)]
+    fn as_f32s(z: &[f32]) -> Option<&[f32]> {
+        Some(z)
+    }
+}
+
+/// The smaller of `a` and `b`, `b` when they compare equal (`±0`): what `vminps`/`vminpd`
+/// return for finite values, so that the scalar and the vector kernels agree to the sign of
+/// zero (`f64::min` leaves it open).
+#[inline(always)]
+fn lower(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// The larger of `a` and `b`, `b` when they compare equal (as `vmaxps`/`vmaxpd`).
+#[inline(always)]
+fn higher(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
 }
 
 /// Values per block of the height sums. The blocks are fixed, their partial sums are added
@@ -130,8 +154,8 @@ fn block_moments<T: Height>(chunk: &[T], c: usize, mean: f64) -> [f64; 6] {
                 m[1][l] += e2;
                 m[2][l] += e2 * e;
                 m[3][l] += e2 * e2;
-                mn[l] = mn[l].min(v);
-                mx[l] = mx[l].max(v);
+                mn[l] = lower(v, mn[l]);
+                mx[l] = higher(v, mx[l]);
             }
         }
         for l in 0..LANES {
@@ -139,8 +163,8 @@ fn block_moments<T: Height>(chunk: &[T], c: usize, mean: f64) -> [f64; 6] {
             a2 += m[1][l];
             a3 += m[2][l];
             a4 += m[3][l];
-            lo = lo.min(mn[l]);
-            hi = hi.max(mx[l]);
+            lo = lower(mn[l], lo);
+            hi = higher(mx[l], hi);
         }
         rest = it.remainder();
     }
@@ -153,8 +177,8 @@ fn block_moments<T: Height>(chunk: &[T], c: usize, mean: f64) -> [f64; 6] {
             a2 += e2;
             a3 += e2 * e;
             a4 += e2 * e2;
-            lo = lo.min(v);
-            hi = hi.max(v);
+            lo = lower(v, lo);
+            hi = higher(v, hi);
         }
     }
     [a1, a2, a3, a4, lo, hi]
@@ -193,15 +217,150 @@ impl<T: Height> wide::Kernel for BlockMoments<'_, T> {
     }
 }
 
+/// [`block_sum`] of `f32` values with explicit AVX2 vectors: the same lanes (value `k` in
+/// lane `k % 8`, the selected value widened exactly and added as `f64`), the same bits.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn block_sum_v3(simd: wide::V3, chunk: &[f32]) -> (f64, usize) {
+    use pulp::{Simd, f32x4, f32x8, u32x8};
+    let inf = simd.splat_f32x8(f32::INFINITY);
+    let zero = simd.splat_f32x8(0.0);
+    let mut s = [simd.splat_f64x4(0.0); 2];
+    let mut c = simd.splat_u32x8(0);
+    let mut it = chunk.chunks_exact(LANES);
+    for g in &mut it {
+        let v: f32x8 = pulp::cast(<[f32; LANES]>::try_from(g).unwrap_or_default());
+        // |v| < ∞: false for ±∞ and NaN (an all-ones lane when finite).
+        let ok = simd.less_than_f32s(simd.abs_f32s(v), inf);
+        let [lo, hi]: [f32x4; 2] = pulp::cast(simd.select_f32x8(ok, v, zero));
+        s[0] = simd.add_f64s(s[0], simd.convert_f32x4_to_f64x4(lo));
+        s[1] = simd.add_f64s(s[1], simd.convert_f32x4_to_f64x4(hi));
+        c = simd.sub_u32s(c, pulp::cast::<_, u32x8>(ok));
+    }
+    let (mut sum, mut n) = (0.0, 0usize);
+    for &v in it.remainder() {
+        let v = f64::from(v);
+        if v.is_finite() {
+            sum += v;
+            n += 1;
+        }
+    }
+    let s: [f64; LANES] = pulp::cast(s);
+    let c: [u32; LANES] = pulp::cast(c);
+    for l in 0..LANES {
+        sum += s[l];
+        n += c[l] as usize;
+    }
+    (sum, n)
+}
+
+/// [`block_moments`] of `f32` values with explicit AVX2 vectors (a block without missing
+/// values; others go to the scalar code): the same lanes and operations, the same bits. The
+/// extremes are taken in `f32` (exact; [`lower`] and [`higher`] pick as `vminps`, `vmaxps`).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn block_moments_v3(simd: wide::V3, chunk: &[f32], c: usize, mean: f64) -> [f64; 6] {
+    use pulp::{Simd, f32x4, f32x8};
+    if c != chunk.len() {
+        return block_moments(chunk, c, mean);
+    }
+    let m0 = simd.splat_f64x4(mean);
+    let mut m = [[simd.splat_f64x4(0.0); 2]; 4];
+    let mut mn = simd.splat_f32x8(f32::INFINITY);
+    let mut mx = simd.splat_f32x8(f32::NEG_INFINITY);
+    let mut it = chunk.chunks_exact(LANES);
+    for g in &mut it {
+        let v: f32x8 = pulp::cast(<[f32; LANES]>::try_from(g).unwrap_or_default());
+        mn = simd.min_f32s(v, mn);
+        mx = simd.max_f32s(v, mx);
+        let halves: [f32x4; 2] = pulp::cast(v);
+        for (h, &v) in halves.iter().enumerate() {
+            let e = simd.sub_f64s(simd.convert_f32x4_to_f64x4(v), m0);
+            let e2 = simd.mul_f64s(e, e);
+            m[0][h] = simd.add_f64s(m[0][h], simd.abs_f64s(e));
+            m[1][h] = simd.add_f64s(m[1][h], e2);
+            m[2][h] = simd.add_f64s(m[2][h], simd.mul_f64s(e2, e));
+            m[3][h] = simd.add_f64s(m[3][h], simd.mul_f64s(e2, e2));
+        }
+    }
+    let mut a = [0.0f64; 4];
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let mn: [f32; LANES] = pulp::cast(mn);
+    let mx: [f32; LANES] = pulp::cast(mx);
+    for l in 0..LANES {
+        for (k, a) in a.iter_mut().enumerate() {
+            let lanes: [f64; LANES] = pulp::cast(m[k]);
+            *a += lanes[l];
+        }
+        lo = lower(f64::from(mn[l]), lo);
+        hi = higher(f64::from(mx[l]), hi);
+    }
+    let [mut a1, mut a2, mut a3, mut a4] = a;
+    for &v in it.remainder() {
+        let v = f64::from(v);
+        let e = v - mean;
+        let e2 = e * e;
+        a1 += e.abs();
+        a2 += e2;
+        a3 += e2 * e;
+        a4 += e2 * e2;
+        lo = lower(v, lo);
+        hi = higher(v, hi);
+    }
+    [a1, a2, a3, a4, lo, hi]
+}
+
 /// Blocks per rayon task of the height passes (fixed; results do not depend on it).
 const TASK_BLOCKS: usize = 16;
+
+/// [`block_sum`] of every block of `task`, with explicit AVX2 vectors for `f32` values when
+/// `isa` allows.
+fn task_sums<T: Height>(isa: wide::Isa, task: &[T]) -> Vec<(f64, usize)> {
+    #[cfg(target_arch = "x86_64")]
+    if let (Some(simd), Some(z)) = (wide::v3(isa), T::as_f32s(task)) {
+        return simd.vectorize(
+            #[inline(always)]
+            || {
+                let mut out = Vec::with_capacity(z.len().div_ceil(BLOCK));
+                for chunk in z.chunks(BLOCK) {
+                    out.push(block_sum_v3(simd, chunk));
+                }
+                out
+            },
+        );
+    }
+    wide::run_on(isa, BlockSums(task))
+}
+
+/// [`block_moments`] of every block of `task`, as [`task_sums`].
+fn task_moments<T: Height>(
+    isa: wide::Isa,
+    task: &[T],
+    counts: &[usize],
+    mean: f64,
+) -> Vec<[f64; 6]> {
+    #[cfg(target_arch = "x86_64")]
+    if let (Some(simd), Some(z)) = (wide::v3(isa), T::as_f32s(task)) {
+        return simd.vectorize(
+            #[inline(always)]
+            || {
+                let mut out = Vec::with_capacity(counts.len());
+                for (k, chunk) in z.chunks(BLOCK).enumerate() {
+                    out.push(block_moments_v3(simd, chunk, counts[k], mean));
+                }
+                out
+            },
+        );
+    }
+    wide::run_on(isa, BlockMoments(task, counts, mean))
+}
 
 /// Pass 1 over `z` (whole blocks from a block boundary, the last one may be short): the
 /// sum and count of each block, on all threads.
 pub(crate) fn sums_of<T: Height>(isa: wide::Isa, z: &[T]) -> Vec<(f64, usize)> {
     use rayon::prelude::*;
     z.par_chunks(BLOCK * TASK_BLOCKS)
-        .flat_map_iter(|task| wide::run_on(isa, BlockSums(task)))
+        .flat_map_iter(|task| task_sums(isa, task))
         .collect()
 }
 
@@ -215,7 +374,7 @@ pub(crate) fn moments_of<T: Height>(
     use rayon::prelude::*;
     z.par_chunks(BLOCK * TASK_BLOCKS)
         .zip(counts.par_chunks(TASK_BLOCKS))
-        .flat_map_iter(|(task, c)| wide::run_on(isa, BlockMoments(task, c, mean)))
+        .flat_map_iter(|(task, c)| task_moments(isa, task, c, mean))
         .collect()
 }
 
@@ -264,8 +423,8 @@ impl HeightSums {
             self.s[1] += m[1];
             self.s[2] += m[2];
             self.s[3] += m[3];
-            self.lo = self.lo.min(m[4]);
-            self.hi = self.hi.max(m[5]);
+            self.lo = lower(m[4], self.lo);
+            self.hi = higher(m[5], self.hi);
         }
     }
 
