@@ -140,6 +140,24 @@ fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
 /// blanks). Returns `None` whenever the general parser must decide (blanks, errors, too
 /// many numbers); when it returns a value, the general parser would return the same.
 pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Numbers, usize)> {
+    if word_tail {
+        fast_numbers_of::<true>(b, max)
+    } else {
+        fast_numbers_of::<false>(b, max)
+    }
+}
+
+/// [`fast_numbers`] of a `GOTO`'s arguments (up to [`MAX_NUMBERS`], no word after
+/// them), inlined into the reader's loop.
+#[inline]
+pub(super) fn goto_numbers(b: &[u8]) -> Option<(Numbers, usize)> {
+    fast_numbers_of::<false>(b, MAX_NUMBERS)
+}
+
+/// [`fast_numbers`] with `word_tail` fixed (so that the loop over the numbers, the
+/// reading of a CLSF, tests nothing it does not need).
+#[inline(always)]
+fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbers, usize)> {
     let max = max.min(MAX_NUMBERS);
     let mut values = [0.0; MAX_NUMBERS];
     let mut len = 0;
@@ -177,7 +195,7 @@ pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Num
         match b.get(pos) {
             None => return done(len),
             Some(b',') => {
-                if word_tail && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
+                if WORD_TAIL && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
                     return done(len);
                 }
                 if len >= max {

@@ -1,8 +1,8 @@
 //! The streaming CLSF reader: physical lines joined into logical records (`$`
 //! continuations, `$$` comments), parsed one at a time, with line and column.
 
-use super::grammar::{Span, fast_numbers, parse_record};
-use super::record::{MAX_NUMBERS, Record, RecordKind};
+use super::grammar::{Span, goto_numbers, parse_record};
+use super::record::{Record, RecordKind};
 use crate::parse::error::{ParseError, describe_found};
 use std::io::BufRead;
 
@@ -66,7 +66,7 @@ impl<R: BufRead> ClsfReader<R> {
         // record starts in column 1 and the slow path would take its own fast path too.
         // The scan sees the buffer past the line (the line end stops every number), so the
         // last number too is read eight bytes at a time.
-        match fast_numbers(&avail[5..], MAX_NUMBERS, false) {
+        match goto_numbers(&avail[5..]) {
             Some((n, used)) if used + 5 == end && matches!(n.len(), 3 | 6 | 9 | 12) => {
                 self.src.consume(nl + 1);
                 self.line = self.line.saturating_add(1);
@@ -232,7 +232,7 @@ fn parse_physical(code: &str, line: u32, lead: usize, full: &str) -> Result<Reco
     // Fast path for the bulk of a file: `GOTO/` with bare-comma numbers. Anything
     // unusual (blanks, lower case, errors) goes through the grammar below.
     if let Some(rest) = code.strip_prefix("GOTO/")
-        && let Some((n, used)) = fast_numbers(rest.as_bytes(), MAX_NUMBERS, false)
+        && let Some((n, used)) = goto_numbers(rest.as_bytes())
         && used == rest.len()
         && matches!(n.len(), 3 | 6 | 9 | 12)
     {
