@@ -629,6 +629,27 @@ impl Lowerer {
         Ok(true)
     }
 
+    /// Lower a `GOTO` of numbers only that starts in column 1 (what
+    /// [`crate::parse::ClsfReader::next_goto`] reads), as [`Self::push`] of its record.
+    pub fn push_goto(
+        &mut self,
+        n: &Numbers,
+        line: u32,
+        sink: &mut PostureSink<'_>,
+    ) -> Result<(), LowerError> {
+        if self.push_goto_fast(n, line, sink)? {
+            return Ok(());
+        }
+        self.push(
+            &Record {
+                kind: RecordKind::Goto(*n),
+                line,
+                column: 1,
+            },
+            sink,
+        )
+    }
+
     /// Lower one CLSF record.
     pub fn push(&mut self, rec: &Record, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
         if let RecordKind::Goto(n) = &rec.kind

@@ -2,7 +2,7 @@
 
 use super::record::{Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, RecordKind};
 use crate::parse::error::describe_found;
-use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short};
+use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short_digits};
 use nom::IResult;
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char as ch, space0, space1};
@@ -169,7 +169,7 @@ fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbe
         let (v, used) = match b
             .get(pos..)
             .and_then(|r| r.first_chunk::<SHORT_WINDOW>())
-            .and_then(scan_short)
+            .and_then(scan_short_digits)
         {
             Some(r) => r,
             None => {
@@ -204,6 +204,9 @@ fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbe
                 pos += 1;
             }
             Some(b' ' | b'\t') => return None,
+            // An exponent after a number `scan_short_digits` read (it does not look), or
+            // anything else after one `scan_number` read: the general parser decides.
+            Some(c) if *c | 0x20 == b'e' => return None,
             Some(_) => return done(len),
         }
     }

@@ -2,7 +2,7 @@
 //! continuations, `$$` comments), parsed one at a time, with line and column.
 
 use super::grammar::{Span, goto_numbers, parse_record};
-use super::record::{Record, RecordKind};
+use super::record::{Numbers, Record, RecordKind};
 use crate::parse::error::{ParseError, describe_found};
 use std::io::BufRead;
 
@@ -46,38 +46,50 @@ impl<R: BufRead> ClsfReader<R> {
         self.line
     }
 
-    /// The bulk of a file, without copying or validating the line: a whole `GOTO/` line of
-    /// bare-comma numbers (3, 6, 9 or 12) in the reader's buffer, parsed where it lies.
-    /// `None` (nothing consumed) for anything else, which [`Self::next_record`] reads
-    /// line by line.
-    fn next_goto_in_place(&mut self) -> Result<Option<Record>, ParseError> {
+    /// The next record if it is a `GOTO/` line of bare-comma numbers (3, 6, 9 or 12) that
+    /// lies whole in the reader's buffer: its numbers and line, parsed where they lie
+    /// (no copy of the line, no UTF-8 check, no [`Record`] built). `Ok(None)`, nothing
+    /// consumed, for anything else, which the iterator reads ([`Iterator::next`] takes
+    /// this path too). Readers that lower a file record by record call this first, in a
+    /// loop, for the bulk of it.
+    pub fn next_goto(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
+        // After the first line (which may carry a byte-order mark) and outside a
+        // continued record.
+        if self.done || self.line == 0 || !self.joined.is_empty() {
+            return Ok(None);
+        }
+        let r = self.next_goto_in_place();
+        if r.is_err() {
+            // As `next`: after an error the stream ends.
+            self.done = true;
+        }
+        r
+    }
+
+    fn next_goto_in_place(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
         let avail = self.src.fill_buf()?;
-        let Some(nl) = memchr::memchr(b'\n', avail) else {
+        let Some(rest) = avail.strip_prefix(b"GOTO/") else {
             return Ok(None);
         };
-        let mut end = nl;
-        if end > 0 && avail[end - 1] == b'\r' {
-            end -= 1;
-        }
-        if !avail.starts_with(b"GOTO/") {
-            return Ok(None);
-        }
         // Numbers and commas up to the line end: no blank, no `$`, no other byte, so the
         // record starts in column 1 and the slow path would take its own fast path too.
         // The scan sees the buffer past the line (the line end stops every number), so the
-        // last number too is read eight bytes at a time.
-        match goto_numbers(&avail[5..]) {
-            Some((n, used)) if used + 5 == end && matches!(n.len(), 3 | 6 | 9 | 12) => {
-                self.src.consume(nl + 1);
-                self.line = self.line.saturating_add(1);
-                Ok(Some(Record {
-                    kind: RecordKind::Goto(n),
-                    line: self.line,
-                    column: 1,
-                }))
-            }
-            _ => Ok(None),
+        // last number too is read eight bytes at a time; a line cut by the buffer's end
+        // stops at it, and is left to the line reader.
+        let Some((n, used)) = goto_numbers(rest) else {
+            return Ok(None);
+        };
+        let eol = match rest.get(used..) {
+            Some([b'\n', ..]) => 1,
+            Some([b'\r', b'\n', ..]) => 2,
+            _ => return Ok(None),
+        };
+        if !matches!(n.len(), 3 | 6 | 9 | 12) {
+            return Ok(None);
         }
+        self.src.consume(5 + used + eol);
+        self.line = self.line.saturating_add(1);
+        Ok(Some((n, self.line)))
     }
 
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
@@ -85,9 +97,13 @@ impl<R: BufRead> ClsfReader<R> {
         // continued record.
         if self.line > 0
             && self.joined.is_empty()
-            && let Some(r) = self.next_goto_in_place()?
+            && let Some((n, line)) = self.next_goto_in_place()?
         {
-            return Ok(Some(r));
+            return Ok(Some(Record {
+                kind: RecordKind::Goto(n),
+                line,
+                column: 1,
+            }));
         }
         loop {
             self.buf.clear();
