@@ -191,6 +191,7 @@ fn vec3(t: [f64; 3]) -> Vec3 {
 
 /// Normalise a direction read from a file: vectors within 10⁻⁶ of unit length are kept
 /// exactly as written (so printed digits survive round trips), others are normalised.
+#[inline]
 fn unit_as_written(v: Vec3) -> Option<Vec3> {
     let n = v.norm();
     if !(n > 1e-12 && n.is_finite()) {
@@ -537,13 +538,15 @@ impl Lowerer {
     /// pending posture where it lies and overwrites it field by field (no copies of the
     /// posture, no `Result`s of the checks); returns `false`, having done nothing, for
     /// anything else, which [`Self::push`] then lowers (errors and warnings included).
-    #[inline]
+    /// The only failure is the sink's, an `io::Error` (a word, where a [`LowerError`] is
+    /// returned through memory).
+    #[inline(always)]
     fn push_goto_fast(
         &mut self,
         n: &Numbers,
         line: u32,
         sink: &mut PostureSink<'_>,
-    ) -> Result<bool, LowerError> {
+    ) -> std::io::Result<bool> {
         let len = n.len();
         let plain = (len == 6 || len == 12)
             && self.path.is_some()
@@ -637,7 +640,10 @@ impl Lowerer {
         line: u32,
         sink: &mut PostureSink<'_>,
     ) -> Result<(), LowerError> {
-        if self.push_goto_fast(n, line, sink)? {
+        if self
+            .push_goto_fast(n, line, sink)
+            .map_err(LowerError::Output)?
+        {
             return Ok(());
         }
         self.push(
@@ -653,7 +659,9 @@ impl Lowerer {
     /// Lower one CLSF record.
     pub fn push(&mut self, rec: &Record, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
         if let RecordKind::Goto(n) = &rec.kind
-            && self.push_goto_fast(n, rec.line, sink)?
+            && self
+                .push_goto_fast(n, rec.line, sink)
+                .map_err(LowerError::Output)?
         {
             return Ok(());
         }
