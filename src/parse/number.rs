@@ -335,6 +335,13 @@ mod tests {
         let mut c = [tail; SHORT_WINDOW];
         c[..text.len()].copy_from_slice(text.as_bytes());
         let general = scan_general(&c);
+        // `scan_short_digits` is `scan_short` but for an exponent it does not look at.
+        let digits = scan_short_digits(&c);
+        assert_eq!(
+            scan_short(&c),
+            digits.filter(|&(_, n)| c[n] | 0x20 != b'e'),
+            "{text:?}"
+        );
         if let Some((v, n)) = scan_short(&c) {
             let want: f64 = std::str::from_utf8(&c[..n]).unwrap().parse().unwrap();
             assert_eq!(v.to_bits(), want.to_bits(), "{text:?}");

@@ -351,4 +351,78 @@ mod tests {
         let (line, col, _, found) = err("GOTO/1,$\n  2,x\n");
         assert_eq!((line, col, found.as_str()), (2, 5, "`x`"));
     }
+
+    /// Records as `io::toolpath::stream_from` reads them: `GOTO` lines through
+    /// `next_goto` while it finds them, the rest through the iterator.
+    fn read_as_streamed(text: &str, capacity: usize) -> Vec<Result<Record, String>> {
+        let src = std::io::BufReader::with_capacity(capacity, text.as_bytes());
+        let mut r = ClsfReader::new(src);
+        let mut out = Vec::new();
+        loop {
+            match r.next_goto() {
+                Ok(Some((n, line))) => {
+                    out.push(Ok(Record {
+                        kind: RecordKind::Goto(n),
+                        line,
+                        column: 1,
+                    }));
+                    continue;
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    out.push(Err(e.to_string()));
+                    break;
+                }
+            }
+            match r.next() {
+                None => break,
+                Some(Ok(rec)) => out.push(Ok(rec)),
+                Some(Err(e)) => {
+                    out.push(Err(e.to_string()));
+                    break;
+                }
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        /// GOTO lines read in place from the buffer (any buffer size, so lines are cut by
+        /// its end anywhere) give the records of the lines parsed one by one: numbers of
+        /// every form (exponents, lone points, signs), counts past 12, CR LF, other records.
+        #[test]
+        fn goto_lines_read_in_place_parse_as_single_lines(
+            lines in proptest::collection::vec(
+                (proptest::collection::vec(0usize..16, 1..14), proptest::bool::ANY, 0usize..8),
+                1..40,
+            ),
+            capacity in 1usize..300,
+        ) {
+            const NUMBERS: [&str; 16] = [
+                "-1.7916", "0.2588190", "0", "-0.0000", "12.5", "1.5E3", "2e", "-.5", "7.",
+                "+3", "123456789.123", "0.9950372", "-99.9999", "x", "1e-3", "5",
+            ];
+            let mut text = String::new();
+            let mut expected = Vec::new();
+            for (k, (nums, crlf, kind)) in lines.iter().enumerate() {
+                let line = match kind {
+                    0 => "RAPID".to_string(),
+                    1 => "$$ a comment".to_string(),
+                    _ => {
+                        let n: Vec<&str> = nums.iter().map(|&i| NUMBERS[i]).collect();
+                        format!("GOTO/{}", n.join(","))
+                    }
+                };
+                text.push_str(&line);
+                text.push_str(if *crlf { "\r\n" } else { "\n" });
+                let rec = parse_line(&line, k as u32 + 1).map_err(|e| e.to_string());
+                let failed = rec.is_err();
+                expected.push(rec);
+                if failed {
+                    break;
+                }
+            }
+            proptest::prop_assert_eq!(read_as_streamed(&text, capacity), expected);
+        }
+    }
 }
