@@ -161,19 +161,19 @@ fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbe
     let max = max.min(MAX_NUMBERS);
     let mut values = [0.0; MAX_NUMBERS];
     let mut len = 0;
-    let mut pos = 0;
+    // What is left of `b` (a moving slice: one length test a number for the window).
+    let mut rest = b;
     loop {
         // Short numbers with a window of bytes after them (all but the last of a line
         // that lies alone in its buffer) are read by word operations; the rest, or what
         // that does not cover, by the general scanner.
-        let (v, used) = match b
-            .get(pos..)
-            .and_then(|r| r.first_chunk::<SHORT_WINDOW>())
+        let (v, used) = match rest
+            .first_chunk::<SHORT_WINDOW>()
             .and_then(scan_short_digits)
         {
             Some(r) => r,
             None => {
-                let (v, used) = scan_number(b.get(pos..)?)?;
+                let (v, used) = scan_number(rest)?;
                 if !v.is_finite() {
                     return None;
                 }
@@ -182,32 +182,32 @@ fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbe
         };
         *values.get_mut(len)? = v;
         len += 1;
-        pos += used;
-        let done = |len| {
+        rest = rest.get(used..)?;
+        let done = |len, rest: &[u8]| {
             Some((
                 Numbers {
                     values,
                     len: len as u8,
                 },
-                pos,
+                b.len() - rest.len(),
             ))
         };
-        match b.get(pos) {
-            None => return done(len),
+        match rest.first() {
+            None => return done(len, rest),
             Some(b',') => {
-                if WORD_TAIL && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
-                    return done(len);
+                if WORD_TAIL && rest.get(1).is_some_and(|c| c.is_ascii_alphabetic()) {
+                    return done(len, rest);
                 }
                 if len >= max {
                     return None;
                 }
-                pos += 1;
+                rest = &rest[1..];
             }
             Some(b' ' | b'\t') => return None,
             // An exponent after a number `scan_short_digits` read (it does not look), or
             // anything else after one `scan_number` read: the general parser decides.
             Some(c) if *c | 0x20 == b'e' => return None,
-            Some(_) => return done(len),
+            Some(_) => return done(len, rest),
         }
     }
 }
