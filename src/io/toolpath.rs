@@ -296,7 +296,19 @@ pub fn stream_from(
     };
     match kind {
         InputKind::Clsf => {
-            for rec in ClsfReader::new(reader) {
+            let mut records = ClsfReader::new(reader);
+            loop {
+                // The bulk of a file, GOTO lines, from the reader's buffer to the lowering
+                // without a `Record` between them.
+                while let Some((n, line)) =
+                    records.next_goto().map_err(|e| parse_diagnostic(path, e))?
+                {
+                    low.push_goto(&n, line, sink)
+                        .map_err(|e| lower_diagnostic(path, e))?;
+                }
+                let Some(rec) = records.next() else {
+                    break;
+                };
                 let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
                 low.push(&rec, sink)
                     .map_err(|e| lower_diagnostic(path, e))?;

@@ -118,6 +118,18 @@ fn top_digits(w: u64, n: usize) -> u64 {
 /// per digit: this is the inner loop of reading a CLSF.
 #[inline(always)]
 pub fn scan_short(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
+    let (v, end) = scan_short_digits(c)?;
+    if c[end & 31] | 0x20 == b'e' {
+        return None;
+    }
+    Some((v, end))
+}
+
+/// [`scan_short`] without its look at the byte after the number: the caller refuses a
+/// number followed by `e` or `E` (an exponent, which only [`scan_number`] reads). A list
+/// of numbers looks at that byte anyway (for the comma), so this saves the second look.
+#[inline(always)]
+pub fn scan_short_digits(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
     let first = c[0];
     let negative = first == b'-';
     let s = usize::from(negative || first == b'+');
@@ -150,9 +162,6 @@ pub fn scan_short(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
         }
         (eight_digits(int), 0, dot)
     };
-    if c[end & 31] | 0x20 == b'e' {
-        return None;
-    }
     // mantissa < 10^14: the signed conversion is exact and one instruction.
     let v = mantissa as i64 as f64 / POW10[scale];
     let v = f64::from_bits(v.to_bits() | (u64::from(negative) << 63));
@@ -326,6 +335,13 @@ mod tests {
         let mut c = [tail; SHORT_WINDOW];
         c[..text.len()].copy_from_slice(text.as_bytes());
         let general = scan_general(&c);
+        // `scan_short_digits` is `scan_short` but for an exponent it does not look at.
+        let digits = scan_short_digits(&c);
+        assert_eq!(
+            scan_short(&c),
+            digits.filter(|&(_, n)| c[n] | 0x20 != b'e'),
+            "{text:?}"
+        );
         if let Some((v, n)) = scan_short(&c) {
             let want: f64 = std::str::from_utf8(&c[..n]).unwrap().parse().unwrap();
             assert_eq!(v.to_bits(), want.to_bits(), "{text:?}");

@@ -65,7 +65,9 @@ fn fixed_digits(s: &mut [u8; FIXED_ROOM], v: f64, (min, max): (u32, u32)) -> Opt
     }
     // As in `fixed_digits_wide`: round half away from zero, split at the point.
     let q = (scaled.abs() + 0.5) as i64 as u64;
-    let neg = usize::from(scaled < 0.0 && q != 0);
+    // `scaled < 0.0 && q != 0` (a zero product has `v`'s sign and `q` = 0), from the sign
+    // bit without a comparison of floats.
+    let neg = (v.to_bits() >> 63) as usize & usize::from(q != 0);
     s[0] = b'-';
     if (1..=7).contains(&max) && q < 100_000_000 {
         // All digits in one word: 8 - max of the integer part, then the decimals.

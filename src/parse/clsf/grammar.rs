@@ -2,7 +2,7 @@
 
 use super::record::{Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, RecordKind};
 use crate::parse::error::describe_found;
-use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short};
+use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short_digits};
 use nom::IResult;
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char as ch, space0, space1};
@@ -140,22 +140,40 @@ fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
 /// blanks). Returns `None` whenever the general parser must decide (blanks, errors, too
 /// many numbers); when it returns a value, the general parser would return the same.
 pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Numbers, usize)> {
+    if word_tail {
+        fast_numbers_of::<true>(b, max)
+    } else {
+        fast_numbers_of::<false>(b, max)
+    }
+}
+
+/// [`fast_numbers`] of a `GOTO`'s arguments (up to [`MAX_NUMBERS`], no word after
+/// them), inlined into the reader's loop.
+#[inline]
+pub(super) fn goto_numbers(b: &[u8]) -> Option<(Numbers, usize)> {
+    fast_numbers_of::<false>(b, MAX_NUMBERS)
+}
+
+/// [`fast_numbers`] with `word_tail` fixed (so that the loop over the numbers, the
+/// reading of a CLSF, tests nothing it does not need).
+#[inline(always)]
+fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbers, usize)> {
     let max = max.min(MAX_NUMBERS);
     let mut values = [0.0; MAX_NUMBERS];
     let mut len = 0;
-    let mut pos = 0;
+    // What is left of `b` (a moving slice: one length test a number for the window).
+    let mut rest = b;
     loop {
         // Short numbers with a window of bytes after them (all but the last of a line
         // that lies alone in its buffer) are read by word operations; the rest, or what
         // that does not cover, by the general scanner.
-        let (v, used) = match b
-            .get(pos..)
-            .and_then(|r| r.first_chunk::<SHORT_WINDOW>())
-            .and_then(scan_short)
+        let (v, used) = match rest
+            .first_chunk::<SHORT_WINDOW>()
+            .and_then(scan_short_digits)
         {
             Some(r) => r,
             None => {
-                let (v, used) = scan_number(b.get(pos..)?)?;
+                let (v, used) = scan_number(rest)?;
                 if !v.is_finite() {
                     return None;
                 }
@@ -164,29 +182,32 @@ pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Num
         };
         *values.get_mut(len)? = v;
         len += 1;
-        pos += used;
-        let done = |len| {
+        rest = rest.get(used..)?;
+        let done = |len, rest: &[u8]| {
             Some((
                 Numbers {
                     values,
                     len: len as u8,
                 },
-                pos,
+                b.len() - rest.len(),
             ))
         };
-        match b.get(pos) {
-            None => return done(len),
+        match rest.first() {
+            None => return done(len, rest),
             Some(b',') => {
-                if word_tail && b.get(pos + 1).is_some_and(|c| c.is_ascii_alphabetic()) {
-                    return done(len);
+                if WORD_TAIL && rest.get(1).is_some_and(|c| c.is_ascii_alphabetic()) {
+                    return done(len, rest);
                 }
                 if len >= max {
                     return None;
                 }
-                pos += 1;
+                rest = &rest[1..];
             }
             Some(b' ' | b'\t') => return None,
-            Some(_) => return done(len),
+            // An exponent after a number `scan_short_digits` read (it does not look), or
+            // anything else after one `scan_number` read: the general parser decides.
+            Some(c) if *c | 0x20 == b'e' => return None,
+            Some(_) => return done(len, rest),
         }
     }
 }

@@ -1,8 +1,8 @@
 //! The streaming CLSF reader: physical lines joined into logical records (`$`
 //! continuations, `$$` comments), parsed one at a time, with line and column.
 
-use super::grammar::{Span, fast_numbers, parse_record};
-use super::record::{MAX_NUMBERS, Record, RecordKind};
+use super::grammar::{Span, goto_numbers, parse_record};
+use super::record::{Numbers, Record, RecordKind};
 use crate::parse::error::{ParseError, describe_found};
 use std::io::BufRead;
 
@@ -46,38 +46,50 @@ impl<R: BufRead> ClsfReader<R> {
         self.line
     }
 
-    /// The bulk of a file, without copying or validating the line: a whole `GOTO/` line of
-    /// bare-comma numbers (3, 6, 9 or 12) in the reader's buffer, parsed where it lies.
-    /// `None` (nothing consumed) for anything else, which [`Self::next_record`] reads
-    /// line by line.
-    fn next_goto_in_place(&mut self) -> Result<Option<Record>, ParseError> {
+    /// The next record if it is a `GOTO/` line of bare-comma numbers (3, 6, 9 or 12) that
+    /// lies whole in the reader's buffer: its numbers and line, parsed where they lie
+    /// (no copy of the line, no UTF-8 check, no [`Record`] built). `Ok(None)`, nothing
+    /// consumed, for anything else, which the iterator reads ([`Iterator::next`] takes
+    /// this path too). Readers that lower a file record by record call this first, in a
+    /// loop, for the bulk of it.
+    pub fn next_goto(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
+        // After the first line (which may carry a byte-order mark) and outside a
+        // continued record.
+        if self.done || self.line == 0 || !self.joined.is_empty() {
+            return Ok(None);
+        }
+        let r = self.next_goto_in_place();
+        if r.is_err() {
+            // As `next`: after an error the stream ends.
+            self.done = true;
+        }
+        r
+    }
+
+    fn next_goto_in_place(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
         let avail = self.src.fill_buf()?;
-        let Some(nl) = memchr::memchr(b'\n', avail) else {
+        let Some(rest) = avail.strip_prefix(b"GOTO/") else {
             return Ok(None);
         };
-        let mut end = nl;
-        if end > 0 && avail[end - 1] == b'\r' {
-            end -= 1;
-        }
-        if !avail.starts_with(b"GOTO/") {
-            return Ok(None);
-        }
         // Numbers and commas up to the line end: no blank, no `$`, no other byte, so the
         // record starts in column 1 and the slow path would take its own fast path too.
         // The scan sees the buffer past the line (the line end stops every number), so the
-        // last number too is read eight bytes at a time.
-        match fast_numbers(&avail[5..], MAX_NUMBERS, false) {
-            Some((n, used)) if used + 5 == end && matches!(n.len(), 3 | 6 | 9 | 12) => {
-                self.src.consume(nl + 1);
-                self.line = self.line.saturating_add(1);
-                Ok(Some(Record {
-                    kind: RecordKind::Goto(n),
-                    line: self.line,
-                    column: 1,
-                }))
-            }
-            _ => Ok(None),
+        // last number too is read eight bytes at a time; a line cut by the buffer's end
+        // stops at it, and is left to the line reader.
+        let Some((n, used)) = goto_numbers(rest) else {
+            return Ok(None);
+        };
+        let eol = match rest.get(used..) {
+            Some([b'\n', ..]) => 1,
+            Some([b'\r', b'\n', ..]) => 2,
+            _ => return Ok(None),
+        };
+        if !matches!(n.len(), 3 | 6 | 9 | 12) {
+            return Ok(None);
         }
+        self.src.consume(5 + used + eol);
+        self.line = self.line.saturating_add(1);
+        Ok(Some((n, self.line)))
     }
 
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
@@ -85,9 +97,13 @@ impl<R: BufRead> ClsfReader<R> {
         // continued record.
         if self.line > 0
             && self.joined.is_empty()
-            && let Some(r) = self.next_goto_in_place()?
+            && let Some((n, line)) = self.next_goto_in_place()?
         {
-            return Ok(Some(r));
+            return Ok(Some(Record {
+                kind: RecordKind::Goto(n),
+                line,
+                column: 1,
+            }));
         }
         loop {
             self.buf.clear();
@@ -232,7 +248,7 @@ fn parse_physical(code: &str, line: u32, lead: usize, full: &str) -> Result<Reco
     // Fast path for the bulk of a file: `GOTO/` with bare-comma numbers. Anything
     // unusual (blanks, lower case, errors) goes through the grammar below.
     if let Some(rest) = code.strip_prefix("GOTO/")
-        && let Some((n, used)) = fast_numbers(rest.as_bytes(), MAX_NUMBERS, false)
+        && let Some((n, used)) = goto_numbers(rest.as_bytes())
         && used == rest.len()
         && matches!(n.len(), 3 | 6 | 9 | 12)
     {
@@ -334,5 +350,79 @@ mod tests {
         // An error on a continued line points at that line.
         let (line, col, _, found) = err("GOTO/1,$\n  2,x\n");
         assert_eq!((line, col, found.as_str()), (2, 5, "`x`"));
+    }
+
+    /// Records as `io::toolpath::stream_from` reads them: `GOTO` lines through
+    /// `next_goto` while it finds them, the rest through the iterator.
+    fn read_as_streamed(text: &str, capacity: usize) -> Vec<Result<Record, String>> {
+        let src = std::io::BufReader::with_capacity(capacity, text.as_bytes());
+        let mut r = ClsfReader::new(src);
+        let mut out = Vec::new();
+        loop {
+            match r.next_goto() {
+                Ok(Some((n, line))) => {
+                    out.push(Ok(Record {
+                        kind: RecordKind::Goto(n),
+                        line,
+                        column: 1,
+                    }));
+                    continue;
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    out.push(Err(e.to_string()));
+                    break;
+                }
+            }
+            match r.next() {
+                None => break,
+                Some(Ok(rec)) => out.push(Ok(rec)),
+                Some(Err(e)) => {
+                    out.push(Err(e.to_string()));
+                    break;
+                }
+            }
+        }
+        out
+    }
+
+    proptest::proptest! {
+        /// GOTO lines read in place from the buffer (any buffer size, so lines are cut by
+        /// its end anywhere) give the records of the lines parsed one by one: numbers of
+        /// every form (exponents, lone points, signs), counts past 12, CR LF, other records.
+        #[test]
+        fn goto_lines_read_in_place_parse_as_single_lines(
+            lines in proptest::collection::vec(
+                (proptest::collection::vec(0usize..16, 1..14), proptest::bool::ANY, 0usize..8),
+                1..40,
+            ),
+            capacity in 1usize..300,
+        ) {
+            const NUMBERS: [&str; 16] = [
+                "-1.7916", "0.2588190", "0", "-0.0000", "12.5", "1.5E3", "2e", "-.5", "7.",
+                "+3", "123456789.123", "0.9950372", "-99.9999", "x", "1e-3", "5",
+            ];
+            let mut text = String::new();
+            let mut expected = Vec::new();
+            for (k, (nums, crlf, kind)) in lines.iter().enumerate() {
+                let line = match kind {
+                    0 => "RAPID".to_string(),
+                    1 => "$$ a comment".to_string(),
+                    _ => {
+                        let n: Vec<&str> = nums.iter().map(|&i| NUMBERS[i]).collect();
+                        format!("GOTO/{}", n.join(","))
+                    }
+                };
+                text.push_str(&line);
+                text.push_str(if *crlf { "\r\n" } else { "\n" });
+                let rec = parse_line(&line, k as u32 + 1).map_err(|e| e.to_string());
+                let failed = rec.is_err();
+                expected.push(rec);
+                if failed {
+                    break;
+                }
+            }
+            proptest::prop_assert_eq!(read_as_streamed(&text, capacity), expected);
+        }
     }
 }
