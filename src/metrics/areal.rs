@@ -168,20 +168,28 @@ fn block_moments<T: Height>(chunk: &[T], c: usize, mean: f64) -> [f64; 6] {
         }
         rest = it.remainder();
     }
+    let mut out = [a1, a2, a3, a4, lo, hi];
     for &v in rest {
         let v = v.get();
         if v.is_finite() {
-            let e = v - mean;
-            let e2 = e * e;
-            a1 += e.abs();
-            a2 += e2;
-            a3 += e2 * e;
-            a4 += e2 * e2;
-            lo = lower(v, lo);
-            hi = higher(v, hi);
+            add_moments(&mut out, v, mean);
         }
     }
-    [a1, a2, a3, a4, lo, hi]
+    out
+}
+
+/// One value added to the moment sums about `mean` and the extremes `[Σ|e|, Σe², Σe³, Σe⁴,
+/// min, max]`, one after the other (the scalar tail of the block kernels).
+#[inline(always)]
+fn add_moments(m: &mut [f64; 6], v: f64, mean: f64) {
+    let e = v - mean;
+    let e2 = e * e;
+    m[0] += e.abs();
+    m[1] += e2;
+    m[2] += e2 * e;
+    m[3] += e2 * e2;
+    m[4] = lower(v, m[4]);
+    m[5] = higher(v, m[5]);
 }
 
 /// [`block_sum`] of every block of `z` (blocks of [`BLOCK`] values from its start).
@@ -295,19 +303,11 @@ fn block_moments_v3(simd: wide::V3, chunk: &[f32], c: usize, mean: f64) -> [f64;
         lo = lower(f64::from(mn[l]), lo);
         hi = higher(f64::from(mx[l]), hi);
     }
-    let [mut a1, mut a2, mut a3, mut a4] = a;
+    let mut out = [a[0], a[1], a[2], a[3], lo, hi];
     for &v in it.remainder() {
-        let v = f64::from(v);
-        let e = v - mean;
-        let e2 = e * e;
-        a1 += e.abs();
-        a2 += e2;
-        a3 += e2 * e;
-        a4 += e2 * e2;
-        lo = lower(v, lo);
-        hi = higher(v, hi);
+        add_moments(&mut out, f64::from(v), mean);
     }
-    [a1, a2, a3, a4, lo, hi]
+    out
 }
 
 /// Blocks per rayon task of the height passes (fixed; results do not depend on it).

@@ -59,6 +59,10 @@ impl Lowerer {
         } else {
             None
         };
+        // Every check has passed (`plain` saw the path): from here the GOTO is lowered. The
+        // motion is taken now, as the `Goto` arm of `push` does after the flush (the flush
+        // reads neither the cycle nor the rapid flag).
+        let motion = self.motion_now();
         let Some(path) = self.path.as_mut() else {
             return Ok(false);
         };
@@ -83,14 +87,6 @@ impl Lowerer {
         // As the `Goto` arm of `push`.
         path.stats.gotos += 1;
         self.axis = axis;
-        let motion = if self.cycle {
-            MotionKind::Cycle
-        } else if self.rapid_next {
-            MotionKind::Rapid
-        } else {
-            MotionKind::Cut
-        };
-        self.rapid_next = false;
         let new = Posture {
             position,
             axis,
