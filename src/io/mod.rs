@@ -189,7 +189,7 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
     })
 }
 
-/// The mapping of a `.gsf` reader's error to [`HeightMapError`].
+/// The mapping of an error in opening a `.gsf` to [`HeightMapError`].
 fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
     move |e| match e {
         gsf::ReadError::Io(source) => HeightMapError::Io {
@@ -209,17 +209,11 @@ fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
 /// exactly) as they are handed on.
 pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightMapError> {
     output::register_input(path);
-    let file = std::fs::File::open(path).map_err(|source| HeightMapError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let format = |error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
-    };
-    let rows = GsfRows::open(file, path).map_err(gsf_error(path))?;
-    check_against(opts.dx_um, rows.dx_um, "dx").map_err(format)?;
-    check_against(opts.dy_um, rows.dy_um, "dy").map_err(format)?;
+    let err = gsf_error(path);
+    let file = std::fs::File::open(path).map_err(|e| err(gsf::ReadError::Io(e)))?;
+    let rows = GsfRows::open(file, path).map_err(&err)?;
+    check_against(opts.dx_um, rows.dx_um, "dx").map_err(|e| err(e.into()))?;
+    check_against(opts.dy_um, rows.dy_um, "dy").map_err(|e| err(e.into()))?;
     Ok(rows)
 }
 

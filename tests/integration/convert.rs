@@ -286,6 +286,22 @@ fn missing_file_is_exit_2() {
         .stderr(predicate::str::contains("cannot open"));
 }
 
+/// A 5-axis CLSF with contact data.
+const CONTACT_SAMPLE: &str = "samples/clsf/ball_lead15_contact.cls";
+
+/// [`CONTACT_SAMPLE`] converted to contact12 in a file of `dir`: its text.
+fn converted_to_a_file(dir: &std::path::Path) -> String {
+    let file = dir.join("whole.csv");
+    crest()
+        .arg("convert")
+        .arg(crate::util::repo(CONTACT_SAMPLE))
+        .arg("-o")
+        .arg(&file)
+        .assert()
+        .success();
+    read(&file)
+}
+
 /// Converting into a FIFO streams the rows (no temporary file): when the input fails part
 /// way, the rows before the bad line have reached the reader (as before the contact12
 /// writer collected rows itself; 128 KiB of them were lost for a while), and the command
@@ -294,18 +310,9 @@ fn missing_file_is_exit_2() {
 #[test]
 fn a_failed_convert_into_a_fifo_hands_on_every_row_before_the_bad_line() {
     let dir = tempdir();
-    let good =
-        std::fs::read_to_string(crate::util::repo("samples/clsf/ball_lead15_contact.cls")).unwrap();
+    let good = std::fs::read_to_string(crate::util::repo(CONTACT_SAMPLE)).unwrap();
     // The whole path converted to a file: the rows the FIFO must get.
-    let whole = dir.path().join("whole.csv");
-    crest()
-        .arg("convert")
-        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
-        .arg("-o")
-        .arg(&whole)
-        .assert()
-        .success();
-    let expected = read(&whole);
+    let expected = converted_to_a_file(dir.path());
     assert!(expected.lines().count() > 100);
     // The same path with a bad GOTO after its last one.
     let cut = good.rfind("RAPID\n").unwrap();
@@ -354,17 +361,10 @@ fn a_failed_convert_into_a_fifo_hands_on_every_row_before_the_bad_line() {
 #[test]
 fn output_to_dev_stdout_as_a_pipe_goes_down_the_pipe() {
     let dir = tempdir();
-    let file = dir.path().join("rows.csv");
-    crest()
-        .arg("convert")
-        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
-        .arg("-o")
-        .arg(&file)
-        .assert()
-        .success();
+    let expected = converted_to_a_file(dir.path());
     let out = crest()
         .arg("convert")
-        .arg(crate::util::repo("samples/clsf/ball_lead15_contact.cls"))
+        .arg(crate::util::repo(CONTACT_SAMPLE))
         .args(["-o", "/dev/stdout"])
         .output()
         .unwrap();
@@ -373,5 +373,5 @@ fn output_to_dev_stdout_as_a_pipe_goes_down_the_pipe() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_eq!(String::from_utf8(out.stdout).unwrap(), read(&file));
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), expected);
 }

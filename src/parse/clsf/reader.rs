@@ -93,12 +93,7 @@ impl<R: BufRead> ClsfReader<R> {
     }
 
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {
-        // After the first line (which may carry a byte-order mark) and outside a
-        // continued record.
-        if self.line > 0
-            && self.joined.is_empty()
-            && let Some((n, line)) = self.next_goto_in_place()?
-        {
+        if let Some((n, line)) = self.next_goto()? {
             return Ok(Some(Record {
                 kind: RecordKind::Goto(n),
                 line,
