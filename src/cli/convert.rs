@@ -9,8 +9,9 @@
 
 use super::Outcome;
 use super::reading::{RtcpArg, read_options};
-use crest::io::toolpath::{detect, stream_from};
+use crest::io::toolpath::{detect, stream_from, stream_written_from};
 use crest::nc::GcodeWriter;
+use crest::parse::Written;
 use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
 use std::fs::File;
 use std::io::{BufReader, Write};
@@ -152,15 +153,16 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
         } else {
             let mut cw = Contact12Writer::new(all_moves);
             cw.header(w)?;
-            let mut sink = |_: &Toolpath, p: &Posture| {
+            // Rows whose numbers print as the CLSF wrote them are copied from its lines.
+            let mut sink = |_: &Toolpath, p: &Posture, written: Option<&Written>| {
                 if all_moves
                     || (p.contact.is_some() && p.motion == crest::toolpath::MotionKind::Cut)
                 {
                     rows += 1;
                 }
-                cw.posture(p, w)
+                cw.posture_written(p, written, w)
             };
-            let r = stream_from(input, kind, reader, opts, &mut sink);
+            let r = stream_written_from(input, kind, reader, opts, &mut sink);
             // The rows collected so far are handed on even when the input fails later, as a
             // `BufWriter` would: a FIFO or device gets every row before the bad line (a file
             // is not kept on failure anyway).

@@ -10,6 +10,7 @@
 
 use crate::kinematics::Machine;
 use crate::nc::{NcReader, Rtcp};
+use crate::parse::Written;
 use crate::parse::{
     ClsfReader, Contact12Reader, GcodeReader, ParseError, SyntaxError, looks_like_contact12,
     looks_like_gcode,
@@ -287,14 +288,72 @@ pub fn stream_from(
     opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
 ) -> miette::Result<Program> {
-    let opts = opts.into();
+    stream_as::<false>(path, kind, reader, opts.into(), &mut |t, p, _| sink(t, p))
+}
+
+/// What [`stream_written_from`] hands on: each posture with its path, and the numbers of
+/// its `GOTO` line as written when the reader kept them.
+pub type WrittenSink<'a> =
+    dyn FnMut(&Toolpath, &Posture, Option<&Written>) -> std::io::Result<()> + 'a;
+
+/// [`stream_from`], handing each posture on with the numbers of its `GOTO` line as written
+/// (CLSF lines read by [`ClsfReader::next_goto_written`]; `None` for anything else), for a
+/// writer that copies the numbers it would print the same way.
+pub fn stream_written_from(
+    path: &Path,
+    kind: InputKind,
+    reader: impl BufRead,
+    opts: impl Into<ReadOptions>,
+    sink: &mut WrittenSink<'_>,
+) -> miette::Result<Program> {
+    stream_as::<true>(path, kind, reader, opts.into(), sink)
+}
+
+fn stream_as<const WRITTEN: bool>(
+    path: &Path,
+    kind: InputKind,
+    reader: impl BufRead,
+    opts: ReadOptions,
+    sink: &mut WrittenSink<'_>,
+) -> miette::Result<Program> {
     let mut low = Lowerer::new(opts.lower.clone());
     let stem = || {
         path.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
+    let mut plain = |t: &Toolpath, p: &Posture| sink(t, p, None);
     match kind {
+        InputKind::Clsf if WRITTEN => {
+            // The last two GOTO lines as written: a posture leaves the lowering when the
+            // next record comes, so its line is the one before the current one.
+            let mut kept = [Written::default(), Written::default()];
+            let mut k = 0;
+            let mut records = ClsfReader::new(reader);
+            loop {
+                while let Some((n, line)) = records
+                    .next_goto_written(&mut kept[k])
+                    .map_err(|e| parse_diagnostic(path, e))?
+                {
+                    let mut s = |t: &Toolpath, p: &Posture| sink(t, p, kept_for(&kept, p));
+                    low.push_goto(&n, line, &mut s)
+                        .map_err(|e| lower_diagnostic(path, e))?;
+                    k ^= 1;
+                }
+                let Some(rec) = records.next() else {
+                    break;
+                };
+                let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
+                let mut s = |t: &Toolpath, p: &Posture| {
+                    let w = kept.iter().find(|w| w.line == p.line && w.line != 0);
+                    sink(t, p, w)
+                };
+                low.push(&rec, &mut s)
+                    .map_err(|e| lower_diagnostic(path, e))?;
+            }
+            let mut s = |t: &Toolpath, p: &Posture| sink(t, p, kept_for(&kept, p));
+            return low.finish(&mut s).map_err(|e| lower_diagnostic(path, e));
+        }
         InputKind::Clsf => {
             let mut records = ClsfReader::new(reader);
             loop {
@@ -303,14 +362,14 @@ pub fn stream_from(
                 while let Some((n, line)) =
                     records.next_goto().map_err(|e| parse_diagnostic(path, e))?
                 {
-                    low.push_goto(&n, line, sink)
+                    low.push_goto(&n, line, &mut plain)
                         .map_err(|e| lower_diagnostic(path, e))?;
                 }
                 let Some(rec) = records.next() else {
                     break;
                 };
                 let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
-                low.push(&rec, sink)
+                low.push(&rec, &mut plain)
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
         }
@@ -325,24 +384,30 @@ pub fn stream_from(
                 .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
             for block in GcodeReader::new(reader) {
                 let block = block.map_err(|e| parse_diagnostic(path, e))?;
-                nc.push(&block, &mut low, sink)
+                nc.push(&block, &mut low, &mut plain)
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
-            nc.finish(&mut low, sink)
+            nc.finish(&mut low, &mut plain)
                 .map_err(|e| lower_diagnostic(path, e))?;
         }
         InputKind::Contact12 => {
             let name = stem();
-            low.begin_path(&name, "", sink)
+            low.begin_path(&name, "", &mut plain)
                 .map_err(|e| lower_diagnostic(path, e))?;
             for row in Contact12Reader::new(reader) {
                 let row = row.map_err(|e| parse_diagnostic(path, e))?;
-                low.push_contact12(&row, sink)
+                low.push_contact12(&row, &mut plain)
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
         }
     }
-    low.finish(sink).map_err(|e| lower_diagnostic(path, e))
+    low.finish(&mut plain)
+        .map_err(|e| lower_diagnostic(path, e))
+}
+
+/// The kept line of `p`, if it is one of them.
+fn kept_for<'k>(kept: &'k [Written; 2], p: &Posture) -> Option<&'k Written> {
+    kept.iter().find(|w| w.line != 0 && w.line == p.line)
 }
 
 /// Read and lower a CLSF or contact12 file (chosen by content), MSYS not applied.
@@ -380,6 +445,73 @@ mod tests {
         let prog = read_program(&p).unwrap_or_else(|e| panic!("{e:?}"));
         assert_eq!(prog.paths[0].name, "b");
         assert!(prog.paths[0].postures[0].contact.is_some());
+    }
+
+    /// `crest convert`'s contact12 rows: copied where a GOTO's numbers print as written,
+    /// printed elsewhere; the bytes are those of printing every row, for NX's lines, the
+    /// same numbers written otherwise, and the same file in inches.
+    #[test]
+    fn rows_copied_as_written_are_the_rows_printed() {
+        use crate::toolpath::Contact12Writer;
+        let sample = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/samples/clsf/ball_lead15_contact.cls"
+        );
+        let sample = std::fs::read_to_string(sample).unwrap_or_else(|e| panic!("{e}"));
+        let mut text = String::new();
+        for (k, line) in sample.lines().enumerate() {
+            text.push_str(line);
+            text.push('\n');
+            if let Some(numbers) = line.strip_prefix("GOTO/") {
+                let otherwise: Vec<String> = numbers
+                    .split(',')
+                    .enumerate()
+                    .map(|(i, t)| match (k + i) % 7 {
+                        0 => format!("{t}0"),
+                        1 if !t.starts_with('-') => format!("+{t}"),
+                        2 => format!("{t}E0"),
+                        3 if t.starts_with("0.") => t[1..].to_string(),
+                        4 => format!("0{t}").replace("0-", "-0"),
+                        _ => t.to_string(),
+                    })
+                    .collect();
+                text.push_str(&format!("GOTO/{}\n", otherwise.join(",")));
+            }
+        }
+        let inches = text.replacen("\nGOTO/", "\nUNITS/INCH\nGOTO/", 1);
+        let mut rows = Vec::new();
+        for (name, text) in [("mixed", &text), ("inches", &inches)] {
+            let (_d, p) = temp(text, "a.cls");
+            let printed = {
+                let mut out = Vec::new();
+                let mut cw = Contact12Writer::new(false);
+                let mut sink = |_: &Toolpath, q: &Posture| cw.posture(q, &mut out);
+                let r = File::open(&p)
+                    .map(BufReader::new)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                stream_from(&p, InputKind::Clsf, r, LowerOptions::default(), &mut sink)
+                    .unwrap_or_else(|e| panic!("{e:?}"));
+                cw.flush(&mut out).unwrap_or_else(|e| panic!("{e}"));
+                out
+            };
+            let (mut out, mut copied) = (Vec::new(), 0);
+            let mut cw = Contact12Writer::new(false);
+            let mut sink = |_: &Toolpath, q: &Posture, w: Option<&Written>| {
+                copied += usize::from(w.is_some());
+                cw.posture_written(q, w, &mut out)
+            };
+            let r = File::open(&p)
+                .map(BufReader::new)
+                .unwrap_or_else(|e| panic!("{e}"));
+            stream_written_from(&p, InputKind::Clsf, r, LowerOptions::default(), &mut sink)
+                .unwrap_or_else(|e| panic!("{e:?}"));
+            cw.flush(&mut out).unwrap_or_else(|e| panic!("{e}"));
+            assert!(printed.len() > 10_000 && copied > 100, "{name}: {copied}");
+            assert!(out == printed, "{name}");
+            rows.push(out);
+        }
+        // The inch file's rows are other numbers (scaled: printed, none copied).
+        assert!(rows[0] != rows[1]);
     }
 
     #[test]

@@ -22,7 +22,7 @@ pub mod gcode;
 pub mod number;
 pub mod position;
 
-pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind, Written};
 pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
 pub use error::{ParseError, SyntaxError};
 pub use gcode::{Block, GcodeReader, looks_like_gcode};

@@ -130,6 +130,54 @@ pub fn scan_short(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
 /// of numbers looks at that byte anyway (for the comma), so this saves the second look.
 #[inline(always)]
 pub fn scan_short_digits(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
+    scan_short_form(c).map(|(v, end, _)| (v, end))
+}
+
+/// How a number is written, as far as a fixed-point printer cares (see
+/// [`Form::decimals`]); what [`scan_short_form`] reports beside the value. Four bits, so
+/// that a line's forms pack into one word ([`Form::bits`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Form(u8);
+
+impl Form {
+    /// Any other way of writing a number (an exponent, a `+`, a leading zero more, no
+    /// point, no digit before it, a negative zero, more than five digits before the point
+    /// or seven after it).
+    pub const OTHER: Form = Form(0x8);
+
+    /// The form of `[-]digits.digits` with one to five digits before the point (one `0`
+    /// or no leading zero) and `decimals` (1-7) after it, no `+`, not a negative zero
+    /// (`-0.000`): a number written as a fixed-point printer writes it, below 10^5 in
+    /// size.
+    pub const fn fixed(decimals: u32) -> Form {
+        if decimals < 8 {
+            Form(decimals as u8)
+        } else {
+            Form::OTHER
+        }
+    }
+
+    /// `Some(decimals)` for [`Form::fixed`]`(decimals)`, `None` for [`Form::OTHER`].
+    pub fn decimals(self) -> Option<u32> {
+        (self.0 < 8).then_some(u32::from(self.0))
+    }
+
+    /// The four bits of the form.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// The form of four bits.
+    pub const fn from_bits(b: u8) -> Form {
+        Form::fixed((b & 0xF) as u32)
+    }
+}
+
+/// [`scan_short_digits`] and the number's [`Form`]: the same value and length, and how the
+/// number is written, from what the scan has seen anyway (its sign, where its point is, its
+/// first and last digit): a few more operations and no branch.
+#[inline(always)]
+pub fn scan_short_form(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize, Form)> {
     let first = c[0];
     let negative = first == b'-';
     let s = usize::from(negative || first == b'+');
@@ -165,7 +213,21 @@ pub fn scan_short_digits(c: &[u8; SHORT_WINDOW]) -> Option<(f64, usize)> {
     // mantissa < 10^14: the signed conversion is exact and one instruction.
     let v = mantissa as i64 as f64 / POW10[scale];
     let v = f64::from_bits(v.to_bits() | (u64::from(negative) << 63));
-    Some((v, end))
+    // The form (`Form::fixed`): one to five digits before the point, the first not a `0`
+    // unless it is alone, digits after it, no `+`, not a negative zero. Plain operations
+    // on flags, no branch.
+    let other = (first == b'+')
+        | (n1 == 0)
+        | (n1 > 5)
+        | (scale == 0)
+        | ((n1 > 1) & (c[s] == b'0'))
+        | (negative & (mantissa == 0));
+    let form = if other {
+        Form::OTHER
+    } else {
+        Form(scale as u8)
+    };
+    Some((v, end, form))
 }
 
 /// Scan one number at the start of `bytes`.
@@ -331,6 +393,50 @@ mod tests {
     }
 
     /// `scan_short` on `text` padded to a window with `tail`, against `str::parse`.
+    /// The form of a number's text, by the words of [`Form::fixed`].
+    fn form_of(t: &str) -> Form {
+        let (negative, body) = match t.strip_prefix('-') {
+            Some(b) => (true, b),
+            None => (false, t),
+        };
+        let Some((int, frac)) = body.split_once('.') else {
+            return Form::OTHER;
+        };
+        let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+        let zero = body.bytes().all(|b| b == b'0' || b == b'.');
+        if !digits(int) || !digits(frac) || int.len() > 5 || (int.len() > 1 && int.starts_with('0'))
+        {
+            return Form::OTHER;
+        }
+        if negative && zero {
+            return Form::OTHER;
+        }
+        Form::fixed(frac.len() as u32)
+    }
+
+    #[test]
+    fn forms_of_written_numbers() {
+        let form = |t: &str| {
+            let mut c = [b','; SHORT_WINDOW];
+            c[..t.len()].copy_from_slice(t.as_bytes());
+            scan_short_form(&c).map(|(_, _, f)| f)
+        };
+        assert_eq!(form("0.2588190"), Some(Form::fixed(7)));
+        assert_eq!(form("-1.7916"), Some(Form::fixed(4)));
+        assert_eq!(form("0.0000"), Some(Form::fixed(4)));
+        assert_eq!(form("12345.1"), Some(Form::fixed(1)));
+        assert_eq!(form("123456.1"), Some(Form::OTHER));
+        assert_eq!(Form::fixed(4).decimals(), Some(4));
+        for other in [
+            "-0.0000", "+1.0000", "01.0000", ".5000", "-.5", "7.", "12", "00.1",
+        ] {
+            assert_eq!(form(other), Some(Form::OTHER), "{other}");
+        }
+        assert_eq!(Form::OTHER.decimals(), None);
+        assert_eq!(Form::fixed(8), Form::OTHER);
+        assert_eq!(Form::from_bits(Form::fixed(7).bits()), Form::fixed(7));
+    }
+
     fn short_agrees(text: &str, tail: u8) {
         let mut c = [tail; SHORT_WINDOW];
         c[..text.len()].copy_from_slice(text.as_bytes());
@@ -342,6 +448,15 @@ mod tests {
             digits.filter(|&(_, n)| c[n] | 0x20 != b'e'),
             "{text:?}"
         );
+        // The form is the written number's, by the rules of `Form::fixed`.
+        if let Some((v, n, form)) = scan_short_form(&c) {
+            assert_eq!(Some((v, n)), digits, "{text:?}");
+            assert_eq!(
+                form,
+                form_of(std::str::from_utf8(&c[..n]).unwrap()),
+                "{text:?}"
+            );
+        }
         if let Some((v, n)) = scan_short(&c) {
             let want: f64 = std::str::from_utf8(&c[..n]).unwrap().parse().unwrap();
             assert_eq!(v.to_bits(), want.to_bits(), "{text:?}");

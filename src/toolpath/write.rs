@@ -6,6 +6,8 @@
 //! CLSF → contact12 is exact to the printed digits.
 
 use super::{MotionKind, Posture, ToolData, Toolpath};
+use crate::parse::Written;
+use crate::parse::number::Form;
 use std::io::{self, Write};
 
 /// Decimals of lengths: at least, at most.
@@ -298,6 +300,19 @@ pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
     String::from_utf8(b).unwrap_or_default()
 }
 
+/// Whether a number written with `form` and read as its value prints back, through
+/// [`push_fixed`] with `decimals`, to the very bytes it was written with: a fixed-point
+/// number written as [`push_fixed`] writes it (see [`Form::fixed`]) with exactly the
+/// least number of decimals (so a last `0` is printed too). Its at most five digits before
+/// the point and seven after make an integer below 10^12, read exactly and scaled back to
+/// it exactly, and a size below 10^5, printed in fixed point with any decimals (a unit test
+/// checks every form). More decimals are printed without trailing zeros;
+/// those numbers are printed, not copied.
+#[inline(always)]
+pub fn prints_as_written(form: Form, (min, _): (u32, u32)) -> bool {
+    form == Form::fixed(min)
+}
+
 /// The contact12 CSV header.
 pub const CONTACT12_HEADER: &str = "x,y,z,i,j,k,cx,cy,cz,nx,ny,nz";
 
@@ -366,6 +381,50 @@ fn fast_row(r: &mut [u8; ROW_ROOM], p: &Posture) -> Option<usize> {
     Some(at)
 }
 
+/// The forms of a contact12 row's twelve numbers that print as written
+/// ([`prints_as_written`]), packed as [`Written::forms`] packs them.
+const ROW_FORMS: u64 = {
+    let (l, u) = (
+        Form::fixed(LENGTH_DECIMALS.0).bits() as u64,
+        Form::fixed(UNIT_DECIMALS.0).bits() as u64,
+    );
+    let mut f = 0;
+    let mut k = 0;
+    while k < 12 {
+        f |= if (k / 3) % 2 == 0 { l } else { u } << (4 * k);
+        k += 1;
+    }
+    f
+};
+
+/// The text of `w` when the row of `p` (with contact data) would print as exactly that:
+/// `w` holds the line of `p`, its twelve values are `p`'s, bit for bit (nothing was scaled
+/// or replaced in the lowering), and every number prints back as written.
+#[inline]
+fn row_as_written<'w>(p: &Posture, w: &'w Written) -> Option<&'w [u8]> {
+    let c = p.contact.as_ref()?;
+    if w.line != p.line || w.numbers.len() != 12 || w.forms != ROW_FORMS {
+        return None;
+    }
+    let values = [
+        p.position.x,
+        p.position.y,
+        p.position.z,
+        p.axis.x,
+        p.axis.y,
+        p.axis.z,
+        c.point.x,
+        c.point.y,
+        c.point.z,
+        c.normal.x,
+        c.normal.y,
+        c.normal.z,
+    ]
+    .map(f64::to_bits);
+    let read = w.numbers.as_slice().iter().map(|v| v.to_bits());
+    values.into_iter().eq(read).then(|| w.text())
+}
+
 impl Contact12Writer {
     /// A writer; `all_moves` writes every posture (CC/normal empty without contact),
     /// otherwise only cutting moves with contact data.
@@ -408,6 +467,34 @@ impl Contact12Writer {
                 self.flush(out)?;
                 self.slow_row(p, out)
             }
+        }
+    }
+
+    /// [`Self::posture`], given the numbers of the posture's `GOTO` as written when the
+    /// reader kept them: a row that would print as they are written is copied (the same
+    /// bytes, without printing twelve numbers).
+    pub fn posture_written(
+        &mut self,
+        p: &Posture,
+        written: Option<&Written>,
+        out: &mut dyn Write,
+    ) -> io::Result<()> {
+        let text = written.and_then(|w| row_as_written(p, w));
+        let Some(text) = text.filter(|_| p.motion == MotionKind::Cut || self.all_moves) else {
+            return self.posture(p, out);
+        };
+        if self.used + ROW_ROOM > self.pending.len() {
+            self.flush(out)?;
+        }
+        let at = self.used;
+        match self.pending.get_mut(at..at + text.len() + 1) {
+            Some(row) => {
+                row[..text.len()].copy_from_slice(text);
+                row[text.len()] = b'\n';
+                self.used += text.len() + 1;
+                Ok(())
+            }
+            None => self.posture(p, out),
         }
     }
 
@@ -859,6 +946,131 @@ mod tests {
         (2, 5),
         (12, 12),
     ];
+
+    #[test]
+    fn rows_as_written_are_copied_only_when_they_print_so() {
+        use crate::math::{Point3, Vec3};
+        use crate::parse::ClsfReader;
+        use crate::toolpath::Contact;
+        // Each line after the first as the reader keeps it, and the posture of its values.
+        let read = |line: &str| {
+            // A line after it, as in a file: the last number, too, is read by words.
+            let text = format!(
+                "TOOL PATH/A,TOOL,T\nGOTO/{line}\nEND-OF-PATH\n$$ {:64}\n",
+                ""
+            );
+            let mut r = ClsfReader::new(text.as_bytes());
+            let _ = r.next();
+            let mut w = Written::default();
+            let (n, at) = r
+                .next_goto_written(&mut w)
+                .unwrap()
+                .unwrap_or_else(|| panic!("{line}"));
+            let v = n.as_slice();
+            let p = Posture {
+                position: Point3::new(v[0], v[1], v[2]),
+                axis: Vec3::new(v[3], v[4], v[5]),
+                motion: MotionKind::Cut,
+                arc: None,
+                contact: Some(Contact {
+                    point: Point3::new(v[6], v[7], v[8]),
+                    normal: Vec3::new(v[9], v[10], v[11]),
+                    normal_derived: false,
+                }),
+                feed_mm_min: None,
+                spindle_rpm: None,
+                line: at,
+            };
+            (w, p)
+        };
+        let printed = |p: &Posture| {
+            let mut out = Vec::new();
+            let mut cw = Contact12Writer::new(false);
+            cw.posture(p, &mut out).unwrap();
+            cw.flush(&mut out).unwrap();
+            out
+        };
+        let nx = "-1.7916,0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372";
+        let (w, p) = read(nx);
+        assert_eq!(row_as_written(&p, &w), Some(nx.as_bytes()));
+        assert_eq!(printed(&p), format!("{nx}\n").into_bytes());
+        // Written otherwise than the writer writes: printed, not copied.
+        for other in [
+            "-1.7916,0.0000,0.1456,0.2588190,0.0000000,0.9659258,+0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372",
+            "-1.79160,0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372",
+            "-1.7916,-0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372",
+            "-1.7916,0.0000,0.1456,.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372",
+            "-1.7916,0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,00.0000,-0.0995037,0.0000000,0.9950372",
+            "-1.7916,0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.995037",
+        ] {
+            let (w, p) = read(other);
+            assert_eq!(row_as_written(&p, &w), None, "{other}");
+            assert_ne!(printed(&p), format!("{other}\n").into_bytes(), "{other}");
+        }
+        // More decimals than the least: printed (here to the same digits), not copied.
+        let more = "-1.79165,0.0000,0.1456,0.2588190,0.0000000,0.9659258,0.0000,0.0000,0.0000,-0.0995037,0.0000000,0.9950372";
+        let (w, p) = read(more);
+        assert_eq!(row_as_written(&p, &w), None);
+        assert_eq!(printed(&p), format!("{more}\n").into_bytes());
+        // A value changed on the way (units, a frame) or another line: printed.
+        let (w, mut p) = read(nx);
+        p.position.x *= 25.4;
+        assert_eq!(row_as_written(&p, &w), None);
+        let (w, mut p) = read(nx);
+        p.line += 1;
+        assert_eq!(row_as_written(&p, &w), None);
+    }
+
+    proptest::proptest! {
+        /// A number the reader says prints as written does, for lengths and unit vectors;
+        /// and every number written as the writer writes it is said to.
+        #[test]
+        fn numbers_said_to_print_as_written_do(
+            sign in 0usize..3, int in 0u64..10_000_000, int_len in 0usize..8,
+            frac in 0u64..10_000_000, frac_len in 0usize..8, dot: bool,
+        ) {
+            use crate::parse::number::{SHORT_WINDOW, scan_short_form};
+            let int = format!("{int:07}");
+            let frac = format!("{frac:07}");
+            let mut text = String::from(["", "-", "+"][sign]);
+            text.push_str(&int[7 - int_len..]);
+            if dot {
+                text.push('.');
+                text.push_str(&frac[..frac_len]);
+            }
+            let mut c = [b','; SHORT_WINDOW];
+            c[..text.len()].copy_from_slice(text.as_bytes());
+            if let Some((v, n, form)) = scan_short_form(&c) {
+                proptest::prop_assert_eq!(n, text.len());
+                for d in [LENGTH_DECIMALS, UNIT_DECIMALS] {
+                    let mut out = Vec::new();
+                    push_fixed(&mut out, v, d);
+                    if prints_as_written(form, d) {
+                        proptest::prop_assert_eq!(&out, text.as_bytes(), "{:?}", d);
+                    }
+                    // The writer's own text of the value, with its least decimals, is said
+                    // to print as written, and does.
+                    let mut parts = out.split(|&b| b == b'.');
+                    let int_len = parts.next().map_or(0, |i| i.iter().filter(|b| b.is_ascii_digit()).count());
+                    if int_len <= 5 && parts.next().map(<[u8]>::len) == Some(d.0 as usize) {
+                        let mut c = [b','; SHORT_WINDOW];
+                        c[..out.len()].copy_from_slice(&out);
+                        if let Some((back, n, f)) = scan_short_form(&c) {
+                            proptest::prop_assert_eq!(n, out.len());
+                            proptest::prop_assert!(
+                                prints_as_written(f, d),
+                                "{}",
+                                String::from_utf8_lossy(&out)
+                            );
+                            let mut again = Vec::new();
+                            push_fixed(&mut again, back, d);
+                            proptest::prop_assert_eq!(&again, &out);
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn digits_made_by_words_match_the_digit_loop() {

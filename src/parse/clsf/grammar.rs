@@ -2,7 +2,7 @@
 
 use super::record::{Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, RecordKind};
 use crate::parse::error::describe_found;
-use crate::parse::number::{SHORT_WINDOW, scan_number, scan_short_digits};
+use crate::parse::number::{Form, SHORT_WINDOW, scan_number, scan_short_form};
 use nom::IResult;
 use nom::bytes::complete::take_while1;
 use nom::character::complete::{char as ch, space0, space1};
@@ -140,10 +140,11 @@ fn numbers(i: Span<'_>, max: usize, word_tail: bool) -> Res<'_, Numbers> {
 /// blanks). Returns `None` whenever the general parser must decide (blanks, errors, too
 /// many numbers); when it returns a value, the general parser would return the same.
 pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Numbers, usize)> {
+    let mut forms = 0;
     if word_tail {
-        fast_numbers_of::<true>(b, max)
+        fast_numbers_of::<true, false>(b, max, &mut forms)
     } else {
-        fast_numbers_of::<false>(b, max)
+        fast_numbers_of::<false, false>(b, max, &mut forms)
     }
 }
 
@@ -151,13 +152,28 @@ pub(super) fn fast_numbers(b: &[u8], max: usize, word_tail: bool) -> Option<(Num
 /// them), inlined into the reader's loop.
 #[inline]
 pub(super) fn goto_numbers(b: &[u8]) -> Option<(Numbers, usize)> {
-    fast_numbers_of::<false>(b, MAX_NUMBERS)
+    let mut forms = 0;
+    fast_numbers_of::<false, false>(b, MAX_NUMBERS, &mut forms)
+}
+
+/// [`goto_numbers`] and how each number is written: the [`Form::bits`] of number `k` in
+/// bits `4k..4k + 4` of `forms` ([`Form::OTHER`] for those the word scan does not read),
+/// zeros above the last.
+#[inline]
+pub(super) fn goto_numbers_with_forms(b: &[u8], forms: &mut u64) -> Option<(Numbers, usize)> {
+    fast_numbers_of::<false, true>(b, MAX_NUMBERS, forms)
 }
 
 /// [`fast_numbers`] with `word_tail` fixed (so that the loop over the numbers, the
-/// reading of a CLSF, tests nothing it does not need).
+/// reading of a CLSF, tests nothing it does not need), and with `FORMS` each number's
+/// [`Form`] packed in `forms` as [`goto_numbers_with_forms`] does (without, `forms` is
+/// not touched).
 #[inline(always)]
-fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbers, usize)> {
+fn fast_numbers_of<const WORD_TAIL: bool, const FORMS: bool>(
+    b: &[u8],
+    max: usize,
+    forms: &mut u64,
+) -> Option<(Numbers, usize)> {
     let max = max.min(MAX_NUMBERS);
     let mut values = [0.0; MAX_NUMBERS];
     let mut len = 0;
@@ -167,20 +183,20 @@ fn fast_numbers_of<const WORD_TAIL: bool>(b: &[u8], max: usize) -> Option<(Numbe
         // Short numbers with a window of bytes after them (all but the last of a line
         // that lies alone in its buffer) are read by word operations; the rest, or what
         // that does not cover, by the general scanner.
-        let (v, used) = match rest
-            .first_chunk::<SHORT_WINDOW>()
-            .and_then(scan_short_digits)
-        {
+        let (v, used, form) = match rest.first_chunk::<SHORT_WINDOW>().and_then(scan_short_form) {
             Some(r) => r,
             None => {
                 let (v, used) = scan_number(rest)?;
                 if !v.is_finite() {
                     return None;
                 }
-                (v, used)
+                (v, used, Form::OTHER)
             }
         };
         *values.get_mut(len)? = v;
+        if FORMS {
+            *forms |= u64::from(form.bits()) << (4 * (len & 15));
+        }
         len += 1;
         rest = rest.get(used..)?;
         let done = |len, rest: &[u8]| {

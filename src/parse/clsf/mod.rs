@@ -21,7 +21,9 @@ mod record;
 
 pub use grammar::Span;
 pub use reader::{ClsfReader, parse_line, parse_str};
-pub use record::{Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, Record, RecordKind};
+pub use record::{
+    Arg, FeedUnit, LengthUnit, MAX_NUMBERS, Numbers, Record, RecordKind, WRITTEN_ROOM, Written,
+};
 
 /// Test helper of the files' unit tests: the one record of `s`.
 #[cfg(test)]

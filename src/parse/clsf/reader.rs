@@ -1,8 +1,8 @@
 //! The streaming CLSF reader: physical lines joined into logical records (`$`
 //! continuations, `$$` comments), parsed one at a time, with line and column.
 
-use super::grammar::{Span, goto_numbers, parse_record};
-use super::record::{Numbers, Record, RecordKind};
+use super::grammar::{Span, goto_numbers, goto_numbers_with_forms, parse_record};
+use super::record::{Numbers, Record, RecordKind, Written};
 use crate::parse::error::{ParseError, describe_found};
 use std::io::BufRead;
 
@@ -53,12 +53,29 @@ impl<R: BufRead> ClsfReader<R> {
     /// this path too). Readers that lower a file record by record call this first, in a
     /// loop, for the bulk of it.
     pub fn next_goto(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
+        self.next_goto_as::<false>(None)
+    }
+
+    /// [`Self::next_goto`], keeping the line's numbers as written in `written` (its text,
+    /// the forms of its numbers, the values and the line; see [`Written`]).
+    pub fn next_goto_written(
+        &mut self,
+        written: &mut Written,
+    ) -> Result<Option<(Numbers, u32)>, ParseError> {
+        self.next_goto_as::<true>(Some(written))
+    }
+
+    #[inline(always)]
+    fn next_goto_as<const KEEP: bool>(
+        &mut self,
+        written: Option<&mut Written>,
+    ) -> Result<Option<(Numbers, u32)>, ParseError> {
         // After the first line (which may carry a byte-order mark) and outside a
         // continued record.
         if self.done || self.line == 0 || !self.joined.is_empty() {
             return Ok(None);
         }
-        let r = self.next_goto_in_place();
+        let r = self.next_goto_in_place::<KEEP>(written);
         if r.is_err() {
             // As `next`: after an error the stream ends.
             self.done = true;
@@ -66,7 +83,11 @@ impl<R: BufRead> ClsfReader<R> {
         r
     }
 
-    fn next_goto_in_place(&mut self) -> Result<Option<(Numbers, u32)>, ParseError> {
+    #[inline(always)]
+    fn next_goto_in_place<const KEEP: bool>(
+        &mut self,
+        written: Option<&mut Written>,
+    ) -> Result<Option<(Numbers, u32)>, ParseError> {
         let avail = self.src.fill_buf()?;
         let Some(rest) = avail.strip_prefix(b"GOTO/") else {
             return Ok(None);
@@ -76,7 +97,13 @@ impl<R: BufRead> ClsfReader<R> {
         // The scan sees the buffer past the line (the line end stops every number), so the
         // last number too is read eight bytes at a time; a line cut by the buffer's end
         // stops at it, and is left to the line reader.
-        let Some((n, used)) = goto_numbers(rest) else {
+        let mut forms = 0;
+        let found = if KEEP {
+            goto_numbers_with_forms(rest, &mut forms)
+        } else {
+            goto_numbers(rest)
+        };
+        let Some((n, used)) = found else {
             return Ok(None);
         };
         let eol = match rest.get(used..) {
@@ -87,9 +114,14 @@ impl<R: BufRead> ClsfReader<R> {
         if !matches!(n.len(), 3 | 6 | 9 | 12) {
             return Ok(None);
         }
+        let line = self.line.saturating_add(1);
+        if let Some(w) = written {
+            w.forms = forms;
+            w.keep(&rest[..used], line, n);
+        }
         self.src.consume(5 + used + eol);
-        self.line = self.line.saturating_add(1);
-        Ok(Some((n, self.line)))
+        self.line = line;
+        Ok(Some((n, line)))
     }
 
     fn next_record(&mut self) -> Result<Option<Record>, ParseError> {

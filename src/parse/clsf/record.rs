@@ -1,5 +1,6 @@
 //! The CLSF records: what one logical record says (syntax only) and where it starts.
 
+use crate::parse::number::Form;
 use std::fmt;
 
 /// At most this many numbers in one fixed-size record (a GOTO with contact data).
@@ -51,6 +52,81 @@ impl Numbers {
 impl fmt::Debug for Numbers {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_list().entries(self.as_slice()).finish()
+    }
+}
+
+/// Bytes of a GOTO's numbers that a [`Written`] keeps: twelve short numbers (at most 16
+/// bytes each) and their commas fit.
+pub const WRITTEN_ROOM: usize = 224;
+
+/// A `GOTO` line's numbers as written: the text after `GOTO/` up to the line end, each
+/// number's [`Form`] and value, and the line. A writer that would print a posture made of
+/// exactly these values the same way copies the text instead of printing the numbers
+/// (`crest convert` to contact12; see [`crate::toolpath::Contact12Writer`]).
+#[derive(Clone, Copy)]
+pub struct Written {
+    /// The line (1-based); 0 when nothing is kept (the text did not fit).
+    pub line: u32,
+    /// The values, as read.
+    pub numbers: Numbers,
+    /// How each number is written: the [`Form::bits`] of number `k` in bits `4k..4k + 4`
+    /// (see [`Written::form`]), zeros above the last.
+    pub forms: u64,
+    text: [u8; WRITTEN_ROOM],
+    len: u8,
+}
+
+impl Default for Written {
+    fn default() -> Self {
+        Written {
+            line: 0,
+            numbers: Numbers {
+                values: [0.0; MAX_NUMBERS],
+                len: 0,
+            },
+            forms: 0,
+            text: [0; WRITTEN_ROOM],
+            len: 0,
+        }
+    }
+}
+
+impl Written {
+    /// Keep `text` (the numbers of `line`, read as `numbers` with `forms`); nothing is kept
+    /// (`line` 0) when it is longer than [`WRITTEN_ROOM`].
+    pub(super) fn keep(&mut self, text: &[u8], line: u32, numbers: Numbers) {
+        match self.text.get_mut(..text.len()) {
+            Some(t) => {
+                t.copy_from_slice(text);
+                self.len = text.len() as u8;
+                self.line = line;
+                self.numbers = numbers;
+            }
+            None => self.line = 0,
+        }
+    }
+
+    /// How number `k` is written.
+    pub fn form(&self, k: usize) -> Form {
+        if k < self.numbers.len() {
+            Form::from_bits((self.forms >> (4 * k)) as u8)
+        } else {
+            Form::OTHER
+        }
+    }
+
+    /// The numbers as written: bare commas between them, no line end.
+    pub fn text(&self) -> &[u8] {
+        &self.text[..usize::from(self.len)]
+    }
+}
+
+impl fmt::Debug for Written {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Written")
+            .field("line", &self.line)
+            .field("text", &String::from_utf8_lossy(self.text()))
+            .finish()
     }
 }
 
