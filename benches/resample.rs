@@ -28,7 +28,7 @@ fn path() -> Toolpath {
         .map(|i| {
             let line = i / LINE_POSTURES;
             let along = (i % LINE_POSTURES) as f64 * STEP_MM;
-            let forward = line % 2 == 0;
+            let forward = line.is_multiple_of(2);
             let x = if forward {
                 along
             } else {

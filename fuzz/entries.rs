@@ -78,10 +78,10 @@ pub fn config(data: &[u8]) {
 
 /// The measured-table reader.
 pub fn measured(data: &[u8]) {
-    if let Ok(text) = std::str::from_utf8(data) {
-        if let Ok(table) = crest::io::measured::parse_measured(text, "fuzz") {
-            let _ = crest::study::measured::summarize(&table);
-        }
+    if let Ok(text) = std::str::from_utf8(data)
+        && let Ok(table) = crest::io::measured::parse_measured(text, "fuzz")
+    {
+        let _ = crest::study::measured::summarize(&table);
     }
 }
 

@@ -397,11 +397,11 @@ fn stream_pass(
         let mut error: Option<(String, ResampleError)> = None;
         let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
             if path.stats.postures == 1 {
-                if let Some(cur) = current.take() {
-                    if let Err(e) = finish(cur, &mut out, &mut finished) {
-                        error = Some((path.name.clone(), e));
-                        return Err(std::io::Error::other("resampling failed"));
-                    }
+                if let Some(cur) = current.take()
+                    && let Err(e) = finish(cur, &mut out, &mut finished)
+                {
+                    error = Some((path.name.clone(), e));
+                    return Err(std::io::Error::other("resampling failed"));
                 }
                 let ordinal = count;
                 count += 1;
@@ -433,16 +433,15 @@ fn stream_pass(
             if let Some(scan) = cur.scan.as_mut() {
                 scan.push(p);
             }
-            if cur.lazy_error.is_none() {
-                if let Some(r) = cur.resampler.as_mut() {
-                    if let Err(e) = r.push(p, |s| out.sample(s)) {
-                        if lazy {
-                            cur.lazy_error = Some(e);
-                        } else {
-                            error = Some((path.name.clone(), e));
-                            return Err(std::io::Error::other("resampling failed"));
-                        }
-                    }
+            if cur.lazy_error.is_none()
+                && let Some(r) = cur.resampler.as_mut()
+                && let Err(e) = r.push(p, |s| out.sample(s))
+            {
+                if lazy {
+                    cur.lazy_error = Some(e);
+                } else {
+                    error = Some((path.name.clone(), e));
+                    return Err(std::io::Error::other("resampling failed"));
                 }
             }
             out.check()
@@ -458,18 +457,18 @@ fn stream_pass(
                 return Err(std::io::Error::other("resampling failed"));
             }
         };
-        if let Some(cur) = current.take() {
-            if let Err(e) = finish(cur, &mut out, &mut finished) {
-                let name = program
-                    .paths
-                    .iter()
-                    .filter(|p| p.stats.postures > 0)
-                    .nth(count.saturating_sub(1))
-                    .map(|p| p.name.clone())
-                    .unwrap_or_default();
-                failure = Some(path_error(file, &name, e));
-                return Err(std::io::Error::other("resampling failed"));
-            }
+        if let Some(cur) = current.take()
+            && let Err(e) = finish(cur, &mut out, &mut finished)
+        {
+            let name = program
+                .paths
+                .iter()
+                .filter(|p| p.stats.postures > 0)
+                .nth(count.saturating_sub(1))
+                .map(|p| p.name.clone())
+                .unwrap_or_default();
+            failure = Some(path_error(file, &name, e));
+            return Err(std::io::Error::other("resampling failed"));
         }
         out.flush()?;
 

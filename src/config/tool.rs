@@ -396,28 +396,26 @@ impl ToolConfig {
         }
         if let Some(r) = &self.runout {
             let offset_um = opt_finite(text, "runout.offset_um", &r.offset_um)?;
-            if offset_um.abs() > 1e3 * radius {
-                if let Some(o) = &r.offset_um {
-                    return Err(invalid(
-                        text,
-                        "runout.offset_um",
-                        o.span(),
-                        format!(
-                            "must not exceed the tool radius ({radius} mm), found {offset_um} µm"
-                        ),
-                    ));
-                }
+            if offset_um.abs() > 1e3 * radius
+                && let Some(o) = &r.offset_um
+            {
+                return Err(invalid(
+                    text,
+                    "runout.offset_um",
+                    o.span(),
+                    format!("must not exceed the tool radius ({radius} mm), found {offset_um} µm"),
+                ));
             }
             let tilt_deg = opt_finite(text, "runout.axis_tilt_deg", &r.axis_tilt_deg)?;
-            if tilt_deg.abs() >= 45.0 {
-                if let Some(s) = &r.axis_tilt_deg {
-                    return Err(invalid(
-                        text,
-                        "runout.axis_tilt_deg",
-                        s.span(),
-                        format!("must lie strictly between -45 and 45 degrees, found {tilt_deg}"),
-                    ));
-                }
+            if tilt_deg.abs() >= 45.0
+                && let Some(s) = &r.axis_tilt_deg
+            {
+                return Err(invalid(
+                    text,
+                    "runout.axis_tilt_deg",
+                    s.span(),
+                    format!("must lie strictly between -45 and 45 degrees, found {tilt_deg}"),
+                ));
             }
             let devs = per_tooth(
                 text,
@@ -607,15 +605,15 @@ impl ToolConfig {
             None => None,
         };
         let corner_within = |radius: f64| -> Result<(), ToolConfigError> {
-            if let Some((rc, span)) = &corner {
-                if *rc > radius {
-                    return Err(invalid(
-                        text,
-                        "corner_radius_mm",
-                        span.clone(),
-                        format!("({rc} mm) must not exceed radius_mm ({radius} mm)"),
-                    ));
-                }
+            if let Some((rc, span)) = &corner
+                && *rc > radius
+            {
+                return Err(invalid(
+                    text,
+                    "corner_radius_mm",
+                    span.clone(),
+                    format!("({rc} mm) must not exceed radius_mm ({radius} mm)"),
+                ));
             }
             Ok(())
         };

@@ -136,10 +136,11 @@ fn destination(path: &Path) -> std::io::Result<(PathBuf, bool)> {
             Ok(m) if m.file_type().is_symlink() => {
                 // A link to a pipe, socket or device is written through the link itself:
                 // `/dev/stdout` → `/proc/self/fd/1` → `pipe:[…]`, which names no path.
-                if let Ok(t) = std::fs::metadata(&p) {
-                    if !t.is_file() && !t.is_dir() {
-                        return Ok((p, true));
-                    }
+                if let Ok(t) = std::fs::metadata(&p)
+                    && !t.is_file()
+                    && !t.is_dir()
+                {
+                    return Ok((p, true));
                 }
                 let target = std::fs::read_link(&p)?;
                 p = match p.parent() {

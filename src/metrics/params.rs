@@ -210,20 +210,20 @@ impl Preprocess {
             ("lambda-s", self.lambda_s_um),
             ("lambda-c", self.lambda_c_um),
         ] {
-            if let Some(l) = v {
-                if !(l.is_finite() && l > 0.0) {
-                    return Err(MetricsError::BadSetting(format!(
-                        "--{n}-um must be a positive length, got {l}"
-                    )));
-                }
-            }
-        }
-        if let (Some(s), Some(c)) = (self.lambda_s_um, self.lambda_c_um) {
-            if s >= c {
+            if let Some(l) = v
+                && !(l.is_finite() && l > 0.0)
+            {
                 return Err(MetricsError::BadSetting(format!(
-                    "lambda-s ({s} µm) must be shorter than lambda-c ({c} µm)"
+                    "--{n}-um must be a positive length, got {l}"
                 )));
             }
+        }
+        if let (Some(s), Some(c)) = (self.lambda_s_um, self.lambda_c_um)
+            && s >= c
+        {
+            return Err(MetricsError::BadSetting(format!(
+                "lambda-s ({s} µm) must be shorter than lambda-c ({c} µm)"
+            )));
         }
         Ok(())
     }

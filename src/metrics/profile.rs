@@ -330,11 +330,12 @@ fn rsm(eta: &[f64], step: f64, h: f64) -> f64 {
             prev = None;
             continue;
         }
-        if let Some((j, u)) = prev {
-            if u <= 0.0 && v > 0.0 {
-                let f = -u / (v - u);
-                last_up = (j as f64 + f * (i - j) as f64) * step;
-            }
+        if let Some((j, u)) = prev
+            && u <= 0.0
+            && v > 0.0
+        {
+            let f = -u / (v - u);
+            last_up = (j as f64 + f * (i - j) as f64) * step;
         }
         if v < -h {
             seen_low = true;

@@ -39,10 +39,10 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
         .join(&study.tool);
     let mut cutter = super::load_tool(&tool_path)
         .wrap_err_with(|| format!("{study_name}: tool = \"{}\"", study.tool))?;
-    if study.process.min_chip_mm == 0.0 {
-        if let Some(h) = super::tool_min_chip(Some(&tool_path))? {
-            study.process.min_chip_mm = h;
-        }
+    if study.process.min_chip_mm == 0.0
+        && let Some(h) = super::tool_min_chip(Some(&tool_path))?
+    {
+        study.process.min_chip_mm = h;
     }
     if let Some(r) = &study.runout {
         let n = r.tooth_radius_dev_mm.len();

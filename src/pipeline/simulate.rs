@@ -248,10 +248,10 @@ pub fn resolve_cutting(
         ("feed-mm-min", req.feed_mm_min),
         ("fz-mm", req.fz_mm),
     ] {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(miette!("--{name} must be positive, got {v}"));
-            }
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(miette!("--{name} must be positive, got {v}"));
         }
     }
     let rpm = req
@@ -439,24 +439,24 @@ pub fn simulate_shard(
     }
     let tiles = |done: usize, total: usize| progress.advance(done as u64, total as u64);
     let tiles: &(dyn Fn(usize, usize) + Sync) = &tiles;
-    if let Some(g) = req.grid_um {
-        if !(g.is_finite() && g > 0.0) {
-            return Err(miette!("--grid-um must be positive, got {g}"));
-        }
+    if let Some(g) = req.grid_um
+        && !(g.is_finite() && g > 0.0)
+    {
+        return Err(miette!("--grid-um must be positive, got {g}"));
     }
-    if let Some(t) = req.chord_tol_um {
-        if !(CHORD_TOL_UM.0..=CHORD_TOL_UM.1).contains(&t) {
-            return Err(miette!(
-                "--chord-tol-um must be between {} and {} µm, got {t}",
-                CHORD_TOL_UM.0,
-                CHORD_TOL_UM.1
-            ));
-        }
+    if let Some(t) = req.chord_tol_um
+        && !(CHORD_TOL_UM.0..=CHORD_TOL_UM.1).contains(&t)
+    {
+        return Err(miette!(
+            "--chord-tol-um must be between {} and {} µm, got {t}",
+            CHORD_TOL_UM.0,
+            CHORD_TOL_UM.1
+        ));
     }
-    if let Some(b) = req.band_um {
-        if !(b.is_finite() && b >= 0.1) {
-            return Err(miette!("--band-um must be at least 0.1 µm, got {b}"));
-        }
+    if let Some(b) = req.band_um
+        && !(b.is_finite() && b >= 0.1)
+    {
+        return Err(miette!("--band-um must be at least 0.1 µm, got {b}"));
     }
     let dmin = crate::math::limits::MIN_DTHETA_DEG;
     if !(req.dtheta_deg.is_finite() && req.dtheta_deg >= dmin && req.dtheta_deg <= 90.0) {
@@ -471,12 +471,11 @@ pub fn simulate_shard(
         x1_mm,
         y1_mm,
     } = req.grid
+        && (x1_mm < x0_mm || y1_mm < y0_mm)
     {
-        if x1_mm < x0_mm || y1_mm < y0_mm {
-            return Err(miette!(
-                "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"
-            ));
-        }
+        return Err(miette!(
+            "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"
+        ));
     }
     let mut warnings = Vec::new();
     let part = match &req.part {
@@ -689,7 +688,7 @@ pub fn simulate_shard(
             let keep = reach.as_ref().is_none_or(|r| r.near(&s.position, margin));
             subset.push(&s, keep);
             streamed += 1;
-            if streamed % 8192 == 0 {
+            if streamed.is_multiple_of(8192) {
                 progress.advance(streamed, (estimated_samples as u64).max(streamed));
             }
         })
@@ -752,16 +751,14 @@ pub fn simulate_shard(
             if let GridRequest::Map {
                 region: Some(r), ..
             } = req.grid
-            {
-                if !(r.iter().all(|v| v.is_finite())
+                && !(r.iter().all(|v| v.is_finite())
                     && r[3] >= r[0]
                     && r[4] >= r[1]
                     && r[5] >= r[2])
-                {
-                    return Err(miette!(
-                        "--region X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1"
-                    ));
-                }
+            {
+                return Err(miette!(
+                    "--region X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1"
+                ));
             }
             let tile = (128.0 * spacing_mm).clamp(0.5, 10.0).max(spacing_mm);
             sopts.spacing_mm = spacing_mm;

@@ -31,13 +31,13 @@ pub fn resample_with(
 ) -> Result<Stats, ResampleError> {
     validate(opts)?;
     let feeds = opts.posture_feed_mm_min.as_deref();
-    if let Some(feeds) = feeds {
-        if feeds.len() != path.postures.len() {
-            return Err(ResampleError::PostureFeedLength {
-                expected: path.postures.len(),
-                got: feeds.len(),
-            });
-        }
+    if let Some(feeds) = feeds
+        && feeds.len() != path.postures.len()
+    {
+        return Err(ResampleError::PostureFeedLength {
+            expected: path.postures.len(),
+            got: feeds.len(),
+        });
     }
     let mut scan = SpindleScan::new();
     for (i, p) in path.postures.iter().enumerate() {
@@ -60,20 +60,20 @@ fn validate(opts: &Options) -> Result<(), ResampleError> {
     if opts.teeth == 0 {
         return Err(ResampleError::NoTeeth);
     }
-    if let Mode::SpindleStep { dtheta_rad } = opts.mode {
-        if !(dtheta_rad.is_finite() && dtheta_rad > 0.0) {
-            return Err(ResampleError::InvalidSpindleStep(dtheta_rad));
-        }
+    if let Mode::SpindleStep { dtheta_rad } = opts.mode
+        && !(dtheta_rad.is_finite() && dtheta_rad > 0.0)
+    {
+        return Err(ResampleError::InvalidSpindleStep(dtheta_rad));
     }
-    if let Some(rpm) = opts.rpm {
-        if !(rpm.is_finite() && rpm > 0.0) {
-            return Err(ResampleError::InvalidSpindle(rpm));
-        }
+    if let Some(rpm) = opts.rpm
+        && !(rpm.is_finite() && rpm > 0.0)
+    {
+        return Err(ResampleError::InvalidSpindle(rpm));
     }
-    if let Some(v) = opts.feed_mm_min {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(ResampleError::InvalidOptionFeed(v));
-        }
+    if let Some(v) = opts.feed_mm_min
+        && !(v.is_finite() && v > 0.0)
+    {
+        return Err(ResampleError::InvalidOptionFeed(v));
     }
     Ok(())
 }

@@ -142,11 +142,11 @@ fn posture_tangent(
     outgoing: Option<(&Posture, &Posture)>,
 ) -> Option<Vec3> {
     let neighbour = |a: &Posture, b: &Posture, out: bool| -> Option<(Vec3, f64, bool)> {
-        if let Some(arc) = &b.arc {
-            if let Some(c) = Curve::arc(a.position, b.position, arc) {
-                let (t0, t1) = c.end_tangents();
-                return Some((if out { t0 } else { t1 }, c.len(), true));
-            }
+        if let Some(arc) = &b.arc
+            && let Some(c) = Curve::arc(a.position, b.position, arc)
+        {
+            let (t0, t1) = c.end_tangents();
+            return Some((if out { t0 } else { t1 }, c.len(), true));
         }
         let d = b.position - a.position;
         let len = d.norm();

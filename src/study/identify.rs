@@ -218,7 +218,7 @@ pub fn identify(
     // Period: the smallest shift k (dividing Z) that maps the pattern onto itself.
     let dtol = 0.02 + 0.2 * res * 1e3;
     let k = (1..=nt)
-        .filter(|k| nt % k == 0)
+        .filter(|k| nt.is_multiple_of(*k))
         .find(|&k| {
             (0..nt).all(|i| {
                 let (p, q) = (order[i], order[(i + k) % nt]);

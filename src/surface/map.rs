@@ -57,12 +57,12 @@ pub fn map_part(
     shard: Option<(usize, usize)>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<PartMap, SurfaceError> {
-    if let Some((k, n)) = shard {
-        if k == 0 || k > n {
-            return Err(SurfaceError::InvalidOption(format!(
-                "shard {k}/{n} is not a shard K/N with 1 ≤ K ≤ N"
-            )));
-        }
+    if let Some((k, n)) = shard
+        && (k == 0 || k > n)
+    {
+        return Err(SurfaceError::InvalidOption(format!(
+            "shard {k}/{n} is not a shard K/N with 1 ≤ K ≤ N"
+        )));
     }
     if !(spacing_mm.is_finite() && spacing_mm > 0.0 && tile_mm.is_finite() && tile_mm >= spacing_mm)
     {

@@ -344,12 +344,12 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
             spec.cutter.radius_mm
         )));
     }
-    if let Orientation::Fixed { axis } = spec.orientation {
-        if !(axis.iter().all(|c| c.is_finite()) && (axis.norm() - 1.0).abs() < 1e-6) {
-            return Err(SynthError::Invalid(format!(
-                "the fixed tool axis must be a unit vector, got {axis:?}"
-            )));
-        }
+    if let Orientation::Fixed { axis } = spec.orientation
+        && !(axis.iter().all(|c| c.is_finite()) && (axis.norm() - 1.0).abs() < 1e-6)
+    {
+        return Err(SynthError::Invalid(format!(
+            "the fixed tool axis must be a unit vector, got {axis:?}"
+        )));
     }
     let axis_fgn = spec.orientation.axis_fgn();
     if !axis_fgn.iter().all(|c| c.is_finite()) || axis_fgn.z <= 1e-9 {

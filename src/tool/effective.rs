@@ -37,10 +37,10 @@ pub fn effective_radius(cutter: &Cutter, lead_rad: f64, ap_mm: f64) -> Effective
     }
     let (sb, cb) = b.sin_cos();
     let g = |x: f64| cutter.profile_height(x).unwrap_or(f64::INFINITY) * cb - x * sb;
-    if let Shape::Profile(m) = &cutter.shape {
-        if !m.is_convex() {
-            return scanned(&g, cutter.min_radius_mm(), r, ap);
-        }
+    if let Shape::Profile(m) = &cutter.shape
+        && !m.is_convex()
+    {
+        return scanned(&g, cutter.min_radius_mm(), r, ap);
     }
     // Minimum of the convex g on [r_min, R] by golden-section search.
     let (mut lo, mut hi) = (cutter.min_radius_mm(), r);

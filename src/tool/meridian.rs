@@ -133,14 +133,12 @@ impl Segment {
             t0,
             t1,
         } = *self
+            && (m[0] != 0.0 || m[1] != 0.0)
+            && let Some(t) = in_range(m[0].atan2(-m[1]), t0.min(t1), t0.max(t1))
         {
-            if m[0] != 0.0 || m[1] != 0.0 {
-                if let Some(t) = in_range(m[0].atan2(-m[1]), t0.min(t1), t0.max(t1)) {
-                    let p = arc_point(centre, radius, t);
-                    if dot(p) > dot(best) {
-                        best = p;
-                    }
-                }
+            let p = arc_point(centre, radius, t);
+            if dot(p) > dot(best) {
+                best = p;
             }
         }
         (best, dot(best))
@@ -563,11 +561,12 @@ impl Meridian {
         let mut out: Vec<[f64; 2]> = Vec::with_capacity(raw.len());
         for p in raw {
             if p[1] > z_lim + 1e-12 {
-                if let Some(q) = out.last().copied() {
-                    if q[1] < z_lim && p[1] > q[1] {
-                        let f = (z_lim - q[1]) / (p[1] - q[1]);
-                        out.push([q[0] + (p[0] - q[0]) * f, z_lim]);
-                    }
+                if let Some(q) = out.last().copied()
+                    && q[1] < z_lim
+                    && p[1] > q[1]
+                {
+                    let f = (z_lim - q[1]) / (p[1] - q[1]);
+                    out.push([q[0] + (p[0] - q[0]) * f, z_lim]);
                 }
                 return out;
             }

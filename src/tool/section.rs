@@ -112,13 +112,10 @@ pub fn feed_profile(radius_mm: f64, corner_radius_mm: f64, lead_rad: f64) -> Fee
 /// The feed profile of any cutter at lead `lead_rad`: [`feed_profile`] for ball, torus and
 /// flat ends, the section of the meridian for round inserts and profiles.
 pub fn feed_profile_for(cutter: &Cutter, lead_rad: f64) -> FeedProfile {
-    if !cutter.shape.is_classic() {
-        if let Ok(m) = cutter.meridian() {
-            return FeedProfile::Meridian(Shared::new(Section::new(
-                &m,
-                lead_rad.abs().min(FRAC_PI_2),
-            )));
-        }
+    if !cutter.shape.is_classic()
+        && let Ok(m) = cutter.meridian()
+    {
+        return FeedProfile::Meridian(Shared::new(Section::new(&m, lead_rad.abs().min(FRAC_PI_2))));
     }
     feed_profile(cutter.radius_mm, cutter.corner_radius_mm(), lead_rad)
 }

@@ -203,7 +203,7 @@ impl Sim<'_> {
         while p < self.end && b.start[p] <= s1 + dist {
             // Skip a chunk where no ceiling is below the peak and no ā below the stop's
             // deceleration: none of the tests below can fire there.
-            if p % CHUNK == 0 {
+            if p.is_multiple_of(CHUNK) {
                 let c = p / CHUNK;
                 if self.ch.ceil[c] >= pk
                     && self

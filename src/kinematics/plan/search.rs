@@ -94,10 +94,10 @@ impl Sim<'_> {
         let clip = |x: f64| x.clamp(j_lo, j_hi);
         let mut cands = [j_hi, clip(-a / t), clip(0.0), j_lo];
         cands.sort_by(|x, y| y.total_cmp(x));
-        if let Some(h) = hint.filter(|_| !self.bisect_only) {
-            if let Some(c) = self.follow_hint(st, &cands, h) {
-                return c;
-            }
+        if let Some(h) = hint.filter(|_| !self.bisect_only)
+            && let Some(c) = self.follow_hint(st, &cands, h)
+        {
+            return c;
         }
         let mut evals = [Eval::rejected(Bind::default(), (0.0, 0.0)); 4];
         let mut best = Tier::Rejected;

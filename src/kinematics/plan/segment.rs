@@ -183,33 +183,34 @@ impl Sim<'_> {
             // short of it).
             let rem = s_end - s;
             let due_maybe = stop_dist.is_nan() || stop_dist >= rem - eps || cycles >= max_cycles;
-            if self.window_end(k) >= s_end && due_maybe {
-                if let Some(prof) = self.stop_from(k, s, v, a) {
-                    let d = prof.distance();
-                    if d >= rem - eps || cycles >= max_cycles {
-                        if cycles >= max_cycles {
-                            out.fallbacks += 1;
-                        }
-                        let gap = (rem - d).max(0.0);
-                        let tg = if gap > 0.0 && v > 0.0 { gap / v } else { 0.0 };
-                        while next < self.end {
-                            let x = b.start[next] - s;
-                            let (tt, vv) = if x <= gap {
-                                (if gap > 0.0 { tg * x / gap } else { 0.0 }, v)
-                            } else {
-                                let tp = prof.time_at(x - gap);
-                                (tg + tp, prof.at(tp).1)
-                            };
-                            out.put(next, t + tt, vv.max(0.0));
-                            next += 1;
-                        }
-                        let tend = t + tg + prof.duration();
-                        let tend = tend.max(out.t(self.end - 1));
-                        out.put(self.end, tend, 0.0);
-                        self.sample(k, v, a, 0.0, out);
-                        out.cycles += cycles;
-                        return tend;
+            if self.window_end(k) >= s_end
+                && due_maybe
+                && let Some(prof) = self.stop_from(k, s, v, a)
+            {
+                let d = prof.distance();
+                if d >= rem - eps || cycles >= max_cycles {
+                    if cycles >= max_cycles {
+                        out.fallbacks += 1;
                     }
+                    let gap = (rem - d).max(0.0);
+                    let tg = if gap > 0.0 && v > 0.0 { gap / v } else { 0.0 };
+                    while next < self.end {
+                        let x = b.start[next] - s;
+                        let (tt, vv) = if x <= gap {
+                            (if gap > 0.0 { tg * x / gap } else { 0.0 }, v)
+                        } else {
+                            let tp = prof.time_at(x - gap);
+                            (tg + tp, prof.at(tp).1)
+                        };
+                        out.put(next, t + tt, vv.max(0.0));
+                        next += 1;
+                    }
+                    let tend = t + tg + prof.duration();
+                    let tend = tend.max(out.t(self.end - 1));
+                    out.put(self.end, tend, 0.0);
+                    self.sample(k, v, a, 0.0, out);
+                    out.cycles += cycles;
+                    return tend;
                 }
             }
             let Choice {
