@@ -322,21 +322,27 @@ fn stream_as<const WRITTEN: bool>(
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    let mut plain = |t: &Toolpath, p: &Posture| sink(t, p, None);
+    // With `WRITTEN`, the last two GOTO lines as written (a posture leaves the lowering
+    // when the next record comes, so its line is the one before the current one); nothing
+    // is kept otherwise, and no posture is handed on with a line.
+    let mut kept = [Written::default(), Written::default()];
     match kind {
-        InputKind::Clsf if WRITTEN => {
-            // The last two GOTO lines as written: a posture leaves the lowering when the
-            // next record comes, so its line is the one before the current one.
-            let mut kept = [Written::default(), Written::default()];
+        InputKind::Clsf => {
             let mut k = 0;
             let mut records = ClsfReader::new(reader);
             loop {
-                while let Some((n, line)) = records
-                    .next_goto_written(&mut kept[k])
-                    .map_err(|e| parse_diagnostic(path, e))?
-                {
-                    let mut s = |t: &Toolpath, p: &Posture| sink(t, p, kept_for(&kept, p));
-                    low.push_goto(&n, line, &mut s)
+                // The bulk of a file, GOTO lines, from the reader's buffer to the lowering
+                // without a `Record` between them.
+                loop {
+                    let next = if WRITTEN {
+                        records.next_goto_written(&mut kept[k])
+                    } else {
+                        records.next_goto()
+                    };
+                    let Some((n, line)) = next.map_err(|e| parse_diagnostic(path, e))? else {
+                        break;
+                    };
+                    low.push_goto(&n, line, &mut |t, p| sink(t, p, kept_for(&kept, p)))
                         .map_err(|e| lower_diagnostic(path, e))?;
                     k ^= 1;
                 }
@@ -344,32 +350,7 @@ fn stream_as<const WRITTEN: bool>(
                     break;
                 };
                 let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
-                let mut s = |t: &Toolpath, p: &Posture| {
-                    let w = kept.iter().find(|w| w.line == p.line && w.line != 0);
-                    sink(t, p, w)
-                };
-                low.push(&rec, &mut s)
-                    .map_err(|e| lower_diagnostic(path, e))?;
-            }
-            let mut s = |t: &Toolpath, p: &Posture| sink(t, p, kept_for(&kept, p));
-            return low.finish(&mut s).map_err(|e| lower_diagnostic(path, e));
-        }
-        InputKind::Clsf => {
-            let mut records = ClsfReader::new(reader);
-            loop {
-                // The bulk of a file, GOTO lines, from the reader's buffer to the lowering
-                // without a `Record` between them.
-                while let Some((n, line)) =
-                    records.next_goto().map_err(|e| parse_diagnostic(path, e))?
-                {
-                    low.push_goto(&n, line, &mut plain)
-                        .map_err(|e| lower_diagnostic(path, e))?;
-                }
-                let Some(rec) = records.next() else {
-                    break;
-                };
-                let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
-                low.push(&rec, &mut plain)
+                low.push(&rec, &mut |t, p| sink(t, p, kept_for(&kept, p)))
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
         }
@@ -384,24 +365,24 @@ fn stream_as<const WRITTEN: bool>(
                 .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
             for block in GcodeReader::new(reader) {
                 let block = block.map_err(|e| parse_diagnostic(path, e))?;
-                nc.push(&block, &mut low, &mut plain)
+                nc.push(&block, &mut low, &mut |t, p| sink(t, p, None))
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
-            nc.finish(&mut low, &mut plain)
+            nc.finish(&mut low, &mut |t, p| sink(t, p, None))
                 .map_err(|e| lower_diagnostic(path, e))?;
         }
         InputKind::Contact12 => {
             let name = stem();
-            low.begin_path(&name, "", &mut plain)
+            low.begin_path(&name, "", &mut |t, p| sink(t, p, None))
                 .map_err(|e| lower_diagnostic(path, e))?;
             for row in Contact12Reader::new(reader) {
                 let row = row.map_err(|e| parse_diagnostic(path, e))?;
-                low.push_contact12(&row, &mut plain)
+                low.push_contact12(&row, &mut |t, p| sink(t, p, None))
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
         }
     }
-    low.finish(&mut plain)
+    low.finish(&mut |t, p| sink(t, p, kept_for(&kept, p)))
         .map_err(|e| lower_diagnostic(path, e))
 }
 
