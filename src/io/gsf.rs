@@ -304,6 +304,27 @@ impl GsfRows {
         })
     }
 
+    /// Hand the heights of the rows `rows` (as [`GsfRows::for_each_piece`]) to `each` in
+    /// pieces of `piece` whole rows, in order, read on the caller's thread (`pread` into one
+    /// reused buffer): several threads may each read their own rows of the file at once.
+    pub(crate) fn for_each_piece_of(
+        &self,
+        rows: std::ops::Range<usize>,
+        piece: usize,
+        limit_um: f64,
+        mut each: impl FnMut(&[f32]),
+    ) -> Result<(), PieceError> {
+        let (nx, piece) = (self.nx, piece.max(1));
+        let rows = rows.start..rows.end.min(self.ny);
+        let mut buf = Vec::with_capacity(piece.min(rows.len()) * nx);
+        for first in rows.clone().step_by(piece) {
+            buf.resize(piece.min(rows.end - first) * nx, 0.0);
+            self.read_piece(first * nx, &mut buf, limit_um)?;
+            each(&buf);
+        }
+        Ok(())
+    }
+
     /// The file's path.
     pub fn path(&self) -> &std::path::Path {
         &self.path
