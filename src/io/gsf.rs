@@ -520,8 +520,28 @@ mod tests {
                     .all(|(a, b)| f64::from(*a).to_bits() == b.to_bits())
             );
         }
+        // Ranges of rows, read on the caller's thread: their values, in pieces of whole rows.
+        for (range, k) in [(0..ny, 7), (5..17, 4), (39..40, 3), (30..ny + 3, 64)] {
+            let mut got = Vec::new();
+            let r = rows.for_each_piece_of(range.clone(), k, 1e6, |piece| {
+                assert!(piece.len() % nx == 0 && piece.len() <= k * nx);
+                got.extend_from_slice(piece);
+            });
+            assert!(r.is_ok());
+            let want = &f.z_um[range.start * nx..range.end.min(ny) * nx];
+            assert_eq!(got.len(), want.len());
+            assert!(
+                got.iter()
+                    .zip(want)
+                    .all(|(a, b)| f64::from(*a).to_bits() == b.to_bits())
+            );
+        }
         // A height beyond the limit stops the reading before its piece is handed on.
         let bad = f.z_um.iter().position(|v| v.abs() > 2.0).unwrap();
+        match rows.for_each_piece_of(bad / nx..ny, 2, 2.0, |_| panic!("handed on")) {
+            Err(PieceError::Beyond((k, _))) => assert_eq!(k, bad),
+            _ => panic!("height beyond the limit accepted"),
+        }
         let mut seen = 0;
         match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
             Err(PieceError::Beyond((k, v))) => {

@@ -8,6 +8,12 @@
 //! cut them: the values after the last whole block wait for the next piece), the row pairs
 //! of Sdr and Sdq carry over from one piece to the next, and every sum is reduced in block
 //! or row order, as in memory.
+//!
+//! [`RowStream::by_parts`] instead cuts the rows into one range per thread, each read and
+//! reduced on its thread into lists (block sums, moments, row pairs) that are then added
+//! in order: the blocks straddling two ranges and the row pairs across them are computed
+//! whole at the merge. A few hand-offs per pass, and the copying out of the page cache
+//! shared by the threads.
 
 use super::areal::{self, BLOCK, Height, HeightSums, SdqSums, SdrSums};
 use super::params::{PASS_PARAMS, pass_table};
