@@ -568,9 +568,9 @@ mod tests {
     ) -> Result<(Vec<(Param, f64)>, usize), MetricsError> {
         let s = RowStream::new_on(isa, nx, ny, 0.5, 0.7, set)?;
         let read = |r: std::ops::Range<usize>, each: &mut dyn FnMut(&[f32])| {
-            z[r.start * nx..r.end * nx]
-                .chunks(rows * nx)
-                .for_each(|piece| each(piece));
+            for piece in z[r.start * nx..r.end * nx].chunks(rows * nx) {
+                each(piece);
+            }
             Ok::<(), ()>(())
         };
         let s = s.by_parts(parts, read).unwrap();
