@@ -304,6 +304,27 @@ impl GsfRows {
         })
     }
 
+    /// Hand the heights of the rows `rows` (as [`GsfRows::for_each_piece`]) to `each` in
+    /// pieces of `piece` whole rows, in order, read on the caller's thread (`pread` into one
+    /// reused buffer): several threads may each read their own rows of the file at once.
+    pub(crate) fn for_each_piece_of(
+        &self,
+        rows: std::ops::Range<usize>,
+        piece: usize,
+        limit_um: f64,
+        mut each: impl FnMut(&[f32]),
+    ) -> Result<(), PieceError> {
+        let (nx, piece) = (self.nx, piece.max(1));
+        let rows = rows.start..rows.end.min(self.ny);
+        let mut buf = Vec::with_capacity(piece.min(rows.len()) * nx);
+        for first in rows.clone().step_by(piece) {
+            buf.resize(piece.min(rows.end - first) * nx, 0.0);
+            self.read_piece(first * nx, &mut buf, limit_um)?;
+            each(&buf);
+        }
+        Ok(())
+    }
+
     /// The file's path.
     pub fn path(&self) -> &std::path::Path {
         &self.path
@@ -499,8 +520,28 @@ mod tests {
                     .all(|(a, b)| f64::from(*a).to_bits() == b.to_bits())
             );
         }
+        // Ranges of rows, read on the caller's thread: their values, in pieces of whole rows.
+        for (range, k) in [(0..ny, 7), (5..17, 4), (39..40, 3), (30..ny + 3, 64)] {
+            let mut got = Vec::new();
+            let r = rows.for_each_piece_of(range.clone(), k, 1e6, |piece| {
+                assert!(piece.len() % nx == 0 && piece.len() <= k * nx);
+                got.extend_from_slice(piece);
+            });
+            assert!(r.is_ok());
+            let want = &f.z_um[range.start * nx..range.end.min(ny) * nx];
+            assert_eq!(got.len(), want.len());
+            assert!(
+                got.iter()
+                    .zip(want)
+                    .all(|(a, b)| f64::from(*a).to_bits() == b.to_bits())
+            );
+        }
         // A height beyond the limit stops the reading before its piece is handed on.
         let bad = f.z_um.iter().position(|v| v.abs() > 2.0).unwrap();
+        match rows.for_each_piece_of(bad / nx..ny, 2, 2.0, |_| panic!("handed on")) {
+            Err(PieceError::Beyond((k, _))) => assert_eq!(k, bad),
+            _ => panic!("height beyond the limit accepted"),
+        }
         let mut seen = 0;
         match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
             Err(PieceError::Beyond((k, v))) => {

@@ -229,16 +229,34 @@ impl GsfRows {
         each: impl FnMut(usize, &[f32]),
     ) -> Result<(), HeightMapError> {
         self.for_each_piece(rows, MAX_HEIGHT_UM, each)
-            .map_err(|e| match e {
-                gsf::PieceError::Io(source) => HeightMapError::Io {
-                    path: self.path().to_path_buf(),
-                    source,
-                },
-                gsf::PieceError::Beyond((k, v)) => HeightMapError::Format {
-                    path: self.path().to_path_buf(),
-                    error: beyond(k, v, self.nx),
-                },
-            })
+            .map_err(|e| self.piece_error(e))
+    }
+
+    /// Hand the heights of the rows `rows` (those of the map: rows past its end are not
+    /// there) to `each` in pieces of `piece` whole rows (the last may be shorter), in
+    /// order, read on the caller's thread, so that several threads can each read their own
+    /// rows at once; errors as [`GsfRows::read_rows`].
+    pub fn read_row_range(
+        &self,
+        rows: std::ops::Range<usize>,
+        piece: usize,
+        each: impl FnMut(&[f32]),
+    ) -> Result<(), HeightMapError> {
+        self.for_each_piece_of(rows, piece, MAX_HEIGHT_UM, each)
+            .map_err(|e| self.piece_error(e))
+    }
+
+    fn piece_error(&self, e: gsf::PieceError) -> HeightMapError {
+        match e {
+            gsf::PieceError::Io(source) => HeightMapError::Io {
+                path: self.path().to_path_buf(),
+                source,
+            },
+            gsf::PieceError::Beyond((k, v)) => HeightMapError::Format {
+                path: self.path().to_path_buf(),
+                error: beyond(k, v, self.nx),
+            },
+        }
     }
 }
 

@@ -25,7 +25,8 @@
 //! Only the parameters asked for are computed ([`ParamSet`]): a quick `Sa` costs two passes
 //! over the data, the ACF and the sort are only done for the parameters that need them.
 //! [`RowStream`] computes the plain-pass ones of a map fed in pieces of rows (as a file is
-//! read), with the same values.
+//! read), or read by ranges of rows on all threads ([`RowStream::by_parts`]), with the same
+//! values.
 
 mod areal;
 mod fft;

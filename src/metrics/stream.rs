@@ -8,6 +8,12 @@
 //! cut them: the values after the last whole block wait for the next piece), the row pairs
 //! of Sdr and Sdq carry over from one piece to the next, and every sum is reduced in block
 //! or row order, as in memory.
+//!
+//! [`RowStream::by_parts`] instead cuts the rows into one range per thread, each read and
+//! reduced on its thread into lists (block sums, moments, row pairs) that are then added
+//! in order: the blocks straddling two ranges and the row pairs across them are computed
+//! whole at the merge. A few hand-offs per pass, and the copying out of the page cache
+//! shared by the threads.
 
 use super::areal::{self, BLOCK, Height, HeightSums, SdqSums, SdrSums};
 use super::params::{PASS_PARAMS, pass_table};
@@ -234,6 +240,260 @@ impl<T: Height> RowStream<T> {
     }
 }
 
+impl<T: Height> RowStream<T> {
+    /// Both passes over the rows cut into `parts` ranges of whole rows, each range read and
+    /// reduced on its own thread (`read` hands the rows of a range to its callback in
+    /// pieces of whole rows, in order): a few hand-offs per pass instead of one per piece,
+    /// and the reading itself on all threads. The same values as [`RowStream::first`] and
+    /// [`RowStream::second`] with every row, bit for bit: each range gives back its block
+    /// sums, moments and row pairs as lists, added in block and row order; the blocks that
+    /// straddle two ranges and the row pairs across them are taken whole here. The first
+    /// error of `read`, in row order, stops the passes.
+    pub fn by_parts<E: Send>(
+        mut self,
+        parts: usize,
+        read: impl Fn(std::ops::Range<usize>, &mut dyn FnMut(&[T])) -> Result<(), E> + Sync,
+    ) -> Result<Self, E> {
+        use rayon::prelude::*;
+        let (nx, ny) = (self.nx, self.ny);
+        debug_assert!(self.seen == 0, "a fresh stream");
+        if nx == 0 || ny == 0 {
+            self.end_first();
+            return Ok(self);
+        }
+        let parts = parts.clamp(1, ny);
+        let ranges: Vec<_> = (0..parts)
+            .map(|k| k * ny / parts..(k + 1) * ny / parts)
+            .collect();
+        let isa = self.isa;
+        let (dx_um, dy_um, sdr, sdq) = (self.dx_um, self.dy_um, self.sdr, self.sdq);
+        let firsts = ranges
+            .par_iter()
+            .map(|rows| {
+                let mut p = Part::new(nx, rows.clone());
+                read(rows.clone(), &mut |piece| {
+                    p.first(isa, piece, sdr, sdq, dx_um, dy_um)
+                })?;
+                Ok(p)
+            })
+            .collect::<Vec<Result<_, E>>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, E>>()?;
+        // Pass 1 merged: the block sums in block order (the straddling blocks whole), the
+        // row pairs in row order (the pairs across two ranges between theirs).
+        let mut sums = Vec::with_capacity((nx * ny).div_ceil(BLOCK));
+        let mut straddles: Vec<(usize, Vec<T>)> = Vec::new();
+        let mut carry: Vec<T> = Vec::new();
+        let (mut pairs, mut along, mut across) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, p) in firsts.iter().enumerate() {
+            carry.extend_from_slice(&p.head);
+            if p.boundary {
+                if !carry.is_empty() {
+                    sums.extend(areal::sums_of(isa, &carry));
+                    straddles.push((sums.len() - 1, std::mem::take(&mut carry)));
+                }
+                sums.extend_from_slice(&p.sums);
+                carry.extend_from_slice(&p.tail);
+            }
+            if k > 0 && (sdr || sdq) {
+                let mut joined = firsts[k - 1].last.clone();
+                joined.extend_from_slice(&p.top);
+                if sdr {
+                    pairs.extend(areal::sdr_pairs_of(isa, &joined, nx, dx_um, dy_um));
+                }
+                if sdq {
+                    across.extend(areal::sdq_across_of(&joined, nx));
+                }
+            }
+            pairs.extend_from_slice(&p.pairs);
+            along.extend_from_slice(&p.along);
+            across.extend_from_slice(&p.across);
+        }
+        if !carry.is_empty() {
+            sums.extend(areal::sums_of(isa, &carry));
+            straddles.push((sums.len() - 1, carry));
+        }
+        let starts: Vec<usize> = firsts.iter().map(|p| p.start_block).collect();
+        self.seen = firsts.iter().map(|p| p.got).sum();
+        let whole = firsts
+            .iter()
+            .zip(&ranges)
+            .all(|(p, r)| p.got == r.len() * nx);
+        drop(firsts);
+        self.h.add_sums(&sums);
+        self.counts = sums.iter().map(|s| s.1).collect();
+        self.r.add(&pairs);
+        for &(s, c) in &along {
+            self.q.add_along(s, c);
+        }
+        for &(s, c) in &across {
+            self.q.add_across(s, c);
+        }
+        // Rows missing or too many: no pass 2 (`finish` says so).
+        if !self.end_first() || !whole {
+            return Ok(self);
+        }
+        let Some(mean) = self.mean else {
+            return Ok(self);
+        };
+        // Pass 2: the moments of each range's whole blocks, then of the straddling blocks
+        // kept from pass 1, added in block order.
+        let counts = &self.counts;
+        let seconds = ranges
+            .par_iter()
+            .zip(&starts)
+            .map(|(rows, &start)| {
+                let mut p = Moments::new(nx, rows.clone(), start);
+                read(rows.clone(), &mut |piece| {
+                    p.second(isa, piece, counts, mean)
+                })?;
+                Ok((p.got, p.moments))
+            })
+            .collect::<Vec<Result<_, E>>>()
+            .into_iter()
+            .collect::<Result<Vec<_>, E>>()?;
+        let mut moments = vec![None; counts.len()];
+        for ((got, m), &start) in seconds.iter().zip(&starts) {
+            self.seen += got;
+            for (k, m) in m.iter().enumerate() {
+                moments[start + k] = Some(*m);
+            }
+        }
+        for (b, z) in &straddles {
+            moments[*b] = Some(areal::moments_of(isa, z, &counts[*b..*b + 1], mean)[0]);
+        }
+        // A block left out (rows missing) leaves `seen` short: `finish` says so.
+        let moments: Vec<[f64; 6]> = moments.into_iter().flatten().collect();
+        self.h.add_moments(&moments);
+        self.blocks = moments.len();
+        Ok(self)
+    }
+}
+
+/// Pass 1 over one range of rows ([`RowStream::by_parts`]).
+struct Part<T> {
+    nx: usize,
+    /// Values fed.
+    got: usize,
+    /// The values of the range before its first block boundary (all of them when none is
+    /// inside the range).
+    head: Vec<T>,
+    /// Values of the head still to come.
+    head_left: usize,
+    /// Whether a block boundary lies in the range (at its first value or after).
+    boundary: bool,
+    /// The index of the first whole block after the head.
+    start_block: usize,
+    /// The sums of the whole blocks, in order.
+    sums: Vec<(f64, usize)>,
+    /// The values after the last block boundary (the block goes on in the next range).
+    tail: Vec<T>,
+    /// The first and the last row seen.
+    top: Vec<T>,
+    last: Vec<T>,
+    pairs: Vec<(f64, usize)>,
+    along: Vec<(f64, usize)>,
+    across: Vec<(f64, usize)>,
+}
+
+impl<T: Height> Part<T> {
+    fn new(nx: usize, rows: std::ops::Range<usize>) -> Self {
+        let (a, b) = (rows.start * nx, rows.end * nx);
+        let f = a.next_multiple_of(BLOCK);
+        Part {
+            nx,
+            got: 0,
+            head: Vec::new(),
+            head_left: f.min(b) - a,
+            boundary: f < b,
+            start_block: f / BLOCK,
+            sums: Vec::new(),
+            tail: Vec::new(),
+            top: Vec::new(),
+            last: Vec::new(),
+            pairs: Vec::new(),
+            along: Vec::new(),
+            across: Vec::new(),
+        }
+    }
+
+    fn first(&mut self, isa: Isa, rows: &[T], sdr: bool, sdq: bool, dx_um: f64, dy_um: f64) {
+        let nx = self.nx;
+        debug_assert_eq!(rows.len() % nx, 0, "pieces are whole rows");
+        if rows.is_empty() {
+            return;
+        }
+        self.got += rows.len();
+        let take = self.head_left.min(rows.len());
+        self.head.extend_from_slice(&rows[..take]);
+        self.head_left -= take;
+        let sums = &mut self.sums;
+        feed_blocks(&mut self.tail, &rows[take..], |z| {
+            sums.extend(areal::sums_of(isa, z))
+        });
+        if self.top.is_empty() {
+            self.top.extend_from_slice(&rows[..nx]);
+        }
+        let mut joined = Vec::new();
+        if !self.last.is_empty() && (sdr || sdq) {
+            joined.extend_from_slice(&self.last);
+            joined.extend_from_slice(&rows[..nx]);
+        }
+        if sdr {
+            self.pairs
+                .extend(areal::sdr_pairs_of(isa, &joined, nx, dx_um, dy_um));
+            self.pairs
+                .extend(areal::sdr_pairs_of(isa, rows, nx, dx_um, dy_um));
+        }
+        if sdq {
+            self.along.extend(areal::sdq_along_of(rows, nx));
+            self.across.extend(areal::sdq_across_of(&joined, nx));
+            self.across.extend(areal::sdq_across_of(rows, nx));
+        }
+        self.last.clear();
+        self.last.extend_from_slice(&rows[rows.len() - nx..]);
+    }
+}
+
+/// Pass 2 over one range of rows: the moments of its whole blocks.
+struct Moments<T> {
+    got: usize,
+    head_left: usize,
+    block: usize,
+    pending: Vec<T>,
+    moments: Vec<[f64; 6]>,
+}
+
+impl<T: Height> Moments<T> {
+    fn new(nx: usize, rows: std::ops::Range<usize>, start_block: usize) -> Self {
+        let (a, b) = (rows.start * nx, rows.end * nx);
+        Moments {
+            got: 0,
+            head_left: a.next_multiple_of(BLOCK).min(b) - a,
+            block: start_block,
+            pending: Vec::new(),
+            moments: Vec::new(),
+        }
+    }
+
+    fn second(&mut self, isa: Isa, rows: &[T], counts: &[usize], mean: f64) {
+        self.got += rows.len();
+        let take = self.head_left.min(rows.len());
+        self.head_left -= take;
+        let Moments {
+            ref mut block,
+            ref mut pending,
+            ref mut moments,
+            ..
+        } = *self;
+        feed_blocks(pending, &rows[take..], |z| {
+            let n = z.len().div_ceil(BLOCK);
+            moments.extend(areal::moments_of(isa, z, &counts[*block..*block + n], mean));
+            *block += n;
+        });
+    }
+}
+
 /// Hand `rows` to `f` in whole blocks of [`BLOCK`] values counted from the first value of the
 /// pass: first the pending block once `rows` completes it, then the whole blocks of `rows`
 /// (one call); the rest waits in `pending` for the next rows.
@@ -294,6 +554,125 @@ mod tests {
         }
         let valid = s.valid();
         Ok((s.finish()?, valid))
+    }
+
+    /// The parameters by [`RowStream::by_parts`] with `parts` ranges read in pieces of
+    /// `rows` rows.
+    fn in_parts(
+        isa: Isa,
+        z: &[f32],
+        (nx, ny): (usize, usize),
+        set: &ParamSet,
+        parts: usize,
+        rows: usize,
+    ) -> Result<(Vec<(Param, f64)>, usize), MetricsError> {
+        let s = RowStream::new_on(isa, nx, ny, 0.5, 0.7, set)?;
+        let read = |r: std::ops::Range<usize>, each: &mut dyn FnMut(&[f32])| {
+            for piece in z[r.start * nx..r.end * nx].chunks(rows * nx) {
+                each(piece);
+            }
+            Ok::<(), ()>(())
+        };
+        let s = s.by_parts(parts, read).unwrap();
+        let valid = s.valid();
+        Ok((s.finish()?, valid))
+    }
+
+    #[test]
+    fn by_parts_gives_the_in_memory_values_for_any_cut() {
+        let all = ParamSet::parse("Sa,Sq,Sp,Sv,Sz,Ssk,Sku,Sdq,Sdr", false).unwrap();
+        let sdr = ParamSet::parse("Sdr", false).unwrap();
+        let sq = ParamSet::parse("Sq,Sdq", false).unwrap();
+        // Blocks straddling the cuts (301, 7, 1000 wide), a block per row (4096), rows that
+        // cut blocks evenly (64, 2048), ranges holding no block boundary (7 × 1200 in 5
+        // parts: 1680 values each), 1 to 3 rows, one column.
+        let sizes = [
+            (301, 67),
+            (7, 1200),
+            (1, 50),
+            (64, 200),
+            (2048, 5),
+            (4096, 3),
+            (1000, 9),
+            (13, 1),
+            (4100, 2),
+            (5, 3),
+        ];
+        for (nx, ny) in sizes {
+            for nan in [false, true] {
+                let z = rough(nx, ny, nan);
+                let g = Grid {
+                    nx,
+                    ny,
+                    dx_um: 0.5,
+                    dy_um: 0.7,
+                    z: &z[..],
+                };
+                let valid = z.iter().filter(|v| v.is_finite()).count();
+                for set in [&all, &sdr, &sq] {
+                    let want = bits(&areal_parameters_of(g, set).unwrap());
+                    for threads in [1, 2, 3] {
+                        let pool = rayon::ThreadPoolBuilder::new()
+                            .num_threads(threads)
+                            .build()
+                            .unwrap();
+                        for parts in [1, 2, 3, 5, 8] {
+                            for rows in [1, 2, 64, ny] {
+                                for isa in [Isa::Best, Isa::Baseline] {
+                                    let (got, n) = pool
+                                        .install(|| in_parts(isa, &z, (nx, ny), set, parts, rows))
+                                        .unwrap();
+                                    assert_eq!(
+                                        bits(&got),
+                                        want,
+                                        "{nx}×{ny} {parts} parts {rows} rows {threads} threads"
+                                    );
+                                    assert_eq!(n, valid);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn by_parts_stops_at_the_first_error_in_row_order_and_sees_missing_rows() {
+        let set = ParamSet::parse("Sa,Sdr", false).unwrap();
+        let (nx, ny) = (5, 12);
+        let z = rough(nx, ny, false);
+        // Ranges from row 3 on fail, each with its first row: the first is reported.
+        let s = RowStream::<f32>::new(nx, ny, 1.0, 1.0, &set).unwrap();
+        let e = s
+            .by_parts(4, |r, each| {
+                if r.start >= 3 {
+                    return Err(r.start);
+                }
+                each(&z[r.start * nx..r.end * nx]);
+                Ok(())
+            })
+            .unwrap_err();
+        assert_eq!(e, 3);
+        // A reader that hands on too few rows: an error, not a wrong value.
+        let s = RowStream::<f32>::new(nx, ny, 1.0, 1.0, &set).unwrap();
+        let s = s
+            .by_parts(3, |r, each| {
+                each(&z[r.start * nx..(r.end - 1) * nx]);
+                Ok::<(), ()>(())
+            })
+            .unwrap();
+        assert!(s.finish().is_err());
+        // No valid height: as with `first`.
+        let nan = vec![f32::NAN; nx * ny];
+        let s = RowStream::<f32>::new(nx, ny, 1.0, 1.0, &set).unwrap();
+        let s = s
+            .by_parts(2, |r, each| {
+                each(&nan[r.start * nx..r.end * nx]);
+                Ok::<(), ()>(())
+            })
+            .unwrap();
+        assert!(matches!(s.finish(), Err(MetricsError::TooFew(_))));
     }
 
     fn bits(v: &[(Param, f64)]) -> Vec<(Param, u64)> {
