@@ -341,29 +341,33 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
         None => None,
     };
-    let heights: Vec<f64> = match &run.output {
-        Output::Grid(sim) => {
-            crest::io::write_heightmap(&args.output, &sim.map)
-                .into_diagnostic()
-                .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
-            sim.map.z_um.clone()
-        }
+    // The heights' statistics are taken while the file is written (the same values).
+    let (written, st) = match &run.output {
+        Output::Grid(sim) => pool.install(|| {
+            rayon::join(
+                || crest::io::write_heightmap(&args.output, &sim.map),
+                || crest::metrics::height_stats(&sim.map.z_um),
+            )
+        }),
         Output::Map(m) => {
-            crest::io::write_atomic(&args.output, |w| {
-                crest::io::mesh::write_map_ply(&m.points, w)
-            })
-            .into_diagnostic()
-            .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
-            m.points.iter().map(|p| p.height_um).collect()
+            let heights: Vec<f64> = m.points.iter().map(|p| p.height_um).collect();
+            (
+                crest::io::write_atomic(&args.output, |w| {
+                    crest::io::mesh::write_map_ply(&m.points, w)
+                }),
+                crest::metrics::height_stats(&heights),
+            )
         }
     };
+    written
+        .into_diagnostic()
+        .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
     if let (Some(path), Some(html)) = (&args.view, &page) {
         crest::io::write_atomic(path, |w| w.write_all(html.as_bytes()))
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", path.display()))?;
     }
     let elapsed = started.elapsed().as_secs_f64();
-    let st = crest::metrics::height_stats(&heights);
     let fraction = run.nodes_cut as f64 / run.nodes.max(1) as f64;
     let thin = fraction < 0.1;
     let warning = thin.then(|| {
