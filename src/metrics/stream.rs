@@ -598,43 +598,28 @@ mod tests {
             (4100, 2),
             (5, 3),
         ];
-        for (nx, ny) in sizes {
-            for nan in [false, true] {
-                let z = rough(nx, ny, nan);
-                let g = Grid {
-                    nx,
-                    ny,
-                    dx_um: 0.5,
-                    dy_um: 0.7,
-                    z: &z[..],
-                };
-                let valid = z.iter().filter(|v| v.is_finite()).count();
-                for set in [&all, &sdr, &sq] {
-                    let want = bits(&areal_parameters_of(g, set).unwrap());
-                    for threads in [1, 2, 3] {
-                        let pool = rayon::ThreadPoolBuilder::new()
-                            .num_threads(threads)
-                            .build()
-                            .unwrap();
-                        for parts in [1, 2, 3, 5, 8] {
-                            for rows in [1, 2, 64, ny] {
-                                for isa in [Isa::Best, Isa::Baseline] {
-                                    let (got, n) = pool
-                                        .install(|| in_parts(isa, &z, (nx, ny), set, parts, rows))
-                                        .unwrap();
-                                    assert_eq!(
-                                        bits(&got),
-                                        want,
-                                        "{nx}×{ny} {parts} parts {rows} rows {threads} threads"
-                                    );
-                                    assert_eq!(n, valid);
-                                }
-                            }
+        for_each_case(
+            &sizes,
+            &[&all, &sdr, &sq],
+            |z, (nx, ny), set, pool, want, valid| {
+                for parts in [1, 2, 3, 5, 8] {
+                    for rows in [1, 2, 64, ny] {
+                        for isa in [Isa::Best, Isa::Baseline] {
+                            let (got, n) = pool
+                                .install(|| in_parts(isa, z, (nx, ny), set, parts, rows))
+                                .unwrap();
+                            let threads = pool.current_num_threads();
+                            assert_eq!(
+                                bits(&got),
+                                want,
+                                "{nx}×{ny} {parts} parts {rows} rows {threads} threads"
+                            );
+                            assert_eq!(n, valid);
                         }
                     }
                 }
-            }
-        }
+            },
+        );
     }
 
     #[test]
@@ -685,7 +670,41 @@ mod tests {
         let sdr = ParamSet::parse("Sdr", false).unwrap();
         let sa = ParamSet::parse("Sa", false).unwrap();
         // 301 × 67: 4096-value blocks straddle the pieces and the rows.
-        for (nx, ny) in [(301, 67), (7, 1200), (1, 50)] {
+        let sizes = [(301, 67), (7, 1200), (1, 50)];
+        for_each_case(
+            &sizes,
+            &[&all, &sdr, &sa],
+            |z, (nx, ny), set, pool, want, valid| {
+                for rows in [1, 2, 5, 64, ny] {
+                    for isa in [Isa::Best, Isa::Baseline] {
+                        let (got, n) = pool
+                            .install(|| streamed(isa, z, nx, ny, set, rows))
+                            .unwrap();
+                        let threads = pool.current_num_threads();
+                        assert_eq!(bits(&got), want, "{nx}×{ny} {rows} rows {threads}");
+                        assert_eq!(n, valid);
+                    }
+                }
+            },
+        );
+    }
+
+    /// Every size, with and without NaN heights, every set, on 1, 2 and 3 threads: `check`
+    /// gets the heights, the size, the set, the pool, the in-memory values (bits) and the
+    /// number of valid heights.
+    fn for_each_case(
+        sizes: &[(usize, usize)],
+        sets: &[&ParamSet],
+        mut check: impl FnMut(
+            &[f32],
+            (usize, usize),
+            &ParamSet,
+            &rayon::ThreadPool,
+            &[(Param, u64)],
+            usize,
+        ),
+    ) {
+        for &(nx, ny) in sizes {
             for nan in [false, true] {
                 let z = rough(nx, ny, nan);
                 let g = Grid {
@@ -696,22 +715,14 @@ mod tests {
                     z: &z[..],
                 };
                 let valid = z.iter().filter(|v| v.is_finite()).count();
-                for set in [&all, &sdr, &sa] {
+                for set in sets {
                     let want = bits(&areal_parameters_of(g, set).unwrap());
                     for threads in [1, 2, 3] {
                         let pool = rayon::ThreadPoolBuilder::new()
                             .num_threads(threads)
                             .build()
                             .unwrap();
-                        for rows in [1, 2, 5, 64, ny] {
-                            for isa in [Isa::Best, Isa::Baseline] {
-                                let (got, n) = pool
-                                    .install(|| streamed(isa, &z, nx, ny, set, rows))
-                                    .unwrap();
-                                assert_eq!(bits(&got), want, "{nx}×{ny} {rows} rows {threads}");
-                                assert_eq!(n, valid);
-                            }
-                        }
+                        check(&z, (nx, ny), set, &pool, &want, valid);
                     }
                 }
             }
