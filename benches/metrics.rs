@@ -85,7 +85,8 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let rows = open_gsf_rows(black_box(&path), &ReadOptions::default()).unwrap();
             let mut n = 0usize;
-            rows.read_rows(256, |_, piece| n += piece.len()).unwrap();
+            rows.read_row_range(0..rows.ny, 256, |piece| n += piece.len())
+                .unwrap();
             n
         })
     });

@@ -189,7 +189,7 @@ impl From<FormatError> for ReadError {
     }
 }
 
-/// A `.gsf` opened for reading its rows in pieces ([`GsfRows::for_each_piece`]): the header
+/// A `.gsf` opened for reading its rows in pieces ([`GsfRows::for_each_piece_of`]): the header
 /// read, the heights not yet.
 #[derive(Debug)]
 pub struct GsfRows {
@@ -235,14 +235,11 @@ fn read_header(file: &std::fs::File) -> Result<Header, ReadError> {
 /// A height beyond the limit: its index in the map and its value (µm).
 pub(crate) type Beyond = (usize, f32);
 
-/// Why [`GsfRows::for_each_piece`] stopped.
+/// Why [`GsfRows::for_each_piece_of`] stopped.
 pub(crate) enum PieceError {
     Io(std::io::Error),
     Beyond(Beyond),
 }
-
-/// Pieces being read ahead: read while the one before is handed on.
-const AHEAD: usize = 2;
 
 impl GsfRows {
     pub(crate) fn open(file: std::fs::File, path: &std::path::Path) -> Result<GsfRows, ReadError> {
@@ -261,52 +258,12 @@ impl GsfRows {
         })
     }
 
-    /// Hand the heights (the stored float32 values scaled to µm in float32, which [`parse`]
-    /// widens to `f64` exactly) to `each` in
-    /// pieces of `rows` whole rows (the last piece may be shorter), in order, with the index
-    /// of each piece's first row. One thread reads the next pieces (`pread` into a few
-    /// reused buffers) while `each` runs on the caller's thread; memory: those buffers. Stops
-    /// at the first piece holding a finite height beyond `±limit_um` (before handing it on).
-    pub(crate) fn for_each_piece(
-        &self,
-        rows: usize,
-        limit_um: f64,
-        mut each: impl FnMut(usize, &[f32]),
-    ) -> Result<(), PieceError> {
-        use std::sync::mpsc;
-        let (nx, ny) = (self.nx, self.ny);
-        let rows = rows.max(1);
-        std::thread::scope(|scope| {
-            let (full_tx, full_rx) =
-                mpsc::sync_channel::<Result<(usize, Vec<f32>), PieceError>>(AHEAD);
-            let (free_tx, free_rx) = mpsc::channel::<Vec<f32>>();
-            for _ in 0..=AHEAD {
-                let _ = free_tx.send(Vec::with_capacity(rows * nx));
-            }
-            scope.spawn(move || {
-                for first in (0..ny).step_by(rows) {
-                    let Ok(mut buf) = free_rx.recv() else { return };
-                    let n = rows.min(ny - first) * nx;
-                    buf.resize(n, 0.0);
-                    let r = self.read_piece(first * nx, &mut buf, limit_um);
-                    let stop = r.is_err();
-                    if full_tx.send(r.map(|()| (first, buf))).is_err() || stop {
-                        return;
-                    }
-                }
-            });
-            for piece in full_rx {
-                let (first, buf) = piece?;
-                each(first, &buf);
-                let _ = free_tx.send(buf);
-            }
-            Ok(())
-        })
-    }
-
-    /// Hand the heights of the rows `rows` (as [`GsfRows::for_each_piece`]) to `each` in
-    /// pieces of `piece` whole rows, in order, read on the caller's thread (`pread` into one
-    /// reused buffer): several threads may each read their own rows of the file at once.
+    /// Hand the heights of the rows `rows` (the stored float32 values scaled to µm in
+    /// float32, which [`parse`] widens to `f64` exactly; rows past the map's end are not
+    /// there) to `each` in pieces of `piece` whole rows (the last may be shorter), in order,
+    /// read on the caller's thread (`pread` into one reused buffer), so that several threads
+    /// may each read their own rows of the file at once. Stops at the first piece holding a
+    /// finite height beyond `±limit_um` (before handing it on).
     pub(crate) fn for_each_piece_of(
         &self,
         rows: std::ops::Range<usize>,
@@ -506,9 +463,9 @@ mod tests {
         assert_eq!((rows.nx, rows.ny, rows.dx_um), (f.nx, f.ny, f.dx_um));
         for k in [1, 3, 7, ny, ny + 5] {
             let (mut all, mut firsts) = (Vec::new(), Vec::new());
-            let r = rows.for_each_piece(k, 1e6, |first, piece| {
+            let r = rows.for_each_piece_of(0..ny, k, 1e6, |piece| {
                 assert_eq!(piece.len() % nx, 0);
-                firsts.push(first);
+                firsts.push(all.len() / nx);
                 all.extend_from_slice(piece);
             });
             assert!(r.is_ok());
@@ -543,7 +500,7 @@ mod tests {
             _ => panic!("height beyond the limit accepted"),
         }
         let mut seen = 0;
-        match rows.for_each_piece(3, 2.0, |_, piece| seen += piece.len()) {
+        match rows.for_each_piece_of(0..ny, 3, 2.0, |piece| seen += piece.len()) {
             Err(PieceError::Beyond((k, v))) => {
                 assert_eq!(k, bad);
                 assert_eq!(f64::from(v).to_bits(), f.z_um[bad].to_bits());
@@ -583,7 +540,7 @@ mod tests {
         assert_eq!((rows.x0_mm, rows.y0_mm), (m.x0_mm, m.y0_mm));
         let mut all = Vec::new();
         assert!(
-            rows.for_each_piece(700, 1e6, |_, p| all.extend_from_slice(p))
+            rows.for_each_piece_of(0..ny, 700, 1e6, |p| all.extend_from_slice(p))
                 .is_ok()
         );
         assert_eq!(all.len(), m.z_um.len());
@@ -591,7 +548,7 @@ mod tests {
             assert_eq!(f64::from(*a).to_bits(), b.to_bits());
         }
         let first = m.z_um.iter().position(|v| v.abs() > 3.0).unwrap();
-        match rows.for_each_piece(700, 3.0, |_, _| {}) {
+        match rows.for_each_piece_of(0..ny, 700, 3.0, |_| {}) {
             Err(PieceError::Beyond((k, _))) => assert_eq!(k, first),
             _ => panic!("height beyond the limit accepted"),
         }

@@ -203,7 +203,7 @@ fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
     }
 }
 
-/// Open a Gwyddion `.gsf` for reading its heights in pieces of rows ([`GsfRows::read_rows`]),
+/// Open a Gwyddion `.gsf` for reading its heights in pieces of rows ([`GsfRows::read_row_range`]),
 /// in a few rows of memory: the header is read and checked (spacing against `opts`) now,
 /// the heights (the stored float32 values in µm, which [`read_heightmap`] widens to `f64`
 /// exactly) as they are handed on.
@@ -218,24 +218,11 @@ pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightM
 }
 
 impl GsfRows {
-    /// Hand every height (µm, row-major, `NaN` for missing nodes) to `each` in pieces of
-    /// `rows` whole rows (the last may be shorter), in order, with the index of each piece's
-    /// first row; may be called again for another pass. The next pieces are read on another
-    /// thread while `each` runs. A finite height beyond ±1 m is an error (as in
-    /// [`read_heightmap`]), raised before its piece is handed on.
-    pub fn read_rows(
-        &self,
-        rows: usize,
-        each: impl FnMut(usize, &[f32]),
-    ) -> Result<(), HeightMapError> {
-        self.for_each_piece(rows, MAX_HEIGHT_UM, each)
-            .map_err(|e| self.piece_error(e))
-    }
-
     /// Hand the heights of the rows `rows` (those of the map: rows past its end are not
     /// there) to `each` in pieces of `piece` whole rows (the last may be shorter), in
     /// order, read on the caller's thread, so that several threads can each read their own
-    /// rows at once; errors as [`GsfRows::read_rows`].
+    /// rows at once; may be called again for another pass. A finite height beyond ±1 m is an
+    /// error (as in [`read_heightmap`]), raised before its piece is handed on.
     pub fn read_row_range(
         &self,
         rows: std::ops::Range<usize>,

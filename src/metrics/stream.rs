@@ -104,6 +104,29 @@ impl<T: Height> RowStream<T> {
         (bytes / std::mem::size_of::<T>() / self.nx.max(1)).max(1)
     }
 
+    /// What the row pairs of Sdr and Sdq need.
+    fn pairs_spec(&self) -> PairsSpec {
+        PairsSpec {
+            isa: self.isa,
+            nx: self.nx,
+            dx_um: self.dx_um,
+            dy_um: self.dy_um,
+            sdr: self.sdr,
+            sdq: self.sdq,
+        }
+    }
+
+    /// Add row pairs, in their order.
+    fn add_pairs(&mut self, p: &Pairs) {
+        self.r.add(&p.sdr);
+        for &(s, c) in &p.along {
+            self.q.add_along(s, c);
+        }
+        for &(s, c) in &p.across {
+            self.q.add_across(s, c);
+        }
+    }
+
     /// Pass 1: the next whole rows, in order.
     pub fn first(&mut self, rows: &[T]) {
         let nx = self.nx;
@@ -113,12 +136,9 @@ impl<T: Height> RowStream<T> {
         }
         self.seen += rows.len();
         let isa = self.isa;
-        let (mut pairs, mut along, mut across) = (Vec::new(), Vec::new(), Vec::new());
+        let spec = self.pairs_spec();
+        let mut pairs = Pairs::default();
         let RowStream {
-            sdq,
-            sdr,
-            dx_um,
-            dy_um,
             ref mut pending,
             ref mut h,
             ref mut counts,
@@ -133,31 +153,9 @@ impl<T: Height> RowStream<T> {
                     counts.extend(s.iter().map(|s| s.1));
                 })
             },
-            || {
-                // The pair across the cut first, then the pairs inside this piece.
-                let mut joined = Vec::new();
-                if !last.is_empty() && (sdr || sdq) {
-                    joined.extend_from_slice(last);
-                    joined.extend_from_slice(&rows[..nx]);
-                }
-                if sdr {
-                    pairs = areal::sdr_pairs_of(isa, &joined, nx, dx_um, dy_um);
-                    pairs.extend(areal::sdr_pairs_of(isa, rows, nx, dx_um, dy_um));
-                }
-                if sdq {
-                    along = areal::sdq_along_of(rows, nx);
-                    across = areal::sdq_across_of(&joined, nx);
-                    across.extend(areal::sdq_across_of(rows, nx));
-                }
-            },
+            || spec.of_rows(last, rows, &mut pairs),
         );
-        self.r.add(&pairs);
-        for &(s, c) in &along {
-            self.q.add_along(s, c);
-        }
-        for &(s, c) in &across {
-            self.q.add_across(s, c);
-        }
+        self.add_pairs(&pairs);
         self.last.clear();
         self.last.extend_from_slice(&rows[rows.len() - nx..]);
     }
@@ -266,14 +264,12 @@ impl<T: Height> RowStream<T> {
             .map(|k| k * ny / parts..(k + 1) * ny / parts)
             .collect();
         let isa = self.isa;
-        let (dx_um, dy_um, sdr, sdq) = (self.dx_um, self.dy_um, self.sdr, self.sdq);
+        let spec = self.pairs_spec();
         let firsts = ranges
             .par_iter()
             .map(|rows| {
                 let mut p = Part::new(nx, rows.clone());
-                read(rows.clone(), &mut |piece| {
-                    p.first(isa, piece, sdr, sdq, dx_um, dy_um)
-                })?;
+                read(rows.clone(), &mut |piece| p.first(isa, &spec, piece))?;
                 Ok(p)
             })
             .collect::<Vec<Result<_, E>>>()
@@ -284,7 +280,7 @@ impl<T: Height> RowStream<T> {
         let mut sums = Vec::with_capacity((nx * ny).div_ceil(BLOCK));
         let mut straddles: Vec<(usize, Vec<T>)> = Vec::new();
         let mut carry: Vec<T> = Vec::new();
-        let (mut pairs, mut along, mut across) = (Vec::new(), Vec::new(), Vec::new());
+        let mut pairs = Pairs::default();
         for (k, p) in firsts.iter().enumerate() {
             carry.extend_from_slice(&p.head);
             if p.boundary {
@@ -295,19 +291,10 @@ impl<T: Height> RowStream<T> {
                 sums.extend_from_slice(&p.sums);
                 carry.extend_from_slice(&p.tail);
             }
-            if k > 0 && (sdr || sdq) {
-                let mut joined = firsts[k - 1].last.clone();
-                joined.extend_from_slice(&p.top);
-                if sdr {
-                    pairs.extend(areal::sdr_pairs_of(isa, &joined, nx, dx_um, dy_um));
-                }
-                if sdq {
-                    across.extend(areal::sdq_across_of(&joined, nx));
-                }
+            if k > 0 {
+                spec.across(&firsts[k - 1].last, &p.top, &mut pairs);
             }
-            pairs.extend_from_slice(&p.pairs);
-            along.extend_from_slice(&p.along);
-            across.extend_from_slice(&p.across);
+            pairs.append(&p.pairs);
         }
         if !carry.is_empty() {
             sums.extend(areal::sums_of(isa, &carry));
@@ -322,13 +309,7 @@ impl<T: Height> RowStream<T> {
         drop(firsts);
         self.h.add_sums(&sums);
         self.counts = sums.iter().map(|s| s.1).collect();
-        self.r.add(&pairs);
-        for &(s, c) in &along {
-            self.q.add_along(s, c);
-        }
-        for &(s, c) in &across {
-            self.q.add_across(s, c);
-        }
+        self.add_pairs(&pairs);
         // Rows missing or too many: no pass 2 (`finish` says so).
         if !self.end_first() || !whole {
             return Ok(self);
@@ -391,9 +372,7 @@ struct Part<T> {
     /// The first and the last row seen.
     top: Vec<T>,
     last: Vec<T>,
-    pairs: Vec<(f64, usize)>,
-    along: Vec<(f64, usize)>,
-    across: Vec<(f64, usize)>,
+    pairs: Pairs,
 }
 
 impl<T: Height> Part<T> {
@@ -411,13 +390,11 @@ impl<T: Height> Part<T> {
             tail: Vec::new(),
             top: Vec::new(),
             last: Vec::new(),
-            pairs: Vec::new(),
-            along: Vec::new(),
-            across: Vec::new(),
+            pairs: Pairs::default(),
         }
     }
 
-    fn first(&mut self, isa: Isa, rows: &[T], sdr: bool, sdq: bool, dx_um: f64, dy_um: f64) {
+    fn first(&mut self, isa: Isa, spec: &PairsSpec, rows: &[T]) {
         let nx = self.nx;
         debug_assert_eq!(rows.len() % nx, 0, "pieces are whole rows");
         if rows.is_empty() {
@@ -434,24 +411,72 @@ impl<T: Height> Part<T> {
         if self.top.is_empty() {
             self.top.extend_from_slice(&rows[..nx]);
         }
-        let mut joined = Vec::new();
-        if !self.last.is_empty() && (sdr || sdq) {
-            joined.extend_from_slice(&self.last);
-            joined.extend_from_slice(&rows[..nx]);
-        }
-        if sdr {
-            self.pairs
-                .extend(areal::sdr_pairs_of(isa, &joined, nx, dx_um, dy_um));
-            self.pairs
-                .extend(areal::sdr_pairs_of(isa, rows, nx, dx_um, dy_um));
-        }
-        if sdq {
-            self.along.extend(areal::sdq_along_of(rows, nx));
-            self.across.extend(areal::sdq_across_of(&joined, nx));
-            self.across.extend(areal::sdq_across_of(rows, nx));
-        }
+        spec.of_rows(&self.last, rows, &mut self.pairs);
         self.last.clear();
         self.last.extend_from_slice(&rows[rows.len() - nx..]);
+    }
+}
+
+/// The row pairs of Sdr and Sdq, in row order.
+#[derive(Debug, Clone, Default)]
+struct Pairs {
+    sdr: Vec<(f64, usize)>,
+    along: Vec<(f64, usize)>,
+    across: Vec<(f64, usize)>,
+}
+
+impl Pairs {
+    fn append(&mut self, p: &Pairs) {
+        self.sdr.extend_from_slice(&p.sdr);
+        self.along.extend_from_slice(&p.along);
+        self.across.extend_from_slice(&p.across);
+    }
+}
+
+/// What the row pairs of Sdr and Sdq need: the map's width and spacings, which of the two
+/// are asked for, the instruction set.
+#[derive(Debug, Clone, Copy)]
+struct PairsSpec {
+    isa: Isa,
+    nx: usize,
+    dx_um: f64,
+    dy_um: f64,
+    sdr: bool,
+    sdq: bool,
+}
+
+impl PairsSpec {
+    /// The pair across from `prev` (the row before, empty for none) to `next` (a row).
+    fn across<T: Height>(&self, prev: &[T], next: &[T], out: &mut Pairs) {
+        if prev.is_empty() || !(self.sdr || self.sdq) {
+            return;
+        }
+        let mut joined = prev.to_vec();
+        joined.extend_from_slice(&next[..self.nx]);
+        if self.sdr {
+            out.sdr.extend(areal::sdr_pairs_of(
+                self.isa, &joined, self.nx, self.dx_um, self.dy_um,
+            ));
+        }
+        if self.sdq {
+            out.across.extend(areal::sdq_across_of(&joined, self.nx));
+        }
+    }
+
+    /// The pair across from `prev` to the first of `rows` (whole rows), then the pairs
+    /// inside `rows`.
+    fn of_rows<T: Height>(&self, prev: &[T], rows: &[T], out: &mut Pairs) {
+        let nx = self.nx;
+        self.across(prev, rows, out);
+        if self.sdr {
+            out.sdr.extend(areal::sdr_pairs_of(
+                self.isa, rows, nx, self.dx_um, self.dy_um,
+            ));
+        }
+        if self.sdq {
+            out.along.extend(areal::sdq_along_of(rows, nx));
+            out.across.extend(areal::sdq_across_of(rows, nx));
+        }
     }
 }
 

@@ -309,8 +309,13 @@ pub fn fixed(v: f64, decimals: (u32, u32)) -> String {
 /// checks every form). More decimals are printed without trailing zeros;
 /// those numbers are printed, not copied.
 #[inline(always)]
-pub fn prints_as_written(form: Form, (min, _): (u32, u32)) -> bool {
-    form == Form::fixed(min)
+pub fn prints_as_written(form: Form, decimals: (u32, u32)) -> bool {
+    form == written_form(decimals)
+}
+
+/// The one form [`prints_as_written`] accepts for `decimals`: fixed point with the least.
+const fn written_form((min, _): (u32, u32)) -> Form {
+    Form::fixed(min)
 }
 
 /// The contact12 CSV header.
@@ -385,8 +390,8 @@ fn fast_row(r: &mut [u8; ROW_ROOM], p: &Posture) -> Option<usize> {
 /// ([`prints_as_written`]), packed as [`Written::forms`] packs them.
 const ROW_FORMS: u64 = {
     let (l, u) = (
-        Form::fixed(LENGTH_DECIMALS.0).bits() as u64,
-        Form::fixed(UNIT_DECIMALS.0).bits() as u64,
+        written_form(LENGTH_DECIMALS).bits() as u64,
+        written_form(UNIT_DECIMALS).bits() as u64,
     );
     let mut f = 0;
     let mut k = 0;
