@@ -383,7 +383,7 @@ impl<T: Height> Part<T> {
             nx,
             got: 0,
             head: Vec::new(),
-            head_left: f.min(b) - a,
+            head_left: head_len(nx, &rows),
             boundary: f < b,
             start_block: f / BLOCK,
             sums: Vec::new(),
@@ -491,10 +491,9 @@ struct Moments<T> {
 
 impl<T: Height> Moments<T> {
     fn new(nx: usize, rows: std::ops::Range<usize>, start_block: usize) -> Self {
-        let (a, b) = (rows.start * nx, rows.end * nx);
         Moments {
             got: 0,
-            head_left: a.next_multiple_of(BLOCK).min(b) - a,
+            head_left: head_len(nx, &rows),
             block: start_block,
             pending: Vec::new(),
             moments: Vec::new(),
@@ -517,6 +516,13 @@ impl<T: Height> Moments<T> {
             *block += n;
         });
     }
+}
+
+/// The number of values of a range of rows (`nx` values each) before the first block
+/// boundary at or after its first value: the head that pass 1 keeps and pass 2 skips.
+fn head_len(nx: usize, rows: &std::ops::Range<usize>) -> usize {
+    let (a, b) = (rows.start * nx, rows.end * nx);
+    a.next_multiple_of(BLOCK).min(b) - a
 }
 
 /// Hand `rows` to `f` in whole blocks of [`BLOCK`] values counted from the first value of the
