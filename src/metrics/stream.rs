@@ -300,7 +300,6 @@ impl<T: Height> RowStream<T> {
             sums.extend(areal::sums_of(isa, &carry));
             straddles.push((sums.len() - 1, carry));
         }
-        let starts: Vec<usize> = firsts.iter().map(|p| p.start_block).collect();
         self.seen = firsts.iter().map(|p| p.got).sum();
         let whole = firsts
             .iter()
@@ -322,9 +321,8 @@ impl<T: Height> RowStream<T> {
         let counts = &self.counts;
         let seconds = ranges
             .par_iter()
-            .zip(&starts)
-            .map(|(rows, &start)| {
-                let mut p = Moments::new(nx, rows.clone(), start);
+            .map(|rows| {
+                let mut p = Moments::new(nx, rows);
                 read(rows.clone(), &mut |piece| {
                     p.second(isa, piece, counts, mean)
                 })?;
@@ -334,7 +332,8 @@ impl<T: Height> RowStream<T> {
             .into_iter()
             .collect::<Result<Vec<_>, E>>()?;
         let mut moments = vec![None; counts.len()];
-        for ((got, m), &start) in seconds.iter().zip(&starts) {
+        for ((got, m), rows) in seconds.iter().zip(&ranges) {
+            let start = Cut::of(nx, rows).first_block;
             self.seen += got;
             for (k, m) in m.iter().enumerate() {
                 moments[start + k] = Some(*m);
@@ -363,8 +362,6 @@ struct Part<T> {
     head_left: usize,
     /// Whether a block boundary lies in the range (at its first value or after).
     boundary: bool,
-    /// The index of the first whole block after the head.
-    start_block: usize,
     /// The sums of the whole blocks, in order.
     sums: Vec<(f64, usize)>,
     /// The values after the last block boundary (the block goes on in the next range).
@@ -377,15 +374,13 @@ struct Part<T> {
 
 impl<T: Height> Part<T> {
     fn new(nx: usize, rows: std::ops::Range<usize>) -> Self {
-        let (a, b) = (rows.start * nx, rows.end * nx);
-        let f = a.next_multiple_of(BLOCK);
+        let cut = Cut::of(nx, &rows);
         Part {
             nx,
             got: 0,
             head: Vec::new(),
-            head_left: head_len(nx, &rows),
-            boundary: f < b,
-            start_block: f / BLOCK,
+            head_left: cut.head,
+            boundary: cut.boundary,
             sums: Vec::new(),
             tail: Vec::new(),
             top: Vec::new(),
@@ -490,11 +485,12 @@ struct Moments<T> {
 }
 
 impl<T: Height> Moments<T> {
-    fn new(nx: usize, rows: std::ops::Range<usize>, start_block: usize) -> Self {
+    fn new(nx: usize, rows: &std::ops::Range<usize>) -> Self {
+        let cut = Cut::of(nx, rows);
         Moments {
             got: 0,
-            head_left: head_len(nx, &rows),
-            block: start_block,
+            head_left: cut.head,
+            block: cut.first_block,
             pending: Vec::new(),
             moments: Vec::new(),
         }
@@ -518,11 +514,28 @@ impl<T: Height> Moments<T> {
     }
 }
 
-/// The number of values of a range of rows (`nx` values each) before the first block
-/// boundary at or after its first value: the head that pass 1 keeps and pass 2 skips.
-fn head_len(nx: usize, rows: &std::ops::Range<usize>) -> usize {
-    let (a, b) = (rows.start * nx, rows.end * nx);
-    a.next_multiple_of(BLOCK).min(b) - a
+/// Where the blocks of [`BLOCK`] values (counted from the map's first value) cut a range of
+/// rows of `nx` values each; both passes of [`RowStream::by_parts`] start from it.
+struct Cut {
+    /// The values before the first block boundary at or after the range's first value: the
+    /// head that pass 1 keeps and pass 2 skips.
+    head: usize,
+    /// Whether a block boundary lies in the range (at its first value or after).
+    boundary: bool,
+    /// The index of the first block that starts in the range (after the head).
+    first_block: usize,
+}
+
+impl Cut {
+    fn of(nx: usize, rows: &std::ops::Range<usize>) -> Cut {
+        let (a, b) = (rows.start * nx, rows.end * nx);
+        let f = a.next_multiple_of(BLOCK);
+        Cut {
+            head: f.min(b) - a,
+            boundary: f < b,
+            first_block: f / BLOCK,
+        }
+    }
 }
 
 /// Hand `rows` to `f` in whole blocks of [`BLOCK`] values counted from the first value of the
