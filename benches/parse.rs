@@ -10,7 +10,22 @@ use crest::toolpath::{Contact12Writer, LowerOptions, Lowerer, Posture, Toolpath}
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
 
-const LARGE: &str = include_str!("../../shared/samples-external/nx_5axis_varcontour_ijk_large.cls");
+/// A real NX export that ships with the repository (Apache-2.0, 164 kB, 3-axis Z-level).
+const ZLEVEL: &str = include_str!("../samples/nx/nx_zlevel_core_spindl.cls");
+
+/// The large 5-axis NX export (804 kB) of the folder `CREST_EXTERNAL_SAMPLES` names, when it
+/// is set (it has no licence to ship; `reports/benchmarks.md`'s figures are on it).
+fn large() -> Option<String> {
+    let dir = std::env::var_os("CREST_EXTERNAL_SAMPLES").filter(|v| !v.is_empty());
+    let Some(dir) = dir else {
+        eprintln!(
+            "parse/*/nx_large_5axis not run: set CREST_EXTERNAL_SAMPLES to the folder of the real NX files"
+        );
+        return None;
+    };
+    let path = std::path::Path::new(&dir).join("nx_5axis_varcontour_ijk_large.cls");
+    Some(std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+}
 
 /// A 5-axis path with contact data (12-number GOTOs), about `bytes` long.
 fn contact_clsf(bytes: usize) -> String {
@@ -65,11 +80,14 @@ fn bench(c: &mut Criterion) {
     lower_all(&contact, Some(&mut csv));
     let csv_text = String::from_utf8(csv).unwrap_or_default();
 
+    let large = large();
+    let mut inputs = vec![("nx_zlevel_3axis", ZLEVEL)];
+    if let Some(text) = large.as_deref() {
+        inputs.push(("nx_large_5axis", text));
+    }
+    inputs.push(("contact_5axis_4MiB", contact.as_str()));
     let mut g = c.benchmark_group("parse");
-    for (name, text) in [
-        ("nx_large_5axis", LARGE),
-        ("contact_5axis_4MiB", contact.as_str()),
-    ] {
+    for (name, text) in inputs {
         g.throughput(Throughput::Bytes(text.len() as u64));
         g.bench_function(format!("newlines/{name}"), |b| {
             b.iter(|| memchr::memchr_iter(b'\n', black_box(text).as_bytes()).count())

@@ -197,7 +197,7 @@ def test_tool_analysis_is_the_cli_json(cli_json):
 
 
 def test_feed_plan_is_the_cli_json(cli_json):
-    cls = ROOT.parent / "shared" / "samples-external" / "nx_circle_times_from.cls"
+    cls = ROOT / "samples" / "nx" / "nx_iso_header_units_mm.cls"
     machine = ROOT / "samples" / "machines" / "table1_ac.toml"
     j = cli_json("feed", cls, "--machine", machine)
     ours = crest.plan_feed(cls, machine)

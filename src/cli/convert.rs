@@ -32,6 +32,10 @@ pub struct Args {
     /// Apply MSYS: write coordinates in the absolute frame instead of the MCS.
     #[arg(long)]
     pub absolute: bool,
+    /// CLSF output: centre-line data only (GOTO x,y,z,i,j,k, as NX writes without "Output
+    /// Contact Data"), dropping the contact points and normals.
+    #[arg(long)]
+    pub centre_line: bool,
     /// Machine description (`machine.toml`): reads G-code input through its forward
     /// kinematics and writes G-code output through its inverse kinematics.
     #[arg(long, value_name = "MACHINE.toml")]
@@ -143,7 +147,13 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
                     cw.begin_path(path, w)?;
                     open = true;
                 }
-                cw.posture(p, w)
+                if args.centre_line && p.contact.is_some() {
+                    let mut q = p.clone();
+                    q.contact = None;
+                    cw.posture(&q, w)
+                } else {
+                    cw.posture(p, w)
+                }
             };
             let r = stream_from(input, kind, reader, opts, &mut sink);
             if r.is_ok() && open {

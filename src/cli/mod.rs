@@ -17,6 +17,7 @@ mod calibrate;
 mod contact;
 mod convert;
 mod demo;
+mod diagnostic;
 mod feed;
 mod inspect;
 mod merge;
@@ -27,6 +28,7 @@ mod reading;
 mod report;
 mod resample;
 mod runout;
+mod shell;
 mod simulate;
 mod study;
 mod synth;
@@ -35,7 +37,7 @@ mod view;
 
 /// crest: predict the surface a 5-axis ball-end finishing path leaves, from NX CLSF.
 #[derive(Debug, Parser)]
-#[command(name = "crest", version, about, long_about = None)]
+#[command(name = "crest", version = env!("CREST_VERSION"), propagate_version = true, about, long_about = None)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -77,6 +79,10 @@ enum Command {
     Merge(merge::Args),
     /// Write a height map or part map as a self-contained 3-D viewer page (HTML).
     View(view::Args),
+    /// Print shell completions (bash, zsh, fish, PowerShell, elvish).
+    Completions(shell::CompletionsArgs),
+    /// Print the man page (roff), or write every page into a folder.
+    Man(shell::ManArgs),
 }
 
 /// How a command ended when it did not fail.
@@ -88,11 +94,14 @@ pub enum Outcome {
     CheckFailed,
 }
 
-/// On SIGINT or SIGTERM: remove the temporary files of outputs not yet in place, then exit
-/// with 128 + the signal's number, as a shell would report it.
+/// On SIGINT, SIGTERM or SIGHUP (a closed terminal, a dropped ssh): remove the temporary
+/// files of outputs not yet in place, then exit with 128 + the signal's number, as a shell
+/// would report it. (Unix signals; elsewhere the temporaries are removed on every error but
+/// an interrupt.)
+#[cfg(unix)]
 fn clean_up_on_signals() {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
         std::thread::spawn(move || {
             if let Some(sig) = signals.forever().next() {
                 crest::io::output::remove_temporaries();
@@ -101,6 +110,9 @@ fn clean_up_on_signals() {
         });
     }
 }
+
+#[cfg(not(unix))]
+fn clean_up_on_signals() {}
 
 /// Parse the process arguments, run the command, print errors, return the exit code.
 pub fn main() -> ExitCode {
@@ -124,7 +136,7 @@ pub fn main() -> ExitCode {
             if is_broken_pipe(&e) {
                 return ExitCode::SUCCESS;
             }
-            eprintln!("{e:?}");
+            eprint!("{}", diagnostic::render(&e));
             ExitCode::from(2)
         }
     }
@@ -141,13 +153,25 @@ pub(crate) fn print_line(args: std::fmt::Arguments<'_>) -> miette::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{args}")
         .and_then(|()| out.flush())
-        .map_err(|e| {
-            if e.kind() == std::io::ErrorKind::BrokenPipe {
-                miette::Report::new(StdoutClosed)
-            } else {
-                miette::miette!("cannot write to stdout: {e}")
-            }
-        })
+        .map_err(stdout_error)
+}
+
+/// Write bytes on stdout as they are (a generated file); a closed stdout as in [`outln!`].
+pub(crate) fn print_bytes(bytes: &[u8]) -> miette::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(bytes)
+        .and_then(|()| out.flush())
+        .map_err(stdout_error)
+}
+
+/// A failed write to stdout: [`StdoutClosed`] for a broken pipe.
+fn stdout_error(e: std::io::Error) -> miette::Report {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        miette::Report::new(StdoutClosed)
+    } else {
+        miette::miette!("cannot write to stdout: {e}")
+    }
 }
 
 fn is_broken_pipe(e: &miette::Report) -> bool {
@@ -178,6 +202,8 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Study(a) => study::run(a),
         Command::Merge(a) => merge::run(a),
         Command::View(a) => view::run(a),
+        Command::Completions(a) => shell::completions(a),
+        Command::Man(a) => shell::man(a),
     }
 }
 

@@ -3,7 +3,7 @@
 //! device, FIFO or socket is written directly; a symbolic link is written through to its
 //! target; an output that is one of the command's inputs (the same file after resolving links)
 //! is refused. Temporary files are listed so that an interrupted process can remove them
-//! ([`remove_temporaries`], called by the binary's SIGINT/SIGTERM handler), and a set of files
+//! ([`remove_temporaries`], called by the binary's SIGINT/SIGTERM/SIGHUP handler), and a set of files
 //! lands whole or not at all ([`write_set`]).
 
 use std::io::Write;
@@ -220,7 +220,7 @@ where
 
 /// A temporary folder beside an output folder, where a command that reads back what it
 /// wrote (the demo) builds its set of files before [`Staging::land`] moves them in; removed
-/// when dropped or on SIGINT/SIGTERM.
+/// when dropped or on SIGINT/SIGTERM/SIGHUP.
 #[derive(Debug)]
 pub struct Staging {
     dir: Option<tempfile::TempDir>,

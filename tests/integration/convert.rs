@@ -3,7 +3,7 @@
 
 use predicates::prelude::*;
 
-use crate::util::{crest, external, read, success_json, tempdir, write};
+use crate::util::{crest, external_samples, nx_sample, read, success_json, tempdir, write};
 
 /// stderr with miette's frame characters and line wrapping removed.
 fn flat(bytes: &[u8]) -> String {
@@ -82,11 +82,14 @@ fn contact12_to_clsf_to_contact12_is_exact() {
 
 #[test]
 fn clsf_to_contact12_to_clsf_keeps_every_goto() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let dir = tempdir();
     let a = dir.path().join("a.csv");
     let b = dir.path().join("b.cls");
     let c = dir.path().join("c.csv");
-    let src = external("nx_5axis_varcontour_ijk_small.cls");
+    let src = ext.join("nx_5axis_varcontour_ijk_small.cls");
     crest()
         .arg("convert")
         .arg(&src)
@@ -124,10 +127,13 @@ fn clsf_to_contact12_to_clsf_keeps_every_goto() {
 
 #[test]
 fn absolute_applies_msys() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let dir = tempdir();
     let a = dir.path().join("abs.csv");
     // MSYS/393,-297.5,3, X=(0,1,0), Y=(1,0,0): (x,y,z) -> (393+y, -297.5+x, 3-z).
-    let src = external("nx_circle_times_from.cls");
+    let src = ext.join("nx_circle_times_from.cls");
     crest()
         .arg("convert")
         .arg(&src)
@@ -149,7 +155,7 @@ fn inspect_json_has_the_contract_keys() {
     let v = success_json(
         crest()
             .arg("inspect")
-            .arg(external("nx_zlevel_core_spindl.cls"))
+            .arg(nx_sample("nx_zlevel_core_spindl.cls"))
             .arg("--json"),
     );
     let p = &v["paths"][0];

@@ -16,7 +16,8 @@ use crest::toolpath::{MotionKind, Posture, Toolpath};
 use predicates::prelude::*;
 
 use crate::util::{
-    RESAMPLE_HEADER, column, crest, external_file, read_number_csv, repo_file, stdout_json, tempdir,
+    RESAMPLE_HEADER, column, crest, external_samples, nx_sample, read_number_csv, repo_file,
+    stdout_json, tempdir,
 };
 
 /// The Table I machine of 000 (A/C), and the same limits on a nutating table (A at 45°
@@ -644,14 +645,19 @@ fn degenerate_paths_do_not_panic() {
 // machine-file errors that name the file and the line.
 // ---------------------------------------------------------------------------------------
 
-const CIRCLE: &str = external_file!("nx_circle_times_from.cls");
-const VARC: &str = external_file!("nx_5axis_varcontour_ijk_small.cls");
+const CIRCLE: &str = "nx_circle_times_from.cls";
+const VARC: &str = "nx_5axis_varcontour_ijk_small.cls";
 
 #[test]
 fn json_has_the_contract_keys() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let v = stdout_json(
         &crest()
-            .args(["feed", CIRCLE, "--machine", AC, "--json"])
+            .arg("feed")
+            .arg(ext.join(CIRCLE))
+            .args(["--machine", AC, "--json"])
             .assert()
             .success(),
     );
@@ -684,11 +690,16 @@ fn json_has_the_contract_keys() {
 
 #[test]
 fn five_axis_file_on_both_machines_with_csv() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let dir = tempdir();
     for m in [AC, NUT] {
         let csv = dir.path().join("poses.csv");
         crest()
-            .args(["feed", VARC, "--machine", m, "--absolute", "-o"])
+            .arg("feed")
+            .arg(ext.join(VARC))
+            .args(["--machine", m, "--absolute", "-o"])
             .arg(&csv)
             .assert()
             .success()
@@ -702,7 +713,9 @@ fn five_axis_file_on_both_machines_with_csv() {
     }
     // In the MCS the tool points along −Z: beyond A's ±120° travel.
     crest()
-        .args(["feed", VARC, "--machine", AC])
+        .arg("feed")
+        .arg(ext.join(VARC))
+        .args(["--machine", AC])
         .assert()
         .code(2)
         .stderr(predicate::str::contains(
@@ -712,17 +725,24 @@ fn five_axis_file_on_both_machines_with_csv() {
 
 #[test]
 fn feed_poses_chain_into_plot_feed() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let dir = tempdir();
     let csv = dir.path().join("poses.csv");
     crest()
-        .args(["feed", CIRCLE, "--machine", AC, "-o"])
+        .arg("feed")
+        .arg(ext.join(CIRCLE))
+        .args(["--machine", AC, "-o"])
         .arg(&csv)
         .assert()
         .success();
     let svg = dir.path().join("feed.svg");
     let v = stdout_json(
         &crest()
-            .args(["plot", "feed", CIRCLE, "--json", "--actual"])
+            .args(["plot", "feed"])
+            .arg(ext.join(CIRCLE))
+            .args(["--json", "--actual"])
             .arg(&csv)
             .arg("-o")
             .arg(&svg)
@@ -750,7 +770,9 @@ fn bad_machine_names_file_key_and_line() {
     let line = text[..text.find("amax = 5.0").unwrap()].lines().count() + 1;
     std::fs::write(&bad, text).unwrap();
     crest()
-        .args(["feed", CIRCLE, "--machine"])
+        .arg("feed")
+        .arg(nx_sample("nx_iso_header_units_mm.cls"))
+        .arg("--machine")
         .arg(&bad)
         .assert()
         .code(2)

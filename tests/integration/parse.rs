@@ -1,5 +1,5 @@
-//! Reading and lowering CLSF and contact12: every real NX sample of
-//! `../shared/samples-external/` parses and lowers, with record counts matching an
+//! Reading and lowering CLSF and contact12: every real NX sample (the two of `samples/nx/`,
+//! and the folder of `CREST_EXTERNAL_SAMPLES` when it is set) parses and lowers, with record counts matching an
 //! independent count of the lines and a snapshotted summary; the project's own contact-data
 //! samples (`samples/clsf/`) are consistent; printed records parse back, arbitrary bytes
 //! never panic, written postures read back to the printed digits (proptest).
@@ -14,7 +14,7 @@ use crest::toolpath::{
 };
 use proptest::prelude::*;
 
-use crate::util::{external_cls_files, external_file, posture, repo_file};
+use crate::util::{external_cls_files, external_samples, posture, repo, repo_file};
 
 fn lower(text: &str, opts: LowerOptions) -> Program {
     let mut low = Lowerer::new(opts);
@@ -43,9 +43,13 @@ fn lower_c12(text: &str) -> Program {
 // The real NX samples
 // ---------------------------------------------------------------------------------------
 
-fn samples() -> Vec<std::path::PathBuf> {
-    let v = external_cls_files();
-    assert_eq!(v.len(), 12, "twelve NX samples expected");
+fn samples(dir: &std::path::Path, expected: usize) -> Vec<std::path::PathBuf> {
+    let v = external_cls_files(dir);
+    assert_eq!(
+        v.len(),
+        expected,
+        "{expected} NX samples expected in {dir:?}"
+    );
     v
 }
 
@@ -111,8 +115,20 @@ fn summary(program: &Program) -> String {
 }
 
 #[test]
-fn every_sample_parses_with_independent_counts() {
-    for path in samples() {
+fn every_shipped_sample_parses_with_independent_counts() {
+    every_sample_parses_with_independent_counts(samples(&repo("samples/nx"), 2));
+}
+
+#[test]
+fn every_external_sample_parses_with_independent_counts() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    every_sample_parses_with_independent_counts(samples(&ext, 12));
+}
+
+fn every_sample_parses_with_independent_counts(files: Vec<std::path::PathBuf>) {
+    for path in files {
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
         let program = lower(&text, LowerOptions::default());
         assert_eq!(
@@ -161,9 +177,15 @@ fn every_sample_parses_with_independent_counts() {
 
 #[test]
 fn the_published_facts_of_the_samples_hold() {
-    let read = |p: &str| std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{p}: {e}"));
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    let read = |name: &str| {
+        let p = ext.join(name);
+        std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{p:?}: {e}"))
+    };
     // SOURCES.md: 20 057 GOTOs, 4 660 with i,j,k in the large 5-axis file.
-    let large = read(external_file!("nx_5axis_varcontour_ijk_large.cls"));
+    let large = read("nx_5axis_varcontour_ijk_large.cls");
     let p = lower(&large, LowerOptions::default());
     assert_eq!(p.paths[0].stats.gotos, 20_057);
     let with_axis = large
@@ -180,7 +202,7 @@ fn the_published_facts_of_the_samples_hold() {
     assert!(axis_changes < with_axis);
     // A path without any i,j,k keeps the default +Z.
     let slot = lower(
-        &read(external_file!("nx_slot_multilevel_arcs.cls")),
+        &read("nx_slot_multilevel_arcs.cls"),
         LowerOptions::default(),
     );
     assert!(slot.paths[0].postures.iter().all(|q| q.axis == Vec3::z()));
@@ -196,7 +218,7 @@ fn the_published_facts_of_the_samples_hold() {
         );
     }
     // The NURBS samples pass through the last control point of each block.
-    let nurbs_text = read(external_file!("nx_fixed_contour_nurbs.cls"));
+    let nurbs_text = read("nx_fixed_contour_nurbs.cls");
     let nurbs = lower(&nurbs_text, LowerOptions::default());
     let last_cntrl: Vec<&str> = nurbs_text
         .lines()

@@ -1,7 +1,7 @@
 //! Real parts (issue 15): the design surface as input, contact data from the part or the
 //! path, the N-buffer along the part's normals, patches and maps on real NX exports.
 
-use crate::util::{ROOT, crest, external as shared, json};
+use crate::util::{ROOT, crest, external_samples, json};
 use std::path::{Path, PathBuf};
 
 const BALL: &str = "samples/synth/ball-r5.toml";
@@ -183,6 +183,9 @@ fn contact_from_the_part_is_within_a_micrometre_and_a_tenth_of_a_degree() {
 
 #[test]
 fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     for (file, near) in [
         ("nx_5axis_varcontour_ijk_large.cls", "472.0,224.4,-65.8"),
@@ -191,7 +194,7 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
         let out = dir.path().join(format!("{file}.gsf"));
         let a = crest()
             .arg("simulate")
-            .arg(shared(file))
+            .arg(ext.join(file))
             .args([
                 "--teeth",
                 "2",
@@ -222,9 +225,12 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
 
 #[test]
 fn a_tool_from_tldata_needs_its_tooth_count_by_name() {
+    let Some(ext) = external_samples() else {
+        return;
+    };
     let a = crest()
         .arg("simulate")
-        .arg(shared("nx_fixed_contour_nurbs.cls"))
+        .arg(ext.join("nx_fixed_contour_nurbs.cls"))
         .args([
             "--rpm",
             "8000",

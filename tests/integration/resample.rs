@@ -19,8 +19,8 @@ use crest::toolpath::{ArcMove, MotionKind, Posture, Toolpath};
 use proptest::prelude::*;
 
 use crate::util::{
-    RESAMPLE_HEADER, column, contact_below, crest, external, external_cls_files, posture, read,
-    read_number_csv, repo, stdout_json, step_geometry, tempdir, unit, write,
+    RESAMPLE_HEADER, column, contact_below, crest, external_cls_files, external_samples, nx_sample,
+    posture, read, read_number_csv, repo, stdout_json, step_geometry, tempdir, unit, write,
 };
 
 // ---------------------------------------------------------------------------------------
@@ -449,7 +449,7 @@ fn lazy_spindle_is_the_first_cutting_feed_and_the_scan_the_highest() {
 }
 
 // ---------------------------------------------------------------------------------------
-// `crest resample` end to end: every real NX file of `../shared/samples-external/` with
+// `crest resample` end to end: every real NX file of `CREST_EXTERNAL_SAMPLES` with
 // cutting moves, both modes, contact columns, feed options, and the errors.
 // ---------------------------------------------------------------------------------------
 
@@ -489,7 +489,10 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 #[test]
 fn every_external_file_with_cutting_moves_resamples() {
-    let files = external_cls_files();
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    let files = external_cls_files(&ext);
     assert!(files.len() >= 12, "{files:?}");
     let fz = 0.5;
     for file in &files {
@@ -548,7 +551,10 @@ fn every_external_file_with_cutting_moves_resamples() {
 
 #[test]
 fn dtheta_mode_steps_the_spindle_angle() {
-    let file = external("nx_5axis_varcontour_ijk_small.cls");
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    let file = ext.join("nx_5axis_varcontour_ijk_small.cls");
     let (json, rows) = run(
         &file,
         &[
@@ -662,7 +668,10 @@ fn contact12_gives_contact_columns_and_time_needs_a_feed() {
 
 #[test]
 fn feed_option_sets_the_clock() {
-    let file = external("nx_circle_times_from.cls");
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    let file = ext.join("nx_circle_times_from.cls");
     let (json, rows) = run(
         &file,
         &[
@@ -704,7 +713,7 @@ fn feed_option_sets_the_clock() {
 
 #[test]
 fn bad_options_are_usage_errors() {
-    let file = external("nx_circle_times_from.cls");
+    let file = nx_sample("nx_iso_header_units_mm.cls");
     let dir = tempdir();
     let out = dir.path().join("out.csv");
     crest()
@@ -733,7 +742,10 @@ fn bad_options_are_usage_errors() {
 
 #[test]
 fn machine_feed_follows_the_kinematics() {
-    let file = external("nx_circle_times_from.cls");
+    let Some(ext) = external_samples() else {
+        return;
+    };
+    let file = ext.join("nx_circle_times_from.cls");
     let machine = repo("samples/machines/table1_ac.toml");
     let (json, rows) = run(
         &file,
@@ -895,7 +907,7 @@ fn slower_engage_first_and_empty_tool_paths() {
 /// tool advances V / n / 4; `--mode fz` without them is a usage error.
 #[test]
 fn dtheta_takes_the_spindle_from_the_file() {
-    let file = external("nx_zlevel_core_spindl.cls"); // SPINDL 1000 rpm, FEDRAT 250 mm/min
+    let file = nx_sample("nx_zlevel_core_spindl.cls"); // SPINDL 1000 rpm, FEDRAT 250 mm/min
     let (json, rows) = run(&file, &["--mode", "dtheta", "--dtheta-deg", "90"]);
     assert!(json["fz_mm"].is_null() && json["teeth"].is_null());
     assert_eq!(json["paths"][0]["stats"]["spindle_rpm"], 1000.0);

@@ -24,19 +24,49 @@ macro_rules! repo_file {
     };
 }
 
-/// `&'static str` path of a real NX sample in `../shared/samples-external/` (tests read
-/// them there, they are never copied into the repository).
-macro_rules! external_file {
-    ($name:literal) => {
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../shared/samples-external/",
-            $name
-        )
-    };
+pub(crate) use repo_file;
+
+/// The variable that names the folder of the real NX files (`../shared/samples-external/` in
+/// this project's CI). They have no licence to ship, so a clone does not have them.
+pub const EXTERNAL_SAMPLES_VAR: &str = "CREST_EXTERNAL_SAMPLES";
+
+/// The folder of the real NX files (`CREST_EXTERNAL_SAMPLES`), or `None`: a test that needs
+/// them then returns at once, and `external_samples_not_run` says how many did not run. Each
+/// such test asks once, as `let Some(dir) = external_samples() else { return };`, which is
+/// the form that count looks for.
+pub fn external_samples() -> Option<PathBuf> {
+    std::env::var_os(EXTERNAL_SAMPLES_VAR)
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
 }
 
-pub(crate) use {external_file, repo_file};
+/// One line on a run without `CREST_EXTERNAL_SAMPLES`: how many tests returned at once for
+/// want of the real NX files, and how to run them. It counts the guards
+/// (`= external_samples() else`) in the test sources, and writes to stderr directly, which
+/// the test harness does not capture.
+#[test]
+fn external_samples_not_run() {
+    if external_samples().is_some() {
+        return;
+    }
+    let dir = repo("tests/integration");
+    let mut skipped = 0;
+    for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())) {
+        let path = entry.unwrap_or_else(|e| panic!("{e}")).path();
+        if path.extension().is_some_and(|x| x == "rs") && !path.ends_with("util.rs") {
+            let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+            skipped += text.matches("= external_samples() else").count();
+        }
+    }
+    assert!(skipped > 0, "no test reads the real NX files");
+    use std::io::Write;
+    let _ = writeln!(
+        std::io::stderr(),
+        "note: {skipped} tests that read the real NX files did not run; to run them, set \
+         {EXTERNAL_SAMPLES_VAR} to the folder that holds them (this project's CI: \
+         ../shared/samples-external)"
+    );
+}
 
 /// A file of the repository.
 pub fn repo(rel: &str) -> PathBuf {
@@ -48,15 +78,14 @@ pub fn synth_sample(name: &str) -> PathBuf {
     repo("samples/synth").join(name)
 }
 
-/// A file of `../shared/samples-external/`.
-pub fn external(name: &str) -> PathBuf {
-    Path::new(external_file!("")).join(name)
+/// A real NX export that ships with the repository (`samples/nx/`, Apache-2.0).
+pub fn nx_sample(name: &str) -> PathBuf {
+    repo("samples/nx").join(name)
 }
 
-/// Every `.cls` file of `../shared/samples-external/`, sorted.
-pub fn external_cls_files() -> Vec<PathBuf> {
-    let dir = external("");
-    let mut v: Vec<PathBuf> = std::fs::read_dir(&dir)
+/// Every `.cls` file of the folder of real NX files, sorted.
+pub fn external_cls_files(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "cls"))

@@ -1,0 +1,99 @@
+//! How an error reaches people: miette's graphical report (colours, frames, the offending
+//! line, wrapping at the terminal's width) only when stderr is a terminal; to a pipe or a
+//! file, one plain line per cause, never wrapped, so that logs can be searched and tests do
+//! not depend on the width of a terminal or the length of a path. Control characters that
+//! came from an input (ESC, BEL, NUL, …) are shown escaped (`\x1b`) in the plain lines.
+
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+
+/// The text to print on stderr for `e` (ending in a newline).
+pub fn render(e: &miette::Report) -> String {
+    if std::io::stderr().is_terminal() {
+        // miette's own handler: it honours NO_COLOR (and FORCE_COLOR) and the terminal width.
+        format!("{e:?}\n")
+    } else {
+        plain(e)
+    }
+}
+
+/// `error: …`, then `  caused by: …` for each source and `  help: …`: one line each.
+pub fn plain(e: &miette::Report) -> String {
+    let mut out = String::new();
+    for (i, cause) in e.chain().enumerate() {
+        let label = if i == 0 { "error" } else { "  caused by" };
+        let _ = writeln!(out, "{label}: {}", one_line(&cause.to_string()));
+    }
+    for related in e.related().into_iter().flatten() {
+        let _ = writeln!(out, "error: {}", one_line(&related.to_string()));
+    }
+    if let Some(help) = e.help() {
+        let _ = writeln!(out, "  help: {}", one_line(&help.to_string()));
+    }
+    out
+}
+
+/// A message on one line: its own line breaks become `; `, control characters are escaped.
+fn one_line(text: &str) -> String {
+    let lines: Vec<&str> = text
+        .lines()
+        .map(str::trim_end)
+        .filter(|l| !l.trim().is_empty())
+        .collect();
+    escape_controls(&lines.join("; "))
+}
+
+/// Every control character but the tab as `\xNN` (or `\u{NNNN}` beyond ASCII), as ripgrep
+/// and git show them: text from an input file cannot move the cursor, clear the screen or
+/// retitle the terminal.
+pub fn escape_controls(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() && c != '\t' {
+            if (c as u32) < 0x80 {
+                let _ = write!(out, "\\x{:02x}", c as u32);
+            } else {
+                let _ = write!(out, "\\u{{{:04x}}}", c as u32);
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, thiserror::Error, miette::Diagnostic)]
+    #[error("inner: bad\x1b]0;title\x07 value")]
+    struct Inner;
+
+    #[derive(Debug, thiserror::Error, miette::Diagnostic)]
+    #[error("a/very/long/path/{0}/file.cls:12:3: expected a number, found `zz`")]
+    #[diagnostic(help("check the line"))]
+    struct Outer(String, #[source] Inner);
+
+    #[test]
+    fn plain_is_one_unwrapped_line_per_cause_with_controls_escaped() {
+        let long = "x".repeat(300);
+        let r = miette::Report::new(Outer(long.clone(), Inner));
+        let text = plain(&r);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines.len(), 3, "{text}");
+        assert_eq!(
+            lines[0],
+            format!("error: a/very/long/path/{long}/file.cls:12:3: expected a number, found `zz`")
+        );
+        assert_eq!(lines[1], "  caused by: inner: bad\\x1b]0;title\\x07 value");
+        assert_eq!(lines[2], "  help: check the line");
+        assert!(!text.contains('\x1b') && !text.contains('\x07'));
+    }
+
+    #[test]
+    fn multi_line_messages_become_one_line() {
+        let r = miette::miette!("first\n  second\n\nthird\u{9b}");
+        assert_eq!(plain(&r), "error: first;   second; third\\u{009b}\n");
+    }
+}
