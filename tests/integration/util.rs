@@ -219,3 +219,11 @@ pub fn contact_below(tip: Point3, normal: Vec3) -> Contact {
         normal_derived: false,
     }
 }
+
+/// The folder of the real NX files (`CREST_EXTERNAL_SAMPLES`), or `None`: a test that needs
+/// them then returns at once, and `external_samples_not_run` says how many did not run.
+pub fn external_samples() -> Option<PathBuf> {
+    std::env::var_os("CREST_EXTERNAL_SAMPLES")
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+}
