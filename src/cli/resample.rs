@@ -91,6 +91,10 @@ pub struct Args {
     /// Resample only this tool path (1-based, in file order).
     #[arg(long)]
     pub path: Option<usize>,
+    /// Which moves are resampled: `cut` (default: the cutting passes) or `all` (every feed
+    /// move, engage and retract too).
+    #[arg(long, value_enum, default_value = "cut")]
+    pub moves: super::reading::MovesArg,
     /// Output CSV.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
@@ -168,6 +172,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         &args.file,
         read.clone(),
         args.path.map(|n| n.saturating_sub(1)),
+        args.moves.into(),
     )?;
     let rpm = args.rpm.or(if spindle_from_path {
         extent.spindle_rpm
@@ -213,7 +218,8 @@ fn resample_in_memory(
     kind: InputKind,
     read: &ReadOptions,
 ) -> miette::Result<(Vec<PathReport>, bool)> {
-    let program = crest::io::toolpath::read_program_with(&args.file, read.clone())?;
+    let mut program = crest::io::toolpath::read_program_with(&args.file, read.clone())?;
+    crest::toolpath::Moves::from(args.moves).apply(&mut program);
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -349,6 +355,7 @@ fn stream_pass(
     pass: &Pass<'_>,
 ) -> miette::Result<PassResult> {
     let file = &args.file;
+    let moves = crest::toolpath::Moves::from(args.moves);
     let kind = detect(file)?;
     let input =
         File::open(file).map_err(|e| miette::miette!("{}: cannot open: {e}", file.display()))?;
@@ -429,6 +436,16 @@ fn stream_pass(
             }
             let Some(cur) = current.as_mut() else {
                 return Ok(());
+            };
+            // `--moves all`: every feed move is resampled as a cut move.
+            let relabelled;
+            let p = if moves.cuts(p.motion) && p.motion != crest::toolpath::MotionKind::Cut {
+                let mut q = p.clone();
+                moves.relabel(&mut q);
+                relabelled = q;
+                &relabelled
+            } else {
+                p
             };
             if let Some(scan) = cur.scan.as_mut() {
                 scan.push(p);

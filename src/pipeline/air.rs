@@ -1,9 +1,12 @@
 //! Is a patch on the cut? The distance from a point to the surface the cut moves define
 //! (their contact points, joined along each pass), and the local stepover there, for
-//! `simulate --patch-near`: a point farther than [`tolerance_mm`] is in the air (on a
-//! lead-in or lead-out arc, a rapid, …) and is refused.
+//! `simulate --patch-near`: a point higher above that surface (along its normal) than
+//! [`tolerance_mm`] is in the air (on a lead-in or lead-out arc, a rapid, …) and is
+//! refused. The height along the normal, not the distance to the nearest contact point:
+//! a flat-bottomed cutter's contacts on a floor lie anywhere under its bottom, millimetres
+//! to the side of a point on the floor.
 
-use crate::math::Point3;
+use crate::math::{Point3, Vec3};
 use crate::toolpath::Program;
 
 /// The smallest distance tolerated between a patch point and the cut surface, mm.
@@ -16,6 +19,9 @@ pub const STEPOVERS: f64 = 1.5;
 pub struct Nearest {
     /// Distance from the point to the nearest point of the cut surface, mm.
     pub distance_mm: f64,
+    /// Height of the point above (or depth below) the cut surface there, along its normal
+    /// (the tool axis where the posture has no contact), mm.
+    pub height_mm: f64,
     /// That nearest point, mm.
     pub point: Point3,
     /// Distance from the nearest point to the neighbouring pass (the local stepover), mm;
@@ -30,6 +36,21 @@ pub struct Nearest {
 /// `fallback_mm` (the tool radius) stands for the stepover.
 pub fn tolerance_mm(near: &Nearest, fallback_mm: f64) -> f64 {
     MIN_TOLERANCE_MM.max(STEPOVERS * near.stepover_mm.unwrap_or(fallback_mm))
+}
+
+impl Nearest {
+    /// How far the point is off the cut surface: its height along the normal, or the whole
+    /// distance when the point lies more than `beside_mm` to the side (beyond the cut).
+    pub fn off_surface_mm(&self, beside_mm: f64) -> f64 {
+        let side = (self.distance_mm.powi(2) - self.height_mm.powi(2))
+            .max(0.0)
+            .sqrt();
+        if side > beside_mm {
+            self.distance_mm
+        } else {
+            self.height_mm
+        }
+    }
 }
 
 /// Closest point of segment a-b to q.
@@ -48,6 +69,7 @@ struct Piece {
     pass: usize,
     a: Point3,
     b: Point3,
+    n: Vec3,
     s0: f64,
     s1: f64,
 }
@@ -79,6 +101,7 @@ pub fn nearest(
                 (None, true) => Some(p.position),
                 (None, false) => None,
             };
+            let n = p.contact.as_ref().map_or(p.axis, |c| c.normal);
             let picked = selected(pi, i);
             match (picked, point, prev) {
                 (true, Some(b), Some((a, s))) => {
@@ -87,6 +110,7 @@ pub fn nearest(
                         pass,
                         a,
                         b,
+                        n,
                         s0: s,
                         s1,
                     });
@@ -101,6 +125,7 @@ pub fn nearest(
                         pass,
                         a,
                         b,
+                        n,
                         s0: 0.0,
                         s1,
                     });
@@ -136,6 +161,7 @@ pub fn nearest(
         .min_by(f64::total_cmp);
     Some(Nearest {
         distance_mm: (c0 - q).norm(),
+        height_mm: (q - c0).dot(&best.n).abs(),
         point: c0,
         stepover_mm: stepover,
     })
@@ -193,6 +219,7 @@ mod tests {
         );
         let n = n.unwrap_or_else(|| panic!("nearest"));
         assert!((n.distance_mm - (0.01f64 + 9.0).sqrt()).abs() < 1e-12);
+        assert!((n.height_mm - 3.0).abs() < 1e-12 && (n.off_surface_mm(1.0) - 3.0).abs() < 1e-12);
         assert!((n.stepover_mm.unwrap_or(0.0) - 0.5).abs() < 1e-12);
         assert!((tolerance_mm(&n, 5.0) - 0.75).abs() < 1e-12);
     }

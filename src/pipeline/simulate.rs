@@ -835,20 +835,17 @@ pub fn simulate_shard(
                         let c = p.closest(&q).point;
                         ((c - q).norm(), c)
                     }
-                    None => (n.distance_mm, n.point),
+                    None => (n.off_surface_mm(cutter.radius_mm), n.point),
                 };
                 patch_distance = Some((d, tol));
-                if d > tol {
+                // `--moves all` simulates as crest did before (a patch reached by engage or
+                // retract moves only is then a warning, below).
+                if d > tol && req.moves == Moves::Cut {
                     return Err(miette!(
-                        "{file}: --patch-near {},{},{} is {d:.3} mm from the surface the {} moves define (nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect --regions` lists them){}",
+                        "{file}: --patch-near {},{},{} is {d:.3} mm from the surface the cut moves define (off it along its normal; nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect --regions` lists them), or simulate every feed move with --moves all",
                         point[0],
                         point[1],
                         point[2],
-                        if req.moves == Moves::All {
-                            "feed"
-                        } else {
-                            "cut"
-                        },
                         at.x,
                         at.y,
                         at.z,
@@ -861,11 +858,6 @@ pub fn simulate_shard(
                             ),
                             |s| format!(" {s:.3} mm")
                         ),
-                        if req.moves == Moves::All {
-                            ""
-                        } else {
-                            ", or simulate every feed move with --moves all"
-                        }
                     ));
                 }
             }

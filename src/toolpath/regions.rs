@@ -4,8 +4,8 @@
 //!
 //! Points are the contact points where the path has contact data, else the CL points
 //! (tool tips). Pass k + 1 joins the region of pass k when, seen from points along it, the
-//! median distance to pass k is at most the tool diameter (10 mm without TLDATA): the
-//! passes lie side by side, or one continues the other.
+//! median distance to one of the region's last three passes is at most the tool diameter
+//! (10 mm without TLDATA): the passes lie side by side, or one continues the other.
 //! The stepover of a region is the median, over points along its passes, of the distance
 //! across the local feed to the nearest other pass of the region (passes k − 2 … k + 2),
 //! or to the same pass farther than two tool diameters along it (a zigzag without lifts).
@@ -35,7 +35,7 @@ pub struct Region {
     pub feeds_mm_min: Vec<f64>,
     /// Length of the cut moves (arcs along the arc), mm.
     pub cut_length_mm: f64,
-    /// A point on the cut: the point at half the length of the region's middle pass, mm.
+    /// A point on the cut: half-way along the full pass nearest the region's middle, mm.
     pub centre: Point3,
 }
 
@@ -166,12 +166,16 @@ pub fn regions(path: &Toolpath) -> Vec<Region> {
     let mut groups: Vec<std::ops::Range<usize>> = Vec::new();
     let mut start = 0;
     for k in 1..passes.len() {
-        let seen: Vec<f64> = passes[k]
-            .samples(SAMPLES_PER_PASS)
-            .iter()
-            .filter_map(|(q, _)| across(q, &passes[k - 1], None).map(|a| a.1))
-            .collect();
-        let joins = median(seen).is_some_and(|d| d <= diameter);
+        // Against each of the last three passes of the region: a short piece between two
+        // passes (a corner, a fragment) does not split the region.
+        let samples = passes[k].samples(SAMPLES_PER_PASS);
+        let joins = (k.saturating_sub(3).max(start)..k).any(|j| {
+            let seen: Vec<f64> = samples
+                .iter()
+                .filter_map(|(q, _)| across(q, &passes[j], None).map(|a| a.1))
+                .collect();
+            median(seen).is_some_and(|d| d <= diameter)
+        });
         if !joins {
             groups.push(start..k);
             start = k;
@@ -253,7 +257,16 @@ fn region(
             }
         }
     }
-    let mid = &passes[g.start + g.len() / 2];
+    // The centre: on the pass nearest the middle of the region among its full passes (at
+    // least half the median length; a short piece in a corner is no centre).
+    let lengths: Vec<f64> = passes[g.clone()].iter().map(Pass::length).collect();
+    let full = 0.5 * median(lengths.clone()).unwrap_or(0.0);
+    let middle = g.start + g.len() / 2;
+    let mid = g
+        .clone()
+        .filter(|&k| passes[k].length() >= full)
+        .min_by_key(|&k| k.abs_diff(middle))
+        .map_or(&passes[middle], |k| &passes[k]);
     Region {
         passes: g.len(),
         min,

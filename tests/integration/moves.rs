@@ -221,19 +221,42 @@ fn simulate(file: &std::path::Path, near: &str, extra: &[&str]) -> (i32, String,
 fn a_patch_on_the_lead_in_arc_is_refused_with_its_distance() {
     let dir = tempdir();
     let file = write(dir.path(), "nx.cls", export(true));
-    // Half-way down the lead-in arc of pass 4: 2.34 mm above the floor, 5.66 mm before the
-    // cut starts at x = 0. The nearest point of the cut surface is the pass's start.
+    // Half-way down the lead-in arc of pass 4: 8 − 8 sin 45° = 2.34 mm above the floor and
+    // 8 cos 45° = 5.66 mm before the cut starts at x = 0, the nearest point of the cut
+    // surface: more than a tool radius beyond the cut, so the whole distance counts.
     let y = 4.0 * STEP;
     let p = lead_in(y, 45.0);
     let want = (p[0] * p[0] + p[2] * p[2]).sqrt();
     let (code, _, err) = simulate(&file, &format!("{},{},{}", p[0], p[1], p[2]), &[]);
     assert_eq!(code, 2, "{err}");
-    let at = err
+    assert!((distance_in(&err) - want).abs() < 0.01, "{want}: {err}");
+    // 3 mm straight above the passes (half-way between passes 3 and 4): the height along
+    // the floor's normal, 3 mm, more than 1.5 stepovers (0.75 mm).
+    let (code, _, err) = simulate(&file, "10,1.75,3", &[]);
+    assert_eq!(code, 2, "{err}");
+    assert!((distance_in(&err) - 3.0).abs() < 0.01, "{err}");
+    // 0.5 mm above: still refused; 0.3 mm above is within the tolerance and simulated.
+    assert_eq!(simulate(&file, "10,1.75,0.8", &[]).0, 2);
+    let (code, out, err) = simulate(&file, "10,1.75,0.3", &[]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
+    let d = v["patch_distance_mm"].as_f64().unwrap_or(f64::NAN);
+    assert!((d - 0.3).abs() < 0.01, "{v}");
+    assert!(
+        (v["patch_tolerance_mm"].as_f64().unwrap_or(0.0) - 0.75).abs() < 0.01,
+        "{v}"
+    );
+}
+
+/// The distance a refusal names: "… is D mm from the surface …".
+fn distance_in(err: &str) -> f64 {
+    let flat = err.replace(['│', '\n'], " ");
+    let flat = flat.split_whitespace().collect::<Vec<_>>().join(" ");
+    let at = flat
         .find(" mm from the surface")
         .unwrap_or_else(|| panic!("no distance in: {err}"));
-    let number = err[..at].rsplit(' ').next().unwrap_or("");
-    let d: f64 = number.parse().unwrap_or_else(|e| panic!("{e}: {err}"));
-    assert!((d - want).abs() < 0.01, "{d} vs {want}: {err}");
+    let number = flat[..at].rsplit(' ').next().unwrap_or("");
+    number.parse().unwrap_or_else(|e| panic!("{e}: {err}"))
 }
 
 #[test]
