@@ -393,3 +393,48 @@ impl Lowerer {
         self.end_kinds(sink)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::parse::clsf::parse_str;
+    use crate::toolpath::{LowerOptions, MotionKind, lower_records};
+
+    fn kinds(text: &str) -> Vec<MotionKind> {
+        let recs = parse_str(text).unwrap_or_else(|e| panic!("{e}"));
+        let p = lower_records(&recs, LowerOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        p.paths[0].postures.iter().map(|q| q.motion).collect()
+    }
+
+    #[test]
+    fn colours_give_the_kinds_and_211_is_decided_by_what_follows() {
+        use MotionKind::*;
+        let k = kinds(
+            "TOOL PATH/A,TOOL,T\nPAINT/COLOR,186\nRAPID\nGOTO/0,0,50\nPAINT/COLOR,211\nRAPID\nGOTO/0,0,5\n\
+             PAINT/COLOR,42\nFEDRAT/MMPM,100\nGOTO/0,0,0\nPAINT/COLOR,31\nGOTO/5,0,0\nPAINT/COLOR,36\nGOTO/5,1,0\n\
+             PAINT/COLOR,37\nGOTO/5,1,5\nRAPID\nGOTO/5,1,9\nPAINT/COLOR,211\nRAPID\nGOTO/5,1,50\n\
+             PAINT/COLOR,186\nRAPID\nGOTO/0,0,50\nEND-OF-PATH\n",
+        );
+        assert_eq!(
+            k,
+            [
+                Rapid, Approach, Engage, Cut, Cut, Retract, Departure, Departure, Rapid
+            ]
+        );
+    }
+
+    #[test]
+    fn without_colours_slower_ends_of_a_stretch_are_engage_and_retract() {
+        use MotionKind::*;
+        let k = kinds(
+            "TOOL PATH/A,TOOL,T\nRAPID\nGOTO/0,0,5\nFEDRAT/MMPM,100\nGOTO/0,0,1\nGOTO/0,0,0\nFEDRAT/MMPM,900\n\
+             GOTO/5,0,0\nFEDRAT/MMPM,400\nGOTO/6,0,0\nFEDRAT/MMPM,900\nGOTO/9,0,0\nFEDRAT/MMPM,100\nGOTO/9,0,3\n\
+             RAPID\nGOTO/9,0,9\nGOTO/20,0,0\nEND-OF-PATH\n",
+        );
+        // 400 between two 900 stretches is a slower cut; the lone feed after the last
+        // rapid has nothing to compare with: a cut.
+        assert_eq!(
+            k,
+            [Rapid, Engage, Engage, Cut, Cut, Cut, Retract, Rapid, Cut]
+        );
+    }
+}
