@@ -47,6 +47,11 @@ pub fn moves_json<'a>(
     for p in postures {
         counts.add(p.motion);
     }
+    counts_json(&counts)
+}
+
+/// [`moves_json`] of counts already made (a path's `stats.moves`).
+pub fn counts_json(counts: &crest::toolpath::MoveCounts) -> serde_json::Value {
     let mut m = serde_json::Map::new();
     for k in crest::toolpath::MotionKind::MOVES {
         m.insert(k.name().to_string(), counts.postures(k).into());

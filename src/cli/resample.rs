@@ -207,6 +207,8 @@ struct PathReport {
     name: String,
     tool: String,
     postures: usize,
+    /// Postures per move kind, as the file gives them.
+    moves: crest::toolpath::MoveCounts,
     stats: Stats,
 }
 
@@ -265,6 +267,7 @@ fn resample_in_memory(
                     name: path.name.clone(),
                     tool: path.tool_name.clone(),
                     postures: path.postures.len(),
+                    moves: path.stats.moves,
                     stats,
                 }),
                 Err(e) => {
@@ -559,6 +562,7 @@ fn stream_pass(
                 name: p.name.clone(),
                 tool: p.tool_name.clone(),
                 postures: p.stats.postures,
+                moves: p.stats.moves,
                 stats,
             });
         }
@@ -610,6 +614,7 @@ fn report(
                     "name": p.name,
                     "tool": p.tool,
                     "postures": p.postures,
+                    "moves": super::reading::counts_json(&p.moves),
                     "stats": stats,
                 })
             })
@@ -622,6 +627,7 @@ fn report(
             "teeth": args.teeth,
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
+            "moves_resampled": crest::toolpath::Moves::from(args.moves).name(),
             "machine": args.machine.as_ref().map(|m| m.display().to_string()),
             "feed": if predicted { "predicted" } else { "programmed" },
             "samples": samples,
