@@ -139,6 +139,18 @@ fn inspect_counts_the_colour_groups_of_a_synthetic_export() {
     // end at x = 0).
     let cut = v["paths"][0]["cutting_length_mm"].as_f64().unwrap_or(0.0);
     assert!((cut - 20.0 * n as f64).abs() < 1e-6, "{cut}");
+    // `crest convert` to CLSF writes the colours back: the kinds read back the same.
+    let back = dir.path().join("back.cls");
+    crest()
+        .arg("convert")
+        .arg(&file)
+        .arg("-o")
+        .arg(&back)
+        .assert()
+        .success();
+    let w = inspect(&back, &[]);
+    assert_eq!(counts(&w["moves"]), want);
+    assert_eq!(counts(&w["paths"][0]["move_groups"]), groups);
 }
 
 #[test]
@@ -382,4 +394,42 @@ fn the_large_nx_export_counts_428_of_each_group() {
             "{region}"
         );
     }
+}
+
+#[test]
+fn contact_derives_the_cut_moves_only_unless_all() {
+    let dir = tempdir();
+    let file = write(dir.path(), "nx.cls", export(true));
+    let run = |moves: &str| {
+        output_json(
+            &crest()
+                .arg("contact")
+                .arg(&file)
+                .args(["--teeth", "2", "--json", "--moves", moves, "-o"])
+                .arg(dir.path().join(format!("{moves}.csv")))
+                .output()
+                .unwrap_or_else(|e| panic!("{e}")),
+        )
+    };
+    let cut = run("cut");
+    // The cutting postures: 10 cut GOTOs per pass; with every feed move, the 2 × 12 arc
+    // GOTOs of each pass too.
+    assert_eq!(
+        cut["postures"].as_u64(),
+        Some((PASSES * CUT_GOTOS) as u64),
+        "{cut}"
+    );
+    assert_eq!(cut["moves"], "cut");
+    assert_eq!(
+        cut["move_kinds"]["engage"].as_u64(),
+        Some((PASSES * ARC_GOTOS) as u64)
+    );
+    let all = run("all");
+    assert_eq!(
+        all["postures"].as_u64(),
+        Some((PASSES * (CUT_GOTOS + 2 * ARC_GOTOS)) as u64),
+        "{all}"
+    );
+    // The kinds written back are the file's, whichever moves got contacts.
+    assert_eq!(all["move_kinds"], cut["move_kinds"]);
 }
