@@ -383,7 +383,7 @@ fn print_text(r: &InspectReport, out: &mut dyn Write) -> std::io::Result<()> {
         for g in regions {
             writeln!(
                 out,
-                "region {} (path {}): {} passes, stepover {}, cut {:.1} mm at {} ",
+                "region {} (path {}): {} passes, stepover {}, cut {:.1} mm at {}",
                 g.id,
                 g.path,
                 g.passes,
