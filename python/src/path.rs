@@ -54,16 +54,7 @@ pub(crate) fn read_path<'py>(
             feed[i] = q.feed_mm_min.unwrap_or(f64::NAN);
             rpm[i] = q.spindle_rpm.unwrap_or(f64::NAN);
             line[i] = q.line;
-            motion.push(
-                match q.motion {
-                    crest::toolpath::MotionKind::From => "from",
-                    crest::toolpath::MotionKind::Rapid => "rapid",
-                    crest::toolpath::MotionKind::Cut => "cut",
-                    crest::toolpath::MotionKind::Cycle => "cycle",
-                    crest::toolpath::MotionKind::GoHome => "gohome",
-                }
-                .to_string(),
-            );
+            motion.push(q.motion.name().to_string());
         }
         let d = PyDict::new(py);
         d.set_item("name", &p.name)?;

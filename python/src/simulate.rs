@@ -142,6 +142,7 @@ pub(crate) fn request_of(
         grid,
         ap_mm,
         path,
+        moves: Default::default(),
     };
     Ok(req)
 }

@@ -41,6 +41,10 @@ pub struct Args {
     /// (x,y,z,i,j,k,cx,cy,cz,nx,ny,nz; contact columns empty where there is none).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
+    /// Which moves get contact data: `cut` (default: the cutting passes) or `all` (every
+    /// feed move, engage and retract too).
+    #[arg(long, value_enum, default_value = "cut")]
+    pub moves: super::reading::MovesArg,
     /// Print one JSON object: postures, with_contact, max_gouge_um, max_gap_um, ….
     #[arg(long)]
     pub json: bool,
@@ -55,6 +59,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         teeth: args.teeth,
         absolute: args.absolute,
         tolerance_um: args.tolerance_um,
+        moves: args.moves.into(),
     };
     let run = contact(&req)?;
     for w in &run.warnings {
@@ -103,6 +108,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "max_gouge_um": run.max_gouge_um,
             "max_gap_um": run.max_gap_um,
             "tolerance_um": args.tolerance_um,
+            "moves": crest::toolpath::Moves::from(args.moves).name(),
+            "move_kinds": super::reading::moves_json(
+                run.program.paths.iter().flat_map(|t| t.postures.iter())
+            ),
             "warnings": run.warnings,
         });
         outln!("{j}");

@@ -1,14 +1,17 @@
 //! `crest inspect`: summarise the tool paths of a CLSF (or APT), contact12 or G-code file.
 //!
 //! Per tool path: name, tool (from TLDATA), record counts (GOTO, RAPID, CIRCLE, NURBS),
-//! path and cutting lengths, feeds and spindle speeds seen, postures with contact data;
-//! then the warnings. Reading streams, so huge files summarise in constant memory.
+//! path and cutting lengths, feeds and spindle speeds seen, postures with contact data,
+//! postures and groups of each move kind; with `--regions` the finishing regions
+//! ([`crest::toolpath::regions`]); then the warnings. Reading streams, so huge files
+//! summarise in constant memory (`--regions` keeps the postures).
 
 use super::Outcome;
 use super::reading::{RtcpArg, read_options};
 use crest::io::toolpath::{detect, stream_program};
-use crest::toolpath::{LowerOptions, MotionKind, Posture, Toolpath};
+use crest::toolpath::{LowerOptions, MotionKind, MoveCounts, Posture, Toolpath};
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -27,6 +30,47 @@ pub struct Args {
     /// are the tool tip) or `off` (X Y Z are joint positions).
     #[arg(long, value_enum, default_value = "auto")]
     pub rtcp: RtcpArg,
+    /// Also list the finishing regions (groups of neighbouring cut passes): extents,
+    /// passes, stepover, tool-axis range, feeds, cutting length and a centre point for
+    /// `simulate --patch-near`.
+    #[arg(long)]
+    pub regions: bool,
+}
+
+/// Postures per move kind: rapid, approach, engage, cut, retract, departure (in path
+/// order; JSON object keys in that order are not guaranteed, the names are).
+pub type KindCounts = BTreeMap<&'static str, usize>;
+
+fn kind_counts(m: &MoveCounts, groups: bool) -> KindCounts {
+    MotionKind::MOVES
+        .iter()
+        .map(|k| (k.name(), if groups { m.groups(*k) } else { m.postures(*k) }))
+        .collect()
+}
+
+/// One finishing region at the interface (mm, degrees, mm/min).
+#[derive(Debug, Serialize)]
+pub struct RegionSummary {
+    /// 1-based, over the whole file.
+    pub id: usize,
+    /// 1-based tool path.
+    pub path: usize,
+    /// Lower corner of the extents, mm (the file's coordinates).
+    pub min_mm: [f64; 3],
+    /// Upper corner, mm.
+    pub max_mm: [f64; 3],
+    /// Cut passes.
+    pub passes: usize,
+    /// Median stepover across the feed, mm (null without a neighbouring pass).
+    pub stepover_mm: Option<f64>,
+    /// Smallest and largest angle of the tool axis to the path's mean axis, degrees.
+    pub axis_deg: [f64; 2],
+    /// Programmed feeds of the cut moves, mm/min.
+    pub feeds_mm_min: Vec<f64>,
+    /// Length of the cut moves, mm.
+    pub cut_length_mm: f64,
+    /// A point on the cut (middle pass, half its length), mm: for `--patch-near`.
+    pub centre_mm: [f64; 3],
 }
 
 /// TLDATA of a path, at the interface (mm, degrees).
@@ -74,8 +118,12 @@ pub struct PathSummary {
     pub contact_postures: usize,
     /// Postures whose normal was derived from the cutter.
     pub derived_normals: usize,
-    /// Cutting postures.
+    /// Cutting postures (cut moves).
     pub cutting_postures: usize,
+    /// Postures per move kind.
+    pub moves: KindCounts,
+    /// Groups of consecutive postures per move kind.
+    pub move_groups: KindCounts,
     /// Length of all moves, mm.
     pub length_mm: f64,
     /// Length of cutting moves, mm.
@@ -112,6 +160,11 @@ pub struct InspectReport {
     pub format: &'static str,
     /// Tool paths in file order.
     pub paths: Vec<PathSummary>,
+    /// Postures per move kind over all tool paths.
+    pub moves: KindCounts,
+    /// Finishing regions (with `--regions`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub regions: Option<Vec<RegionSummary>>,
     /// Warnings in file order.
     pub warnings: Vec<WarningSummary>,
 }
@@ -128,6 +181,7 @@ pub fn summarise(
     file: &std::path::Path,
     machine: Option<&std::path::Path>,
     rtcp: RtcpArg,
+    regions: bool,
 ) -> miette::Result<InspectReport> {
     let kind = detect(file)?;
     let mut counts: Vec<Counts> = Vec::new();
@@ -145,7 +199,7 @@ pub fn summarise(
         Ok(())
     };
     let lower = LowerOptions {
-        keep_postures: false,
+        keep_postures: regions,
         ..Default::default()
     };
     let opts = read_options(kind, lower, machine, rtcp)?;
@@ -187,6 +241,8 @@ pub fn summarise(
                 contact_postures: c.contact,
                 derived_normals: c.derived,
                 cutting_postures: c.cutting,
+                moves: kind_counts(&t.stats.moves, false),
+                move_groups: kind_counts(&t.stats.moves, true),
                 length_mm: round(t.stats.length_mm, 4),
                 cutting_length_mm: round(t.stats.cutting_length_mm, 4),
                 feeds_mm_min: t.stats.feeds_mm_min.iter().map(|v| round(*v, 4)).collect(),
@@ -197,10 +253,42 @@ pub fn summarise(
             }
         })
         .collect();
+    let mut moves = KindCounts::new();
+    for t in &program.paths {
+        for (k, n) in kind_counts(&t.stats.moves, false) {
+            *moves.entry(k).or_insert(0) += n;
+        }
+    }
+    let regions = regions.then(|| {
+        let mut out = Vec::new();
+        for (pi, t) in program.paths.iter().enumerate() {
+            for r in crest::toolpath::regions::regions(t) {
+                let p3 = |p: &crest::math::Point3| [round(p.x, 4), round(p.y, 4), round(p.z, 4)];
+                out.push(RegionSummary {
+                    id: out.len() + 1,
+                    path: pi + 1,
+                    min_mm: p3(&r.min),
+                    max_mm: p3(&r.max),
+                    passes: r.passes,
+                    stepover_mm: r.stepover_mm.map(|v| round(v, 4)),
+                    axis_deg: [
+                        round(r.axis_rad.0.to_degrees(), 3),
+                        round(r.axis_rad.1.to_degrees(), 3),
+                    ],
+                    feeds_mm_min: r.feeds_mm_min.iter().map(|v| round(*v, 4)).collect(),
+                    cut_length_mm: round(r.cut_length_mm, 4),
+                    centre_mm: p3(&r.centre),
+                });
+            }
+        }
+        out
+    });
     Ok(InspectReport {
         file: file.display().to_string(),
         format: kind.name(),
         paths,
+        moves,
+        regions,
         warnings: program
             .warnings
             .into_iter()
@@ -278,8 +366,50 @@ fn print_text(r: &InspectReport, out: &mut dyn Write) -> std::io::Result<()> {
             "  length: {:.4} mm, cutting {:.4} mm",
             p.length_mm, p.cutting_length_mm
         )?;
+        let kinds: Vec<String> = MotionKind::MOVES
+            .iter()
+            .map(|k| {
+                let n = p.moves.get(k.name()).copied().unwrap_or(0);
+                let g = p.move_groups.get(k.name()).copied().unwrap_or(0);
+                format!("{n} {} ({g} groups)", k.name())
+            })
+            .collect();
+        writeln!(out, "  moves: {}", kinds.join(", "))?;
         writeln!(out, "  feeds: {}", list(&p.feeds_mm_min, "mm/min"))?;
         writeln!(out, "  spindle: {}", list(&p.spindles_rpm, "rpm"))?;
+    }
+    if let Some(regions) = &r.regions {
+        writeln!(out, "{} finishing region(s):", regions.len())?;
+        for g in regions {
+            writeln!(
+                out,
+                "region {} (path {}): {} passes, stepover {}, cut {:.1} mm at {}",
+                g.id,
+                g.path,
+                g.passes,
+                g.stepover_mm
+                    .map_or_else(|| "-".to_string(), |v| format!("{v:.4} mm")),
+                g.cut_length_mm,
+                list(&g.feeds_mm_min, "mm/min")
+            )?;
+            writeln!(
+                out,
+                "  x {:.4} … {:.4}, y {:.4} … {:.4}, z {:.4} … {:.4} mm; tool axis {:.2}° … {:.2}° from the mean",
+                g.min_mm[0],
+                g.max_mm[0],
+                g.min_mm[1],
+                g.max_mm[1],
+                g.min_mm[2],
+                g.max_mm[2],
+                g.axis_deg[0],
+                g.axis_deg[1]
+            )?;
+            writeln!(
+                out,
+                "  centre {},{},{} (for --patch-near)",
+                g.centre_mm[0], g.centre_mm[1], g.centre_mm[2]
+            )?;
+        }
     }
     if r.warnings.is_empty() {
         writeln!(out, "no warnings")?;
@@ -298,7 +428,7 @@ fn print_text(r: &InspectReport, out: &mut dyn Write) -> std::io::Result<()> {
 
 /// Run `crest inspect`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
-    let report = summarise(&args.file, args.machine.as_deref(), args.rtcp)?;
+    let report = summarise(&args.file, args.machine.as_deref(), args.rtcp, args.regions)?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let written = if args.json {

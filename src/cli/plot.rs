@@ -468,7 +468,9 @@ fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
 
 fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
     check_format(&a.common.output)?;
-    let program = crest::io::toolpath::read_program(&a.path)?;
+    // The feed along every feed move (engage and retract too).
+    let mut program = crest::io::toolpath::read_program(&a.path)?;
+    crest::toolpath::Moves::All.apply(&mut program);
     let Some(tp) = program.paths.iter().find(|p| !p.cutting_runs().is_empty()) else {
         return Err(miette!("{}: no cutting moves", a.path.display()));
     };

@@ -18,6 +18,47 @@ pub enum RtcpArg {
     Off,
 }
 
+/// The `--moves` values: which moves cut.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum MovesArg {
+    /// Only the cut moves (NX colours 31 and 36, or every feed move nothing marks
+    /// otherwise).
+    #[default]
+    Cut,
+    /// Every feed move: engage and retract moves too.
+    All,
+}
+
+impl From<MovesArg> for crest::toolpath::Moves {
+    fn from(m: MovesArg) -> Self {
+        match m {
+            MovesArg::Cut => crest::toolpath::Moves::Cut,
+            MovesArg::All => crest::toolpath::Moves::All,
+        }
+    }
+}
+
+/// Postures per move kind as JSON: `{"rapid": n, "approach": n, "engage": n, "cut": n,
+/// "retract": n, "departure": n}`.
+pub fn moves_json<'a>(
+    postures: impl IntoIterator<Item = &'a crest::toolpath::Posture>,
+) -> serde_json::Value {
+    let mut counts = crest::toolpath::MoveCounts::default();
+    for p in postures {
+        counts.add(p.motion);
+    }
+    counts_json(&counts)
+}
+
+/// [`moves_json`] of counts already made (a path's `stats.moves`).
+pub fn counts_json(counts: &crest::toolpath::MoveCounts) -> serde_json::Value {
+    let mut m = serde_json::Map::new();
+    for k in crest::toolpath::MotionKind::MOVES {
+        m.insert(k.name().to_string(), counts.postures(k).into());
+    }
+    serde_json::Value::Object(m)
+}
+
 impl From<RtcpArg> for crest::nc::Rtcp {
     fn from(r: RtcpArg) -> Self {
         match r {

@@ -91,6 +91,10 @@ pub struct Args {
     /// Resample only this tool path (1-based, in file order).
     #[arg(long)]
     pub path: Option<usize>,
+    /// Which moves are resampled: `cut` (default: the cutting passes) or `all` (every feed
+    /// move, engage and retract too).
+    #[arg(long, value_enum, default_value = "cut")]
+    pub moves: super::reading::MovesArg,
     /// Output CSV.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
@@ -168,6 +172,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         &args.file,
         read.clone(),
         args.path.map(|n| n.saturating_sub(1)),
+        args.moves.into(),
     )?;
     let rpm = args.rpm.or(if spindle_from_path {
         extent.spindle_rpm
@@ -202,6 +207,8 @@ struct PathReport {
     name: String,
     tool: String,
     postures: usize,
+    /// Postures per move kind, as the file gives them.
+    moves: crest::toolpath::MoveCounts,
     stats: Stats,
 }
 
@@ -213,7 +220,8 @@ fn resample_in_memory(
     kind: InputKind,
     read: &ReadOptions,
 ) -> miette::Result<(Vec<PathReport>, bool)> {
-    let program = crest::io::toolpath::read_program_with(&args.file, read.clone())?;
+    let mut program = crest::io::toolpath::read_program_with(&args.file, read.clone())?;
+    crest::toolpath::Moves::from(args.moves).apply(&mut program);
     let selected: Vec<usize> = match args.path {
         Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
         Some(n) => {
@@ -259,6 +267,7 @@ fn resample_in_memory(
                     name: path.name.clone(),
                     tool: path.tool_name.clone(),
                     postures: path.postures.len(),
+                    moves: path.stats.moves,
                     stats,
                 }),
                 Err(e) => {
@@ -349,6 +358,7 @@ fn stream_pass(
     pass: &Pass<'_>,
 ) -> miette::Result<PassResult> {
     let file = &args.file;
+    let moves = crest::toolpath::Moves::from(args.moves);
     let kind = detect(file)?;
     let input =
         File::open(file).map_err(|e| miette::miette!("{}: cannot open: {e}", file.display()))?;
@@ -429,6 +439,16 @@ fn stream_pass(
             }
             let Some(cur) = current.as_mut() else {
                 return Ok(());
+            };
+            // `--moves all`: every feed move is resampled as a cut move.
+            let relabelled;
+            let p = if moves.cuts(p.motion) && p.motion != crest::toolpath::MotionKind::Cut {
+                let mut q = p.clone();
+                moves.relabel(&mut q);
+                relabelled = q;
+                &relabelled
+            } else {
+                p
             };
             if let Some(scan) = cur.scan.as_mut() {
                 scan.push(p);
@@ -542,6 +562,7 @@ fn stream_pass(
                 name: p.name.clone(),
                 tool: p.tool_name.clone(),
                 postures: p.stats.postures,
+                moves: p.stats.moves,
                 stats,
             });
         }
@@ -593,6 +614,7 @@ fn report(
                     "name": p.name,
                     "tool": p.tool,
                     "postures": p.postures,
+                    "moves": super::reading::counts_json(&p.moves),
                     "stats": stats,
                 })
             })
@@ -605,6 +627,7 @@ fn report(
             "teeth": args.teeth,
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
+            "moves_resampled": crest::toolpath::Moves::from(args.moves).name(),
             "machine": args.machine.as_ref().map(|m| m.display().to_string()),
             "feed": if predicted { "predicted" } else { "programmed" },
             "samples": samples,

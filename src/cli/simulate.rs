@@ -160,6 +160,11 @@ pub struct Args {
     /// Simulate only this tool path (1-based, in file order); default: all.
     #[arg(long, value_name = "N")]
     pub path: Option<usize>,
+    /// Which moves cut: `cut` (default: only the cutting passes define the surface and are
+    /// simulated; a patch in the air is refused) or `all` (every feed move, engage and
+    /// retract too, as before crest told them apart).
+    #[arg(long, value_enum, default_value = "cut")]
+    pub moves: super::reading::MovesArg,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -293,6 +298,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         grid,
         ap_mm: args.ap_mm,
         path: args.path,
+        moves: args.moves.into(),
     };
     let progress = super::progress::Phases::new();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -409,8 +415,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             elapsed
         );
     }
+    for w in &run.failed_checks {
+        eprintln!("crest simulate: {w}");
+    }
     if let Some(w) = warning {
         eprintln!("crest simulate: {w}");
+        return Ok(Outcome::CheckFailed);
+    }
+    if !run.failed_checks.is_empty() {
         return Ok(Outcome::CheckFailed);
     }
     Ok(Outcome::Ok)
@@ -489,6 +501,9 @@ fn summary(
         "grid_um_default": args.grid_um.is_none(),
         "warning": warning,
         "warnings": run.warnings,
+        "moves": run.moves.name(),
+        "patch_distance_mm": run.patch_distance_mm.map(|d| num(d.0)),
+        "patch_tolerance_mm": run.patch_distance_mm.map(|d| num(d.1)),
         "tool": run.tool_source,
         "reference": run.reference.name(),
         "samples": run.samples,

@@ -322,72 +322,86 @@ fn stream_as<const WRITTEN: bool>(
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    // With `WRITTEN`, the last two GOTO lines as written (a posture leaves the lowering
+    // With `WRITTEN`, the last GOTO lines as written (a posture leaves the lowering
     // when the next record comes, so its line is the one before the current one); nothing
     // is kept otherwise, and no posture is handed on with a line.
-    let mut kept = [Written::default(), Written::default()];
-    match kind {
-        InputKind::Clsf => {
-            let mut k = 0;
-            let mut records = ClsfReader::new(reader);
-            loop {
-                // The bulk of a file, GOTO lines, from the reader's buffer to the lowering
-                // without a `Record` between them.
+    // The lowering may hold postures back for their move kind (up to a feed segment's
+    // `FEED_HOLD_LIMIT`): the ring keeps that many lines more.
+    let mut kept = vec![Written::default(); KEPT];
+    let read = || -> miette::Result<()> {
+        match kind {
+            InputKind::Clsf => {
+                let mut k = 0;
+                let mut records = ClsfReader::new(reader);
                 loop {
-                    let next = if WRITTEN {
-                        records.next_goto_written(&mut kept[k])
-                    } else {
-                        records.next_goto()
-                    };
-                    let Some((n, line)) = next.map_err(|e| parse_diagnostic(path, e))? else {
+                    // The bulk of a file, GOTO lines, from the reader's buffer to the lowering
+                    // without a `Record` between them.
+                    loop {
+                        let next = if WRITTEN {
+                            records.next_goto_written(&mut kept[k])
+                        } else {
+                            records.next_goto()
+                        };
+                        let Some((n, line)) = next.map_err(|e| parse_diagnostic(path, e))? else {
+                            break;
+                        };
+                        low.push_goto(&n, line, &mut |t, p| sink(t, p, kept_for(&kept, p)))
+                            .map_err(|e| lower_diagnostic(path, e))?;
+                        k = (k + 1) % KEPT;
+                    }
+                    let Some(rec) = records.next() else {
                         break;
                     };
-                    low.push_goto(&n, line, &mut |t, p| sink(t, p, kept_for(&kept, p)))
+                    let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
+                    low.push(&rec, &mut |t, p| sink(t, p, kept_for(&kept, p)))
                         .map_err(|e| lower_diagnostic(path, e))?;
-                    k ^= 1;
                 }
-                let Some(rec) = records.next() else {
-                    break;
+            }
+            InputKind::Gcode => {
+                let Some(machine) = opts.machine.as_ref() else {
+                    return Err(miette::miette!(
+                        "{}: G-code is read through the machine's kinematics: give --machine MACHINE.toml",
+                        path.display()
+                    ));
                 };
-                let rec = rec.map_err(|e| parse_diagnostic(path, e))?;
-                low.push(&rec, &mut |t, p| sink(t, p, kept_for(&kept, p)))
+                let mut nc = NcReader::new(machine, opts.rtcp, &stem())
+                    .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
+                for block in GcodeReader::new(reader) {
+                    let block = block.map_err(|e| parse_diagnostic(path, e))?;
+                    nc.push(&block, &mut low, &mut |t, p| sink(t, p, None))
+                        .map_err(|e| lower_diagnostic(path, e))?;
+                }
+                nc.finish(&mut low, &mut |t, p| sink(t, p, None))
                     .map_err(|e| lower_diagnostic(path, e))?;
             }
-        }
-        InputKind::Gcode => {
-            let Some(machine) = opts.machine.as_ref() else {
-                return Err(miette::miette!(
-                    "{}: G-code is read through the machine's kinematics: give --machine MACHINE.toml",
-                    path.display()
-                ));
-            };
-            let mut nc = NcReader::new(machine, opts.rtcp, &stem())
-                .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
-            for block in GcodeReader::new(reader) {
-                let block = block.map_err(|e| parse_diagnostic(path, e))?;
-                nc.push(&block, &mut low, &mut |t, p| sink(t, p, None))
+            InputKind::Contact12 => {
+                let name = stem();
+                low.begin_path(&name, "", &mut |t, p| sink(t, p, None))
                     .map_err(|e| lower_diagnostic(path, e))?;
-            }
-            nc.finish(&mut low, &mut |t, p| sink(t, p, None))
-                .map_err(|e| lower_diagnostic(path, e))?;
-        }
-        InputKind::Contact12 => {
-            let name = stem();
-            low.begin_path(&name, "", &mut |t, p| sink(t, p, None))
-                .map_err(|e| lower_diagnostic(path, e))?;
-            for row in Contact12Reader::new(reader) {
-                let row = row.map_err(|e| parse_diagnostic(path, e))?;
-                low.push_contact12(&row, &mut |t, p| sink(t, p, None))
-                    .map_err(|e| lower_diagnostic(path, e))?;
+                for row in Contact12Reader::new(reader) {
+                    let row = row.map_err(|e| parse_diagnostic(path, e))?;
+                    low.push_contact12(&row, &mut |t, p| sink(t, p, None))
+                        .map_err(|e| lower_diagnostic(path, e))?;
+                }
             }
         }
+        Ok(())
+    };
+    if let Err(e) = read() {
+        // The postures held back for their kind (`toolpath::lower`'s move kinds) go out as
+        // they stand, so that a stream into a FIFO gets every row before the bad line.
+        let _ = low.release_held(&mut |t, p| sink(t, p, None));
+        return Err(e);
     }
     low.finish(&mut |t, p| sink(t, p, kept_for(&kept, p)))
         .map_err(|e| lower_diagnostic(path, e))
 }
 
+/// GOTO lines kept as written while their postures may still be in the lowering.
+const KEPT: usize = crate::toolpath::lower::FEED_HOLD_LIMIT + 2;
+
 /// The kept line of `p`, if it is one of them.
-fn kept_for<'k>(kept: &'k [Written; 2], p: &Posture) -> Option<&'k Written> {
+fn kept_for<'k>(kept: &'k [Written], p: &Posture) -> Option<&'k Written> {
     kept.iter().find(|w| w.line != 0 && w.line == p.line)
 }
 

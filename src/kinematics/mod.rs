@@ -331,7 +331,7 @@ pub fn cl_speed(machine: &Machine, q: &Joints, g: &Joints, path_speed: f64) -> f
 /// moves without a feed are limited by the axes only), exact stops where rapid and feed
 /// motion meet and at hole positions.
 pub fn plan_input(path: &Toolpath) -> Vec<PlanInput> {
-    let is_feed = |m: MotionKind| matches!(m, MotionKind::Cut | MotionKind::Cycle);
+    let is_feed = |m: MotionKind| m.is_feed() || m == MotionKind::Cycle;
     let ps = &path.postures;
     ps.iter()
         .enumerate()
@@ -385,7 +385,7 @@ pub fn predict_posture_feed(
     let mut feed: Vec<f64> = plan.postures.iter().map(|p| p.feed_mm_s * 60.0).collect();
     let ps = &path.postures;
     let n = feed.len();
-    let is_feed = |m: MotionKind| matches!(m, MotionKind::Cut | MotionKind::Cycle);
+    let is_feed = |m: MotionKind| m.is_feed() || m == MotionKind::Cycle;
     for k in 0..n.saturating_sub(1) {
         if !is_feed(ps[k + 1].motion) {
             continue; // rapids are not resampled

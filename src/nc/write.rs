@@ -136,7 +136,11 @@ impl<'m> GcodeWriter<'m> {
         }
         let rapid = matches!(
             p.motion,
-            MotionKind::Rapid | MotionKind::From | MotionKind::GoHome
+            MotionKind::Rapid
+                | MotionKind::Approach
+                | MotionKind::Departure
+                | MotionKind::From
+                | MotionKind::GoHome
         );
         if let (Some(arc), Some((tip0, axis0, q0)), false) = (&p.arc, self.prev, rapid) {
             if let Some((plane, cw, centre_prog)) = self.arc_in_plane(arc, &tip0, &axis0, &q0, p) {
@@ -262,7 +266,11 @@ impl<'m> GcodeWriter<'m> {
     ) -> io::Result<()> {
         let rapid = matches!(
             p.motion,
-            MotionKind::Rapid | MotionKind::From | MotionKind::GoHome
+            MotionKind::Rapid
+                | MotionKind::Approach
+                | MotionKind::Departure
+                | MotionKind::From
+                | MotionKind::GoHome
         ) || self.prev.is_none();
         let l = &mut self.line;
         l.clear();

@@ -6,7 +6,7 @@
 use crate::io::mesh::read_part;
 use crate::math::{Point3, Vec3};
 use crate::part::contact::touch_all;
-use crate::toolpath::{Contact, LowerOptions, MotionKind, Program};
+use crate::toolpath::{Contact, LowerOptions, MotionKind, Moves, Program};
 use std::path::{Path, PathBuf};
 
 /// Default distance within which a cutter touches the part, µm.
@@ -27,6 +27,8 @@ pub struct ContactRequest {
     pub absolute: bool,
     /// A cutting posture whose cutter is farther than this from the part gets no contact, µm.
     pub tolerance_um: f64,
+    /// Which moves cut (get contact data).
+    pub moves: Moves,
 }
 
 /// The path with contact data, and what was found.
@@ -63,6 +65,14 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
         ..Default::default()
     };
     let mut program = crate::io::toolpath::read_program_with(&req.file, lower)?;
+    // `--moves all`: every feed move cuts while the contacts are found; the kinds are
+    // given back before the path is written.
+    let kinds: Vec<Vec<MotionKind>> = program
+        .paths
+        .iter()
+        .map(|p| p.postures.iter().map(|q| q.motion).collect())
+        .collect();
+    req.moves.apply(&mut program);
     let (cutter, tool_source, mut warnings) = super::inputs::resolve_cutter(
         req.tool
             .clone()
@@ -141,6 +151,11 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
             "derived from the path"
         }
     };
+    for (path, k) in program.paths.iter_mut().zip(&kinds) {
+        for (p, m) in path.postures.iter_mut().zip(k) {
+            p.motion = *m;
+        }
+    }
     Ok(ContactRun {
         program,
         postures,

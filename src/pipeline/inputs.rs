@@ -265,13 +265,14 @@ pub fn resolve_cutter(
 
 /// The extent of the tool paths of `file` for budgets (one pass over the file, constant
 /// memory): cutting length, cutting runs and the range of programmed feeds, of the path
-/// `only` (0-based) or of all.
+/// `only` (0-based) or of all, with the moves `moves` selects as cutting.
 pub fn path_extent(
     file: &Path,
     read: impl Into<crate::io::toolpath::ReadOptions>,
     only: Option<usize>,
+    moves: crate::toolpath::Moves,
 ) -> miette::Result<crate::resample::PathExtent> {
-    use crate::toolpath::{MotionKind, Posture, Toolpath};
+    use crate::toolpath::{Posture, Toolpath};
     let mut runs = 0usize;
     let mut in_run = false;
     let mut index: Option<usize> = None;
@@ -285,7 +286,7 @@ pub fn path_extent(
         if only.is_some() && index != only {
             return Ok(());
         }
-        let cut = p.motion == MotionKind::Cut;
+        let cut = moves.cuts(p.motion);
         if cut && !in_run {
             runs += 1;
         }
@@ -301,7 +302,10 @@ pub fn path_extent(
         if only.is_some_and(|o| o != i) {
             continue;
         }
-        extent.cutting_mm += p.stats.cutting_length_mm;
+        extent.cutting_mm += match moves {
+            crate::toolpath::Moves::Cut => p.stats.cutting_length_mm,
+            crate::toolpath::Moves::All => p.stats.feed_length_mm,
+        };
         if extent.spindle_rpm.is_none() {
             extent.spindle_rpm = p.stats.spindles_rpm.iter().copied().find(|n| *n > 0.0);
         }

@@ -9,6 +9,7 @@ pub use inputs::{
     ToolFileError, ToolSource, load_machine, load_process, load_tool, tool_from_text, tool_min_chip,
 };
 pub use progress::{Progress, Silent};
+pub mod air;
 pub mod contact;
 pub mod design;
 pub mod feed;

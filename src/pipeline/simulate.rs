@@ -10,7 +10,7 @@ use crate::resample::{self, Sample};
 use crate::surface::cull::{Reach, Subset};
 use crate::surface::{self, GridFrame, GridSpec, ModelKind, PartMap, Reference, Simulation};
 use crate::tool::Cutter;
-use crate::toolpath::{Contact, LowerOptions, MotionKind, Posture, Program, Toolpath};
+use crate::toolpath::{Contact, LowerOptions, MotionKind, Moves, Posture, Program, Toolpath};
 use miette::miette;
 use std::path::{Path, PathBuf};
 
@@ -142,6 +142,9 @@ pub struct SimulateRequest {
     pub ap_mm: Option<f64>,
     /// Only this tool path (1-based).
     pub path: Option<usize>,
+    /// Which moves cut (define the reference surface, are simulated, give the feed).
+    #[serde(default)]
+    pub moves: Moves,
 }
 
 /// Spindle speed, feed and feed per tooth after resolving options, process.toml and file.
@@ -206,6 +209,12 @@ pub struct SimulateRun {
     pub reference: ReferenceSource,
     /// Non-fatal findings (tool/TLDATA mismatch, degenerate mesh triangles, …).
     pub warnings: Vec<String>,
+    /// Checks that failed (also in `warnings`): the command exits 1.
+    pub failed_checks: Vec<String>,
+    /// Which moves were simulated.
+    pub moves: Moves,
+    /// Distance from the `--patch-near` point to the cut surface and its tolerance, mm.
+    pub patch_distance_mm: Option<(f64, f64)>,
     /// Samples the path gave before culling.
     pub samples_total: usize,
     /// Grid spacing used, µm (the option, or the default from the feed per tooth).
@@ -478,6 +487,8 @@ pub fn simulate_shard(
         ));
     }
     let mut warnings = Vec::new();
+    let mut failed_checks = Vec::new();
+    let mut patch_distance = None;
     let part = match &req.part {
         Some(p) => {
             progress.phase(&format!("reading {}", p.display()), "");
@@ -513,6 +524,18 @@ pub fn simulate_shard(
     let read_machine = read.machine.clone();
     progress.phase(&format!("reading {}", req.file.display()), "");
     let mut program = crate::io::toolpath::read_program_with(&req.file, read)?;
+    // The cut moves as the file gives them, before `--moves all` makes every feed move one.
+    let cut_kinds: Vec<Vec<bool>> = program
+        .paths
+        .iter()
+        .map(|p| {
+            p.postures
+                .iter()
+                .map(|q| q.motion == MotionKind::Cut)
+                .collect()
+        })
+        .collect();
+    req.moves.apply(&mut program);
     let (cutter, tool_source, tool_warnings) = super::inputs::resolve_cutter(
         req.tool.as_ref(),
         &program,
@@ -714,6 +737,29 @@ pub fn simulate_shard(
         return Err(miette!("{file}: no cutting moves to simulate"));
     }
     if samples.is_empty() {
+        if let GridRequest::PatchNear { point, .. } = req.grid {
+            let q = Point3::new(point[0], point[1], point[2]);
+            let is_cut =
+                |pi: usize, i: usize| program.paths[pi].postures[i].motion == MotionKind::Cut;
+            let far = 2.0 * cutter.radius_mm;
+            if let Some(n) = super::air::nearest(&program, &paths, &q, far, true, is_cut) {
+                return Err(miette!(
+                    "{file}: --patch-near {},{},{} is {:.3} mm from the surface the {} moves define (nearest point {:.4},{:.4},{:.4}): no cutting move comes within reach of the patch; pick a point on a finishing region (`crest inspect --regions` lists them)",
+                    point[0],
+                    point[1],
+                    point[2],
+                    n.distance_mm,
+                    if req.moves == Moves::All {
+                        "feed"
+                    } else {
+                        "cut"
+                    },
+                    n.point.x,
+                    n.point.y,
+                    n.point.z
+                ));
+            }
+        }
         return Err(miette!(
             "{file}: no cutting move comes within reach of the grid (tool radius + depth of cut {margin:.3} mm); check the coordinates and the frame (--absolute applies MSYS)"
         ));
@@ -776,6 +822,45 @@ pub fn simulate_shard(
             width_mm,
         } => {
             let q = Point3::new(point[0], point[1], point[2]);
+            let far = 2.0 * cutter.radius_mm;
+            let is_cut =
+                |pi: usize, i: usize| program.paths[pi].postures[i].motion == MotionKind::Cut;
+            // The cut surface near q: the contacts of the cut moves, else (a part) their CL points.
+            let near_cut = super::air::nearest(&program, &paths, &q, far, part.is_some(), is_cut);
+            // A point in the air (on a lead-in arc, a rapid) is refused with its distance.
+            if let Some(n) = &near_cut {
+                let tol = super::air::tolerance_mm(n, cutter.radius_mm);
+                let (d, at) = match &part {
+                    Some(p) => {
+                        let c = p.closest(&q).point;
+                        ((c - q).norm(), c)
+                    }
+                    None => (n.off_surface_mm(cutter.radius_mm), n.point),
+                };
+                patch_distance = Some((d, tol));
+                // `--moves all` simulates as crest did before (a patch reached by engage or
+                // retract moves only is then a warning, below).
+                if d > tol && req.moves == Moves::Cut {
+                    return Err(miette!(
+                        "{file}: --patch-near {},{},{} is {d:.3} mm from the surface the cut moves define (off it along its normal; nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect --regions` lists them), or simulate every feed move with --moves all",
+                        point[0],
+                        point[1],
+                        point[2],
+                        at.x,
+                        at.y,
+                        at.z,
+                        super::air::MIN_TOLERANCE_MM,
+                        super::air::STEPOVERS,
+                        n.stepover_mm.map_or_else(
+                            || format!(
+                                ", unknown: the tool radius {} mm stands for it",
+                                cutter.radius_mm
+                            ),
+                            |s| format!(" {s:.3} mm")
+                        ),
+                    ));
+                }
+            }
             let (centre, normal) = match &part {
                 Some(p) => {
                     let c = p.closest(&q);
@@ -797,6 +882,30 @@ pub fn simulate_shard(
                     b
                 }
             };
+            // With every feed move simulated: is the patch reached by cut moves at all?
+            if req.moves == Moves::All
+                && let Some((_, tol)) = patch_distance
+            {
+                let was_cut = |pi: usize, i: usize| cut_kinds[pi][i];
+                let cut_only =
+                    super::air::nearest(&program, &paths, &centre, far, part.is_some(), was_cut);
+                let away = cut_only.map_or(f64::INFINITY, |c| c.distance_mm);
+                if away > tol {
+                    let w = format!(
+                        "the patch at {:.4},{:.4},{:.4} is reached by engage and retract moves only ({}): its heights are those of lead-in or lead-out arcs, not of the finishing passes",
+                        centre.x,
+                        centre.y,
+                        centre.z,
+                        if away.is_finite() {
+                            format!("the nearest cut move's surface is {away:.3} mm away")
+                        } else {
+                            "the path has no cut move".to_string()
+                        }
+                    );
+                    warnings.push(w.clone());
+                    failed_checks.push(w);
+                }
+            }
             // The patch centre must lie within the tool radius of the cutter somewhere.
             let rc = cutter.corner_radius_mm();
             let near = samples
@@ -873,6 +982,9 @@ pub fn simulate_shard(
         tool_source,
         reference,
         warnings,
+        failed_checks,
+        moves: req.moves,
+        patch_distance_mm: patch_distance,
         samples_total,
         grid_um,
         cutter,

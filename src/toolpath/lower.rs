@@ -13,13 +13,16 @@
 mod apt;
 mod contour;
 mod goto;
+mod kinds;
+
+pub use kinds::{FEED_HOLD_LIMIT, HOLD_LIMIT};
 
 use super::geom::Spline;
 use super::{
     ArcMove, Contact, MotionKind, Posture, Program, RawRecord, ToolData, Toolpath, Warning,
 };
 use crate::math::{Point3, Vec3, normalize_or_none};
-use crate::parse::{Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+use crate::parse::{Arg, Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
 use std::collections::HashMap;
 
 /// mm per inch.
@@ -155,6 +158,8 @@ pub struct Lowerer {
     notes: Vec<RawRecord>,
     /// `TPRINT` text or `T<n>` of the last tool change: the tool name of APT paths.
     tool_label: Option<String>,
+    /// The move kinds of the open path (postures held back until their kind is known).
+    kinds: kinds::Kinds,
 }
 
 /// An orthonormal MSYS frame.
@@ -255,6 +260,7 @@ impl Lowerer {
             pending_cc: false,
             notes: Vec::new(),
             tool_label: None,
+            kinds: kinds::Kinds::default(),
         }
     }
 
@@ -378,18 +384,7 @@ impl Lowerer {
             }
         }
         self.last_out = Some(p.position);
-        let keep = self.opts.keep_postures;
-        let path = self.path.get_or_insert_with(Toolpath::default);
-        path.stats.postures += 1;
-        path.stats.length_mm += seg;
-        if p.motion == MotionKind::Cut {
-            path.stats.cutting_length_mm += seg;
-        }
-        sink(path, &p)?;
-        if keep {
-            path.postures.push(p);
-        }
-        Ok(())
+        self.emit(p, seg, sink)
     }
 
     fn close_nurbs(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
@@ -614,7 +609,17 @@ impl Lowerer {
                     self.contact_contour = false;
                 }
             }
-            RecordKind::Paint(_) | RecordKind::Cutcom(_) => {}
+            RecordKind::Paint(args) => {
+                if let [a, Arg::Num(n)] = args.as_slice()
+                    && a.is_word("COLOR")
+                    && *n >= 0.0
+                    && n.fract() == 0.0
+                    && *n <= f64::from(u32::MAX)
+                {
+                    self.paint(*n as u32, sink)?;
+                }
+            }
+            RecordKind::Cutcom(_) => {}
             RecordKind::Units(u) => self.inch = *u == LengthUnit::Inch,
             RecordKind::LoadTool { number, .. } => self.load_tool(*number, sink)?,
             RecordKind::SelectTool { .. } => {}
@@ -904,6 +909,7 @@ impl Lowerer {
 
     fn end_path(&mut self, sink: &mut PostureSink<'_>) -> Result<(), LowerError> {
         self.flush(sink)?;
+        self.end_kinds(sink)?;
         if let Some(c) = self.circle.take() {
             self.warn(
                 "circle-unused",

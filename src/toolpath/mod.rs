@@ -30,10 +30,13 @@ use crate::math::{Point3, Vec3};
 
 pub mod geom;
 pub mod lower;
+pub mod moves;
+pub mod regions;
 pub mod write;
 
 pub use geom::Spline;
 pub use lower::{LowerError, LowerOptions, Lowerer, PostureSink, derive_normal, lower_records};
+pub use moves::{MoveCounts, Moves};
 pub use write::{ClsfWriter, Contact12Writer};
 
 /// A whole file: one or more tool paths and the warnings met while reading it.
@@ -93,19 +96,90 @@ impl ToolData {
     }
 }
 
-/// How the tool reached a posture.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How the tool reached a posture: the move kind.
+///
+/// Lowering gives every move one kind (see [`lower`]'s `kinds` module for the sources: NX's
+/// `PAINT/COLOR`, `RAPID`, feed changes). Rapid, approach and departure moves are rapids;
+/// engage, cut and retract moves are feed moves; only cut moves define the reference surface
+/// and are simulated by default ([`Moves`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum MotionKind {
     /// `FROM` start point (no move into it).
     From,
-    /// A rapid move (GOTO after `RAPID`).
+    /// A rapid move (GOTO after `RAPID`) that is not part of an approach or departure.
     Rapid,
-    /// A feed move: cutting, unless engage/retract hints say otherwise.
+    /// A rapid towards the material before an engage or cut (NX colour 211 before the cut).
+    Approach,
+    /// A feed move into the material before the cut (NX colour 42, or a slower feed right
+    /// before the cutting feed).
+    Engage,
+    /// A cutting move (NX colours 31 and 36, or any feed move nothing marks otherwise).
     Cut,
+    /// A feed move out of the material after the cut (NX colour 37, or a slower feed right
+    /// after the cutting feed).
+    Retract,
+    /// A rapid away from the material after the cut (NX colour 211 after the cut).
+    Departure,
     /// A hole position inside `CYCLE/… CYCLE/OFF`.
     Cycle,
     /// `GOHOME` return point.
     GoHome,
+}
+
+impl MotionKind {
+    /// The six move kinds `inspect` counts, in path order.
+    pub const MOVES: [MotionKind; 6] = [
+        MotionKind::Rapid,
+        MotionKind::Approach,
+        MotionKind::Engage,
+        MotionKind::Cut,
+        MotionKind::Retract,
+        MotionKind::Departure,
+    ];
+
+    /// A move at the programmed feed (engage, cut, retract).
+    pub fn is_feed(self) -> bool {
+        matches!(
+            self,
+            MotionKind::Engage | MotionKind::Cut | MotionKind::Retract
+        )
+    }
+
+    /// A rapid move (rapid, approach, departure).
+    pub fn is_rapid(self) -> bool {
+        matches!(
+            self,
+            MotionKind::Rapid | MotionKind::Approach | MotionKind::Departure
+        )
+    }
+
+    /// The name at the interface (`rapid`, `approach`, `engage`, `cut`, `retract`,
+    /// `departure`, `from`, `cycle`, `gohome`).
+    pub fn name(self) -> &'static str {
+        match self {
+            MotionKind::From => "from",
+            MotionKind::Rapid => "rapid",
+            MotionKind::Approach => "approach",
+            MotionKind::Engage => "engage",
+            MotionKind::Cut => "cut",
+            MotionKind::Retract => "retract",
+            MotionKind::Departure => "departure",
+            MotionKind::Cycle => "cycle",
+            MotionKind::GoHome => "gohome",
+        }
+    }
+
+    /// NX's default display colour of the kind (`PAINT/COLOR,n`), as the writers print it.
+    pub fn nx_colour(self) -> Option<u32> {
+        match self {
+            MotionKind::From | MotionKind::Rapid | MotionKind::GoHome => Some(186),
+            MotionKind::Approach | MotionKind::Departure => Some(211),
+            MotionKind::Engage => Some(42),
+            MotionKind::Cut => Some(31),
+            MotionKind::Retract => Some(37),
+            MotionKind::Cycle => None,
+        }
+    }
 }
 
 /// The arc that leads into a posture (`CIRCLE` followed by `GOTO`).
@@ -193,6 +267,11 @@ pub struct PathStats {
     pub length_mm: f64,
     /// Length of cutting moves (`MotionKind::Cut`), mm.
     pub cutting_length_mm: f64,
+    /// Length of all feed moves (engage, cut, retract), mm: the cutting length of
+    /// `--moves all`.
+    pub feed_length_mm: f64,
+    /// Postures of each move kind, and the groups of consecutive postures of one kind.
+    pub moves: MoveCounts,
     /// Distinct programmed feeds, mm/min, in order of appearance (at most 64).
     pub feeds_mm_min: Vec<f64>,
     /// Distinct spindle speeds, rpm, in order of appearance (at most 64).

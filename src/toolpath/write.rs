@@ -552,6 +552,10 @@ pub struct ClsfWriter {
     axis_len: usize,
     cycle: bool,
     tool: Option<ToolData>,
+    /// The last `PAINT/COLOR` written in this path (colours are written once a path has
+    /// an approach, engage, retract or departure move, so the kinds read back).
+    colour: Option<u32>,
+    kind: Option<MotionKind>,
 }
 
 impl Default for ClsfWriter {
@@ -571,6 +575,8 @@ impl ClsfWriter {
             axis_len: 0,
             cycle: false,
             tool: None,
+            colour: None,
+            kind: None,
         }
     }
 
@@ -599,6 +605,8 @@ impl ClsfWriter {
         self.spindle = None;
         self.axis = None;
         self.cycle = false;
+        self.colour = None;
+        self.kind = None;
         self.tool = path.tool.clone();
         writeln!(
             out,
@@ -683,7 +691,27 @@ impl ClsfWriter {
             }
             self.spindle = p.spindle_rpm;
         }
-        if p.motion == MotionKind::Cut
+        // NX's colour of the move kind, once the path has a kind beyond rapid and cut,
+        // and again at every change of kind (two 211 groups in a row are two groups).
+        let marked = !matches!(
+            p.motion,
+            MotionKind::Rapid
+                | MotionKind::Cut
+                | MotionKind::From
+                | MotionKind::GoHome
+                | MotionKind::Cycle
+        );
+        if let Some(c) = p.motion.nx_colour()
+            && (self.colour.is_some() || marked)
+            && (self.colour != Some(c) || self.kind != Some(p.motion))
+        {
+            self.line.clear();
+            let _ = writeln!(self.line, "PAINT/COLOR,{c}");
+            out.write_all(&self.line)?;
+            self.colour = Some(c);
+        }
+        self.kind = Some(p.motion);
+        if p.motion.is_feed()
             && let Some(f) = p.feed_mm_min
             && Some(f) != self.feed
         {
@@ -694,7 +722,7 @@ impl ClsfWriter {
             out.write_all(&self.line)?;
             self.feed = Some(f);
         }
-        if p.motion == MotionKind::Rapid {
+        if p.motion.is_rapid() {
             out.write_all(b"RAPID\n")?;
         }
         let l = &mut self.line;

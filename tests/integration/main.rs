@@ -14,6 +14,7 @@ mod hostile; // hostile input and lost data (issue 18): each reproduction, -o li
 mod install; // the version, completions, man pages and plain error lines of an installed crest
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
+mod moves; // move kinds (issue 33): NX colours and feed changes, inspect counts and regions, patches in the air refused
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
 mod plot; // `crest plot`: every plot kind, titles and axis labels
 mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo

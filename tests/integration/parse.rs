@@ -91,7 +91,11 @@ fn summary(program: &Program) -> String {
         let kinds = [
             MotionKind::From,
             MotionKind::Rapid,
+            MotionKind::Approach,
+            MotionKind::Engage,
             MotionKind::Cut,
+            MotionKind::Retract,
+            MotionKind::Departure,
             MotionKind::Cycle,
             MotionKind::GoHome,
         ];

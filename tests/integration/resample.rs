@@ -683,6 +683,9 @@ fn feed_option_sets_the_clock() {
             "2",
             "--feed-mm-min",
             "600",
+            // The engage and retract arcs too (6 arcs).
+            "--moves",
+            "all",
         ],
     );
     let stats = &json["paths"][0]["stats"];
@@ -760,6 +763,9 @@ fn machine_feed_follows_the_kinematics() {
             "2",
             "--machine",
             machine.to_str().unwrap(),
+            // From the engage on, which starts from rest.
+            "--moves",
+            "all",
         ],
     );
     let stats = &json["paths"][0]["stats"];
@@ -837,7 +843,8 @@ fn run_to(file: &Path, out: &Path, extra: &[&str]) -> (serde_json::Value, String
 fn slower_engage_first_and_empty_tool_paths() {
     let dir = tempdir();
     let file = write(dir.path(), "engage.cls", CLSF);
-    let (json, csv) = run_to(&file, &dir.path().join("all.csv"), &[]);
+    // Every feed move: the slower engage is resampled too.
+    let (json, csv) = run_to(&file, &dir.path().join("all.csv"), &["--moves", "all"]);
     assert_eq!(json["paths"].as_array().unwrap().len(), 2);
     assert_eq!(json["paths"][0]["name"], "EMPTY");
     assert_eq!(json["paths"][0]["postures"], 0);
@@ -881,13 +888,27 @@ fn slower_engage_first_and_empty_tool_paths() {
     assert_eq!(rows[161][1], "0.000000000");
 
     // `--path 2` is the second tool path of the file, the first with postures.
-    let (json2, csv2) = run_to(&file, &dir.path().join("two.csv"), &["--path", "2"]);
+    let (json2, csv2) = run_to(
+        &file,
+        &dir.path().join("two.csv"),
+        &["--path", "2", "--moves", "all"],
+    );
     assert_eq!(json2["paths"][0]["index"], 2);
     assert_eq!(json2["paths"][0]["stats"], *stats);
     assert_eq!(csv2, csv);
     let (json1, csv1) = run_to(&file, &dir.path().join("one.csv"), &["--path", "1"]);
     assert_eq!(json1["samples"], 0);
     assert_eq!(csv1.lines().count(), 1);
+    // By default only the cut moves: the slower first move (an engage by its feed, the
+    // file has no colours) is left out, run 1 is the 15 mm at 1000 mm/min.
+    let (json_cut, _) = run_to(&file, &dir.path().join("cut.csv"), &[]);
+    let cut = &json_cut["paths"][1]["stats"];
+    assert_abs_diff_eq!(
+        cut["length_mm"].as_f64().unwrap(),
+        15.0 + run2,
+        epsilon = 1e-9
+    );
+    assert_eq!(cut["spindle_rpm"].as_f64(), Some(5000.0));
     // Out of range: an error, and no output file.
     let out = dir.path().join("three.csv");
     crest()

@@ -132,7 +132,7 @@ impl Lowerer {
             return Ok(());
         }
         self.apt = true;
-        if self.path.as_ref().is_some_and(|p| p.stats.postures > 0) {
+        if self.moved() {
             self.end_path(sink)?;
         }
         let label = if number.fract() == 0.0 && number.abs() < 1e9 {
@@ -167,8 +167,9 @@ impl Lowerer {
                 };
                 if word == "TPRINT" {
                     self.apt = true;
+                    let moved = self.moved();
                     match self.path.as_mut() {
-                        Some(p) if !self.opened_by_record && p.stats.postures == 0 => {
+                        Some(p) if !self.opened_by_record && !moved => {
                             p.tool_name = text.clone();
                         }
                         _ => {}
@@ -208,7 +209,7 @@ impl Lowerer {
                 self.apt = true;
                 let tool = self.cutter_tool(n, line, column)?;
                 self.cutter = Some(tool.clone());
-                let moved = self.path.as_ref().is_some_and(|p| p.stats.postures > 0);
+                let moved = self.moved();
                 if self.path.is_some() && !self.opened_by_record && moved {
                     // A new cutter after motion: the next tool's path.
                     self.end_path(sink)?;

@@ -66,8 +66,8 @@ impl Lowerer {
         let Some(path) = self.path.as_mut() else {
             return Ok(false);
         };
-        // As `flush_pending` (nothing of the posture changes on the way out).
-        if let Some(p) = &self.pending {
+        // As `flush_pending` (nothing of the posture changes on the way out but its kind).
+        if let Some(p) = &mut self.pending {
             let seg = match (p.motion, self.current) {
                 (MotionKind::From, _) | (_, None) => 0.0,
                 (_, Some(s)) => match &p.arc {
@@ -77,12 +77,20 @@ impl Lowerer {
             };
             self.current = Some(p.position);
             self.last_out = Some(p.position);
-            path.stats.postures += 1;
-            path.stats.length_mm += seg;
-            if p.motion == MotionKind::Cut {
-                path.stats.cutting_length_mm += seg;
+            match self.kinds.quick(p.motion, p.feed_mm_min) {
+                Some(kind) => {
+                    p.motion = kind;
+                    super::kinds::record(path, p, seg, sink)?;
+                }
+                None => {
+                    // Held back until its kind is known: the posture moves into the queue.
+                    if let Some(p) = self.pending.take() {
+                        let mut out =
+                            |p: Posture, seg: f64| super::kinds::record(path, &p, seg, sink);
+                        self.kinds.push(p, seg, &mut out)?;
+                    }
+                }
             }
-            sink(path, p)?;
         }
         // As the `Goto` arm of `push`.
         path.stats.gotos += 1;
