@@ -211,21 +211,48 @@ pub struct GsfRows {
     data_start: u64,
 }
 
+/// Read exactly `buf.len()` bytes at offset `off` without moving a shared cursor, so that
+/// threads read their ranges of one open file side by side (`pread` on Unix, `seek_read`
+/// on Windows).
+fn read_exact_at(file: &std::fs::File, buf: &mut [u8], off: u64) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileExt;
+        file.read_exact_at(buf, off)
+    }
+    #[cfg(windows)]
+    {
+        use std::os::windows::fs::FileExt;
+        let (mut buf, mut off) = (buf, off);
+        while !buf.is_empty() {
+            match file.seek_read(buf, off) {
+                Ok(0) => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+                Ok(n) => {
+                    buf = &mut buf[n..];
+                    off += n as u64;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Read the header of the `.gsf` in `file` (growing prefixes until the NUL padding is in).
 fn read_header(file: &std::fs::File) -> Result<Header, ReadError> {
-    use std::os::unix::fs::FileExt;
     let len = file.metadata()?.len();
     let len = usize::try_from(len)
         .map_err(|_| FormatError::file("the file is too large for this machine"))?;
     let mut head = vec![0u8; len.min(4096)];
-    file.read_exact_at(&mut head, 0)?;
+    read_exact_at(file, &mut head, 0)?;
     while head.len() < len {
         match head.iter().position(|&b| b == 0) {
             Some(h) if head.len() >= h + 4 => break,
             _ => {
                 let old = head.len();
                 head.resize(len.min(old * 2), 0);
-                file.read_exact_at(&mut head[old..], old as u64)?;
+                read_exact_at(file, &mut head[old..], old as u64)?;
             }
         }
     }
@@ -290,11 +317,8 @@ impl GsfRows {
     /// Read the heights from index `start` on into `buf`, scaled to µm, checked against
     /// `±limit_um`.
     fn read_piece(&self, start: usize, buf: &mut [f32], limit_um: f64) -> Result<(), PieceError> {
-        use std::os::unix::fs::FileExt;
         let off = self.data_start + 4 * start as u64;
-        self.file
-            .read_exact_at(bytemuck::cast_slice_mut(buf), off)
-            .map_err(PieceError::Io)?;
+        read_exact_at(&self.file, bytemuck::cast_slice_mut(buf), off).map_err(PieceError::Io)?;
         let scale = self.z_um;
         // Compared in float32 when the limit is a float32 value (±1e6 µm is): the same
         // answer as in f64, four values per instruction.

@@ -237,3 +237,26 @@ fn the_readme_walkthrough_runs_as_printed() {
         assert_eq!(got, want, "{cmd}");
     }
 }
+
+/// File names with spaces, a backslash (an ordinary character on Unix) and CRLF line ends
+/// read like any other.
+#[cfg(unix)]
+#[test]
+fn odd_names_and_crlf_read_like_any_other() {
+    let dir = tempdir();
+    let sub = dir.path().join("a dir with spaces");
+    std::fs::create_dir_all(&sub).unwrap_or_else(|e| panic!("{e}"));
+    let src = crate::util::nx_sample("nx_iso_header_units_mm.cls");
+    let text = std::fs::read_to_string(&src).unwrap_or_else(|e| panic!("{e}"));
+    let odd = sub.join("back\\slash name.cls");
+    std::fs::write(&odd, text.replace('\n', "\r\n")).unwrap_or_else(|e| panic!("{e}"));
+    let plain = stdout_of(&["inspect", "--json", src.to_str().unwrap_or("")]);
+    let crlf = stdout_of(&["inspect", "--json", odd.to_str().unwrap_or("")]);
+    let strip = |s: &str| -> serde_json::Value {
+        let mut v: serde_json::Value = serde_json::from_str(s).unwrap_or_else(|e| panic!("{e}"));
+        v.as_object_mut().map(|o| o.remove("file"));
+        v
+    };
+    assert_eq!(strip(&plain), strip(&crlf));
+    assert!(crlf.contains("back\\\\slash name.cls"), "{crlf}");
+}
