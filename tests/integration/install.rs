@@ -231,9 +231,9 @@ fn the_readme_walkthrough_runs_as_printed() {
         );
         let got: Vec<String> = String::from_utf8_lossy(&out.stdout)
             .lines()
-            .map(|l| untimed(l))
+            .map(untimed)
             .collect();
-        let want: Vec<String> = expected.iter().map(|l| untimed(l)).collect();
+        let want: Vec<String> = expected.iter().map(untimed).collect();
         assert_eq!(got, want, "{cmd}");
     }
 }
@@ -259,4 +259,41 @@ fn odd_names_and_crlf_read_like_any_other() {
     };
     assert_eq!(strip(&plain), strip(&crlf));
     assert!(crlf.contains("back\\\\slash name.cls"), "{crlf}");
+}
+
+/// On a terminal (a pseudo-terminal made by util-linux's `script`) errors get miette's
+/// graphical report, in colour unless `NO_COLOR` is set.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_terminal_gets_the_graphical_report_and_no_color_is_respected() {
+    let dir = tempdir();
+    let bad = dir.path().join("bad.cls");
+    std::fs::write(&bad, "TOOL PATH/X,TOOL,T\nGOTO/1,2,zz\n").unwrap_or_else(|e| panic!("{e}"));
+    let bin = assert_cmd::cargo::cargo_bin("crest");
+    let line = format!("'{}' inspect '{}'", bin.display(), bad.display());
+    let run = |no_color: bool| -> Option<String> {
+        let mut c = Command::new("script");
+        c.args(["-qec", &line, "/dev/null"]).env_remove("NO_COLOR");
+        if no_color {
+            c.env("NO_COLOR", "1");
+        }
+        let out = c.output().ok()?;
+        Some(String::from_utf8_lossy(&out.stdout).into_owned())
+    };
+    let Some(colour) = run(false) else {
+        eprintln!("script (util-linux) not found: the terminal rendering is not checked");
+        return;
+    };
+    assert!(colour.contains("bad.cls:2:10"), "{colour}");
+    assert!(colour.contains('│'), "no frame on a terminal: {colour}");
+    assert!(
+        colour.contains("\x1b["),
+        "no colour on a terminal: {colour}"
+    );
+    let plain = run(true).unwrap_or_default();
+    assert!(
+        plain.contains('│') && plain.contains("bad.cls:2:10"),
+        "{plain}"
+    );
+    assert!(!plain.contains("\x1b["), "colour under NO_COLOR: {plain}");
 }
