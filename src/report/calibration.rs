@@ -34,28 +34,45 @@ pub fn calibration_json(cal: &Calibration) -> serde_json::Value {
     })
 }
 
-/// `calibration.csv`: one row per case and parameter.
+/// `calibration.csv`: one row per case and parameter, written through the csv crate (a
+/// side label with a comma, a quote or a line break is quoted).
 pub fn calibration_csv(cal: &Calibration) -> String {
-    let mut s = String::from(
-        "lead_deg,side,parameter,measured_um,sigma_um,geometric_um,calibrated_um,loo_um,constant_loo_um,factor_loo_um\n",
-    );
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let head = [
+        "lead_deg",
+        "side",
+        "parameter",
+        "measured_um",
+        "sigma_um",
+        "geometric_um",
+        "calibrated_um",
+        "loo_um",
+        "constant_loo_um",
+        "factor_loo_um",
+    ];
+    // Writing into a Vec cannot fail.
+    let _ = w.write_record(head);
     for c in &cal.cases {
-        let _ = writeln!(
-            s,
-            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            c.lead_deg,
-            c.side.name(),
-            c.parameter,
+        let mut row = vec![
+            c.lead_deg.to_string(),
+            c.side.name().to_string(),
+            c.parameter.to_string(),
+        ];
+        for v in [
             c.measured_um,
             c.sigma_um,
             c.geometric_um,
             c.calibrated_um,
             c.loo_um,
             c.constant_loo_um,
-            c.factor_loo_um
-        );
+            c.factor_loo_um,
+        ] {
+            row.push(format!("{v:.4}"));
+        }
+        let _ = w.write_record(&row);
     }
-    s
+    let bytes = w.into_inner().unwrap_or_default();
+    String::from_utf8(bytes).unwrap_or_default()
 }
 
 /// What the fit does and does not establish, in plain sentences.
@@ -152,7 +169,7 @@ pub fn markdown(r: &Regression) -> String {
                 s,
                 "| {} | {} | {} | {:.4} ± {:.4} | {:.4} | {:.4} | {:.4} | {:+.1} | {:.4} | {:.4} | {} |",
                 trim_decimals(c.lead_deg, 3),
-                c.side.name(),
+                super::md_cell(c.side.name()),
                 c.parameter,
                 c.measured_um,
                 c.sigma_um,
@@ -187,7 +204,7 @@ pub fn markdown(r: &Regression) -> String {
                 s,
                 "| {} | {} | {:.4} / {:.4} / {:.4} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} |",
                 trim_decimals(c.lead_deg, 3),
-                c.side.name(),
+                super::md_cell(c.side.name()),
                 c.rz.p5,
                 c.rz.p50,
                 c.rz.p95,
@@ -212,7 +229,8 @@ pub fn html(r: &Regression) -> String {
     for line in md.lines() {
         let t = line.trim();
         let esc = |x: &str| {
-            x.replace('&', "&amp;")
+            x.replace("\\|", "|")
+                .replace('&', "&amp;")
                 .replace('<', "&lt;")
                 .replace('>', "&gt;")
         };
