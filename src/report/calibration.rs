@@ -292,3 +292,53 @@ pub fn html(r: &Regression) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::calibrate::CalibratedCase;
+    use crate::study::measured::Side;
+
+    #[test]
+    fn a_side_label_with_comma_quote_and_bar_stays_one_field_and_one_cell() {
+        let label = "a,b \"q\" p|q";
+        let case = CalibratedCase {
+            lead_deg: 15.0,
+            side: Side::Other(label.to_string()),
+            parameter: "Rz".to_string(),
+            measured_um: 1.0,
+            sigma_um: 0.1,
+            geometric_um: 1.0,
+            calibrated_um: 1.0,
+            loo_um: 1.0,
+            constant_loo_um: 1.0,
+            factor_loo_um: 1.0,
+        };
+        let cal = Calibration {
+            parameters: Vec::new(),
+            correlation: Vec::new(),
+            covariance: Vec::new(),
+            bounds: Vec::new(),
+            cases: vec![case],
+            chi2: 0.0,
+            dof: 0,
+            loo_rms_pct: 0.0,
+            fit_rms_pct: 0.0,
+            constant_loo_rms_pct: 0.0,
+            factor_loo_rms_pct: 0.0,
+            geometric_constant: true,
+        };
+        let text = calibration_csv(&cal);
+        let mut rows = csv::Reader::from_reader(text.as_bytes());
+        let head = rows.headers().unwrap().len();
+        let recs: Vec<csv::StringRecord> = rows.records().map(|r| r.unwrap()).collect();
+        assert_eq!(recs.len(), 1);
+        assert_eq!(recs[0].len(), head, "{text}");
+        assert_eq!(&recs[0][1], label);
+        // One Markdown cell: the bar escaped, the HTML shows it back.
+        let cell = crate::report::md_cell(label);
+        assert_eq!(cell, "a,b \"q\" p\\|q");
+        let row = format!("| x | {cell} | y |");
+        assert_eq!(row.split(" | ").count(), 3);
+    }
+}
