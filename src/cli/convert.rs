@@ -13,8 +13,7 @@ use crest::io::toolpath::{detect, stream_from, stream_written_from};
 use crest::nc::GcodeWriter;
 use crest::parse::Written;
 use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
-use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Options of `crest convert`.
@@ -77,9 +76,7 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
     let (input, output, all_moves, absolute) =
         (&args.file, &args.output, args.all_moves, args.absolute);
     let kind = detect(input)?;
-    let file =
-        File::open(input).map_err(|e| miette::miette!("{}: cannot open: {e}", input.display()))?;
-    let reader = BufReader::with_capacity(1 << 16, file);
+    let reader = crest::io::toolpath::open(input)?;
     let lower = LowerOptions {
         apply_msys: absolute,
         keep_postures: false,

@@ -225,7 +225,15 @@ fn write_csv(w: &mut dyn Write, plans: &[PlannedPath], names: &[&str; 5]) -> std
     }
     writeln!(w)?;
     for PlannedPath { name, input, plan } in plans {
-        let name = name.replace([',', '"', '\n'], "_");
+        // The path name is text from the file: quoted by the csv crate where it must be.
+        let name = {
+            let mut q = csv::WriterBuilder::new()
+                .has_headers(false)
+                .from_writer(Vec::new());
+            q.write_record([name.as_str()])?;
+            let b = q.into_inner().map_err(|e| e.into_error())?;
+            String::from_utf8_lossy(&b[..b.len() - 1]).into_owned()
+        };
         for (i, (p, inp)) in plan.postures.iter().zip(input).enumerate() {
             let f = inp.feed_mm_s * 60.0;
             let f = if f.is_finite() {

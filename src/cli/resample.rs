@@ -17,8 +17,7 @@ use crest::resample::{
 };
 use crest::toolpath::write::push_decimals;
 use crest::toolpath::{LowerOptions, Posture, Program, Toolpath};
-use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// The CSV header, in column order.
@@ -360,9 +359,7 @@ fn stream_pass(
     let file = &args.file;
     let moves = crest::toolpath::Moves::from(args.moves);
     let kind = detect(file)?;
-    let input =
-        File::open(file).map_err(|e| miette::miette!("{}: cannot open: {e}", file.display()))?;
-    let reader = BufReader::with_capacity(1 << 16, input);
+    let reader = crest::io::toolpath::open(file)?;
     let lower = ReadOptions {
         lower: LowerOptions {
             keep_postures: false,

@@ -21,6 +21,17 @@ pub enum MachineError {
     /// The text is not valid TOML or has unknown keys / wrong value types.
     #[error("machine description: {0}")]
     Syntax(String),
+    /// TOML that does not parse into a machine (a value of the wrong type or out of its
+    /// type's range, an unknown key), where the TOML reader knows the place.
+    #[error("line {line}, column {column}: {message}")]
+    Toml {
+        /// 1-based line.
+        line: usize,
+        /// 1-based column (characters).
+        column: usize,
+        /// The TOML reader's message.
+        message: String,
+    },
     /// A required key is missing.
     #[error("line {line}: missing `{key}` in {table}")]
     Missing {
@@ -348,12 +359,18 @@ impl Machine {
     /// Read a machine description (kinematics.md §3.2). Errors name the key and the line.
     pub fn from_toml_str(text: &str) -> Result<Machine, MachineError> {
         let file: FileMachine = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|s| line_of(text, s.start));
-            let msg = e.message().to_string();
-            MachineError::Syntax(match line {
-                Some(l) => format!("line {l}: {msg}"),
-                None => msg,
-            })
+            let msg = e.message().trim().to_string();
+            match e.span() {
+                Some(s) => {
+                    let (line, column) = crate::parse::line_column(text, s.start);
+                    MachineError::Toml {
+                        line,
+                        column,
+                        message: msg,
+                    }
+                }
+                None => MachineError::Syntax(msg),
+            }
         })?;
         let ctx = Ctx { text };
         let top = "the top level";

@@ -50,6 +50,9 @@ use toml::Spanned;
 
 /// Largest accepted number of teeth (a guard against absurd inputs).
 pub const MAX_TEETH: i64 = 64;
+/// Most points of a `profile_mm` meridian: a ground profile needs tens, a measured one
+/// a few thousand; more only costs time in every sampling of the meridian.
+pub const MAX_PROFILE_POINTS: usize = 10_000;
 
 /// Why a `tool.toml` was rejected. Every variant carries the 1-based line and column.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -337,8 +340,7 @@ impl ToolConfig {
     pub fn to_cutter(&self, text: &str) -> Result<Cutter, ToolConfigError> {
         self.min_chip_mm(text)?;
         let (shape, radius) = self.shape_and_radius(text)?;
-        let max_r = crate::math::limits::MAX_TOOL_RADIUS_MM;
-        if radius <= 0.0 || radius > max_r {
+        if let Err(m) = crate::math::limits::tool_radius(radius) {
             let span = match &self.radius_mm {
                 Some(v) => v.span(),
                 None => self.shape.span(),
@@ -347,7 +349,7 @@ impl ToolConfig {
                 text,
                 "radius_mm",
                 span,
-                format!("must lie in (0, {max_r}] mm, found {radius}"),
+                format!("{m}, found {radius}"),
             ));
         }
         let teeth = *self.teeth.get_ref();
@@ -591,29 +593,29 @@ impl ToolConfig {
     fn shape_and_radius(&self, text: &str) -> Result<(Shape, f64), ToolConfigError> {
         let corner = match &self.corner_radius_mm {
             Some(c) => {
-                let rc = finite(text, "corner_radius_mm", c)?;
-                if rc < 0.0 {
-                    return Err(invalid(
+                let rc = *c.get_ref();
+                crate::math::limits::corner_radius(rc, f64::INFINITY).map_err(|m| {
+                    invalid(
                         text,
                         "corner_radius_mm",
                         c.span(),
-                        format!("must not be negative, found {rc}"),
-                    ));
-                }
+                        format!("{m}, found {rc}"),
+                    )
+                })?;
                 Some((rc, c.span()))
             }
             None => None,
         };
         let corner_within = |radius: f64| -> Result<(), ToolConfigError> {
-            if let Some((rc, span)) = &corner
-                && *rc > radius
-            {
-                return Err(invalid(
-                    text,
-                    "corner_radius_mm",
-                    span.clone(),
-                    format!("({rc} mm) must not exceed radius_mm ({radius} mm)"),
-                ));
+            if let Some((rc, span)) = &corner {
+                crate::math::limits::corner_radius(*rc, radius).map_err(|m| {
+                    invalid(
+                        text,
+                        "corner_radius_mm",
+                        span.clone(),
+                        format!("{m}, found {rc}"),
+                    )
+                })?;
             }
             Ok(())
         };
@@ -701,6 +703,17 @@ impl ToolConfig {
                         "is required when shape = \"profile\"".to_string(),
                     ));
                 };
+                if p.get_ref().len() > MAX_PROFILE_POINTS {
+                    return Err(invalid(
+                        text,
+                        "profile_mm",
+                        p.span(),
+                        format!(
+                            "has {} points, more than {MAX_PROFILE_POINTS}",
+                            p.get_ref().len()
+                        ),
+                    ));
+                }
                 let mut pts = Vec::with_capacity(p.get_ref().len());
                 for (i, q) in p.get_ref().iter().enumerate() {
                     let ok = (q.len() == 2 || q.len() == 3) && q.iter().all(|v| v.is_finite());

@@ -333,13 +333,13 @@ impl GsfRows {
         } else {
             for v in buf.iter_mut() {
                 *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
-                over |= f64::from(v.abs()) > limit_um && v.is_finite();
+                over |= f64::from(v.abs()) > limit_um;
             }
         }
         if over {
             let i = buf
                 .iter()
-                .position(|v| v.is_finite() && f64::from(v.abs()) > limit_um)
+                .position(|v| f64::from(v.abs()) > limit_um)
                 .unwrap_or(0);
             return Err(PieceError::Beyond((start + i, buf[i])));
         }
@@ -348,7 +348,7 @@ impl GsfRows {
 }
 
 /// Scale the stored values (little-endian float32) in place to µm in float32 and say
-/// whether a finite one lies beyond `±lim`: a kernel for [`crate::math::wide::run`] (eight
+/// whether one lies beyond `±lim` (an infinite one too: a stored value of 3e38 m is no height): a kernel for [`crate::math::wide::run`] (eight
 /// values an instruction with AVX2; the same values on any path).
 struct ScaleCheck<'a> {
     buf: &'a mut [f32],
@@ -364,7 +364,7 @@ impl crate::math::wide::Kernel for ScaleCheck<'_> {
         let mut over = false;
         for v in buf.iter_mut() {
             *v = f32::from_bits(u32::from_le(v.to_bits())) * scale;
-            over |= v.abs() > lim && v.is_finite();
+            over |= v.abs() > lim;
         }
         over
     }

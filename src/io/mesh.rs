@@ -207,6 +207,14 @@ fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (String, St
     Ok(v)
 }
 
+/// A vertex coordinate of a text mesh: a finite number within ±100 m
+/// ([`crate::math::limits::coordinates`]).
+fn coordinate(tok: Option<&str>, line: usize) -> Result<f64, (String, String)> {
+    let v = number(tok, line, "a coordinate")?;
+    crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m))?;
+    Ok(v)
+}
+
 /// At most 40 characters of a token, for messages.
 fn short(t: &str) -> String {
     if t.chars().count() > 40 {
@@ -275,6 +283,12 @@ fn parse_binary_stl(bytes: &[u8]) -> ParseResult {
                     format!("vertex {} is not finite", k + 1),
                 ));
             }
+            crate::math::limits::coordinates(p.coords.as_slice()).map_err(|m| {
+                (
+                    format!("triangle {} (byte {b})", t + 1),
+                    format!("vertex {}: {m}", k + 1),
+                )
+            })?;
         }
         check_stored_normal(&normal, &tri)
             .map_err(|m| (format!("triangle {} (byte {o})", t + 1), m))?;
@@ -338,9 +352,9 @@ fn parse_ascii_stl(bytes: &[u8]) -> ParseResult {
                     return Err((at_line(line), "a facet with more than 3 vertices".into()));
                 }
                 verts.push(Point3::new(
-                    number(toks.next(), line, "a coordinate")?,
-                    number(toks.next(), line, "a coordinate")?,
-                    number(toks.next(), line, "a coordinate")?,
+                    coordinate(toks.next(), line)?,
+                    coordinate(toks.next(), line)?,
+                    coordinate(toks.next(), line)?,
                 ));
             }
             "endfacet" => {
@@ -411,9 +425,9 @@ fn parse_obj(bytes: &[u8]) -> ParseResult {
         let mut toks = raw.split_whitespace();
         match toks.next() {
             Some("v") => mesh.vertices.push(Point3::new(
-                number(toks.next(), line, "a coordinate")?,
-                number(toks.next(), line, "a coordinate")?,
-                number(toks.next(), line, "a coordinate")?,
+                coordinate(toks.next(), line)?,
+                coordinate(toks.next(), line)?,
+                coordinate(toks.next(), line)?,
             )),
             Some("f") => {
                 let idx: Vec<u32> = toks
@@ -664,7 +678,10 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
                                 for _ in 0..n as usize {
                                     let at = take(&mut o, it.size(), &e.name)?;
                                     if name.starts_with("vertex_ind") {
-                                        face.push(ply_index(it.read(&body[at..], big), k)?);
+                                        let v = it.read(&body[at..], big);
+                                        face.push(ply_index(v, 0).map_err(|(_, m)| {
+                                            (format!("{} {} (byte {start})", e.name, k + 1), m)
+                                        })?);
                                     }
                                 }
                             }
@@ -707,6 +724,7 @@ fn ply_item(
             if !xyz.iter().all(|v| v.is_finite()) {
                 return Err((place(at), "a vertex without finite x, y, z".into()));
             }
+            crate::math::limits::coordinates(&xyz).map_err(|m| (place(at), m))?;
             mesh.vertices.push(Point3::new(xyz[0], xyz[1], xyz[2]));
         }
         "face" => {

@@ -415,11 +415,7 @@ pub const MAX_HEIGHT_UM: f64 = 1e6;
 /// Refuse a map whose finite heights exceed [`MAX_HEIGHT_UM`] (binary formats), naming
 /// the first offending node.
 fn check_heights(map: &HeightMap) -> Result<(), FormatError> {
-    if let Some(k) = map
-        .z_um
-        .iter()
-        .position(|v| v.is_finite() && v.abs() > MAX_HEIGHT_UM)
-    {
+    if let Some(k) = map.z_um.iter().position(|v| v.abs() > MAX_HEIGHT_UM) {
         return Err(FormatError::file(format!(
             "the height at row {}, column {} is {} µm, beyond ±{MAX_HEIGHT_UM} µm (1 m): not a surface height",
             k / map.nx.max(1),

@@ -243,11 +243,85 @@ pub fn name_output(e: miette::Report, output: &Path) -> miette::Report {
     }
 }
 
-fn open(path: &Path) -> miette::Result<BufReader<File>> {
+/// Open a tool-path file for reading, its line ends made `\n` or `\r\n` ([`LoneCr`]).
+pub fn open(path: &Path) -> miette::Result<BufReader<LoneCr<File>>> {
     super::output::register_input(path);
     let f =
         File::open(path).map_err(|e| miette::miette!("{}: cannot open: {e}", path.display()))?;
-    Ok(BufReader::with_capacity(1 << 16, f))
+    Ok(BufReader::with_capacity(1 << 16, LoneCr::new(f)))
+}
+
+/// A reader that turns every lone `\r` (classic Mac OS line ends) into `\n` and leaves
+/// `\r\n` and `\n` as they are, so the line readers of CLSF, contact12 and G-code (which
+/// end a line at `\n`) read CR-only files line by line, with the same line numbers.
+pub struct LoneCr<R> {
+    inner: R,
+    buf: Vec<u8>,
+    pos: usize,
+    /// The last byte read was a `\r` whose meaning waits for the next byte.
+    held_cr: bool,
+    chunk: Box<[u8]>,
+}
+
+impl<R: Read> LoneCr<R> {
+    /// Wrap `inner`.
+    pub fn new(inner: R) -> LoneCr<R> {
+        LoneCr {
+            inner,
+            buf: Vec::new(),
+            pos: 0,
+            held_cr: false,
+            chunk: vec![0u8; 1 << 16].into_boxed_slice(),
+        }
+    }
+
+    /// Read the next chunk into `buf`; false at the end of the input.
+    fn fill(&mut self) -> std::io::Result<bool> {
+        self.buf.clear();
+        self.pos = 0;
+        loop {
+            let n = match self.inner.read(&mut self.chunk) {
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            let c = &self.chunk[..n];
+            if std::mem::take(&mut self.held_cr) {
+                self.buf.push(if c.first() == Some(&b'\n') {
+                    b'\r'
+                } else {
+                    b'\n'
+                });
+            }
+            for (i, &b) in c.iter().enumerate() {
+                if b != b'\r' {
+                    self.buf.push(b);
+                } else if let Some(&next) = c.get(i + 1) {
+                    self.buf.push(if next == b'\n' { b'\r' } else { b'\n' });
+                } else {
+                    self.held_cr = true;
+                }
+            }
+            if n == 0 || !self.buf.is_empty() {
+                return Ok(!self.buf.is_empty());
+            }
+        }
+    }
+}
+
+impl<R: Read> Read for LoneCr<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        if out.is_empty() {
+            return Ok(0);
+        }
+        if self.pos == self.buf.len() && !self.fill()? {
+            return Ok(0);
+        }
+        let n = out.len().min(self.buf.len() - self.pos);
+        out[..n].copy_from_slice(&self.buf[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
 }
 
 /// Decide whether `path` holds CLSF, contact12 or G-code, from its first 64 KiB.
@@ -415,6 +489,35 @@ pub fn read_program(path: &Path) -> miette::Result<Program> {
 pub fn read_program_with(path: &Path, opts: impl Into<ReadOptions>) -> miette::Result<Program> {
     let mut sink = |_: &Toolpath, _: &Posture| Ok(());
     stream_program(path, opts, &mut sink)
+}
+
+#[cfg(test)]
+mod line_end_tests {
+    use super::LoneCr;
+    use std::io::Read;
+
+    /// Reads one byte at a time: a CR at the end of every chunk.
+    struct Trickle<'a>(&'a [u8]);
+    impl Read for Trickle<'_> {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            let n = self.0.len().min(1).min(out.len());
+            out[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn lone_cr_becomes_lf_and_crlf_stays() {
+        let input = b"A\rB\r\nC\n\r\rD\r";
+        let want = b"A\nB\r\nC\n\n\nD\n".to_vec();
+        let mut out = Vec::new();
+        LoneCr::new(&input[..]).read_to_end(&mut out).unwrap();
+        assert_eq!(out, want);
+        out.clear();
+        LoneCr::new(Trickle(input)).read_to_end(&mut out).unwrap();
+        assert_eq!(out, want);
+    }
 }
 
 #[cfg(test)]

@@ -32,6 +32,42 @@ pub fn within(what: &str, unit: &str, v: f64, range: (f64, f64)) -> Result<f64, 
     }
 }
 
+/// A tool radius R (also D/2 of a CLSF `TLDATA` or `CUTTER`): finite, in
+/// (0, [`MAX_TOOL_RADIUS_MM`]]. The error is the rule it breaks ("must …"), for the caller
+/// to name the key or record and the value: tool.toml and the lowering share this rule.
+pub fn tool_radius(r: f64) -> Result<f64, String> {
+    if r > 0.0 && r <= MAX_TOOL_RADIUS_MM {
+        Ok(r)
+    } else {
+        Err(format!("must lie in (0, {MAX_TOOL_RADIUS_MM}] mm"))
+    }
+}
+
+/// A corner radius `rc` of a tool of radius `r`: finite, in [0, r]. The error is the rule
+/// it breaks, as for [`tool_radius`].
+pub fn corner_radius(rc: f64, r: f64) -> Result<f64, String> {
+    if !rc.is_finite() {
+        Err("must be finite".to_string())
+    } else if rc < 0.0 {
+        Err("must not be negative".to_string())
+    } else if rc > r {
+        Err(format!("must not exceed the radius ({r} mm)"))
+    } else {
+        Ok(rc)
+    }
+}
+
+/// The first coordinate of `p` that is NaN or beyond ±[`MAX_COORD_MM`], as an error
+/// message naming the limit.
+pub fn coordinates(p: &[f64]) -> Result<(), String> {
+    match p.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD_MM) {
+        Some(c) => Err(format!(
+            "coordinate {c} mm is beyond the ±{MAX_COORD_MM} mm (100 m) limit"
+        )),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -45,5 +81,27 @@ mod tests {
             "{e}"
         );
         assert!(within("rpm", "rpm", f64::NAN, RPM).is_err());
+    }
+
+    #[test]
+    fn tool_radii_and_coordinates() {
+        assert_eq!(tool_radius(5.0), Ok(5.0));
+        for r in [0.0, -1.0, 5e299, f64::NAN, f64::INFINITY] {
+            assert!(tool_radius(r).is_err(), "{r}");
+        }
+        assert_eq!(corner_radius(5.0, 5.0), Ok(5.0));
+        assert!(
+            corner_radius(50.0, 5.0)
+                .unwrap_err()
+                .contains("exceed the radius (5 mm)")
+        );
+        assert!(corner_radius(-1.0, 5.0).is_err());
+        assert!(coordinates(&[0.0, 1e5, -1e5]).is_ok());
+        assert!(
+            coordinates(&[0.0, 1e6, 0.0])
+                .unwrap_err()
+                .contains("1000000")
+        );
+        assert!(coordinates(&[f64::NAN]).is_err());
     }
 }

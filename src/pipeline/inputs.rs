@@ -116,6 +116,16 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
                     message: msg,
                 }
             }
+            MachineError::Toml {
+                line,
+                column,
+                message,
+            } => ConfigError {
+                file: file.clone(),
+                line: *line,
+                column: *column,
+                message: message.clone(),
+            },
             _ => ConfigError::whole(&file, e.to_string()),
         };
         e.into()
@@ -306,9 +316,9 @@ pub fn path_extent(
             crate::toolpath::Moves::Cut => p.stats.cutting_length_mm,
             crate::toolpath::Moves::All => p.stats.feed_length_mm,
         };
-        if extent.spindle_rpm.is_none() {
-            extent.spindle_rpm = p.stats.spindles_rpm.iter().copied().find(|n| *n > 0.0);
-        }
+        // The highest speed bounds the estimate whichever SPINDL the resampling takes.
+        let top = p.stats.spindles_rpm.iter().copied().filter(|n| *n > 0.0);
+        extent.spindle_rpm = top.chain(extent.spindle_rpm).reduce(f64::max);
         for &f in &p.stats.feeds_mm_min {
             if f > 0.0 {
                 extent.feed_range_mm_min = Some(match extent.feed_range_mm_min {

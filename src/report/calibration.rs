@@ -34,28 +34,45 @@ pub fn calibration_json(cal: &Calibration) -> serde_json::Value {
     })
 }
 
-/// `calibration.csv`: one row per case and parameter.
+/// `calibration.csv`: one row per case and parameter, written through the csv crate (a
+/// side label with a comma, a quote or a line break is quoted).
 pub fn calibration_csv(cal: &Calibration) -> String {
-    let mut s = String::from(
-        "lead_deg,side,parameter,measured_um,sigma_um,geometric_um,calibrated_um,loo_um,constant_loo_um,factor_loo_um\n",
-    );
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let head = [
+        "lead_deg",
+        "side",
+        "parameter",
+        "measured_um",
+        "sigma_um",
+        "geometric_um",
+        "calibrated_um",
+        "loo_um",
+        "constant_loo_um",
+        "factor_loo_um",
+    ];
+    // Writing into a Vec cannot fail.
+    let _ = w.write_record(head);
     for c in &cal.cases {
-        let _ = writeln!(
-            s,
-            "{},{},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            c.lead_deg,
-            c.side.name(),
-            c.parameter,
+        let mut row = vec![
+            c.lead_deg.to_string(),
+            c.side.name().to_string(),
+            c.parameter.to_string(),
+        ];
+        for v in [
             c.measured_um,
             c.sigma_um,
             c.geometric_um,
             c.calibrated_um,
             c.loo_um,
             c.constant_loo_um,
-            c.factor_loo_um
-        );
+            c.factor_loo_um,
+        ] {
+            row.push(format!("{v:.4}"));
+        }
+        let _ = w.write_record(&row);
     }
-    s
+    let bytes = w.into_inner().unwrap_or_default();
+    String::from_utf8(bytes).unwrap_or_default()
 }
 
 /// What the fit does and does not establish, in plain sentences.
@@ -152,7 +169,7 @@ pub fn markdown(r: &Regression) -> String {
                 s,
                 "| {} | {} | {} | {:.4} ± {:.4} | {:.4} | {:.4} | {:.4} | {:+.1} | {:.4} | {:.4} | {} |",
                 trim_decimals(c.lead_deg, 3),
-                c.side.name(),
+                super::md_cell(c.side.name()),
                 c.parameter,
                 c.measured_um,
                 c.sigma_um,
@@ -187,7 +204,7 @@ pub fn markdown(r: &Regression) -> String {
                 s,
                 "| {} | {} | {:.4} / {:.4} / {:.4} | {:.4} | {:.4} / {:.4} / {:.4} | {:.4} |",
                 trim_decimals(c.lead_deg, 3),
-                c.side.name(),
+                super::md_cell(c.side.name()),
                 c.rz.p5,
                 c.rz.p50,
                 c.rz.p95,
@@ -212,7 +229,8 @@ pub fn html(r: &Regression) -> String {
     for line in md.lines() {
         let t = line.trim();
         let esc = |x: &str| {
-            x.replace('&', "&amp;")
+            x.replace("\\|", "|")
+                .replace('&', "&amp;")
                 .replace('<', "&lt;")
                 .replace('>', "&gt;")
         };
@@ -273,4 +291,54 @@ pub fn html(r: &Regression) -> String {
         s.push_str("</ul>\n");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::calibrate::CalibratedCase;
+    use crate::study::measured::Side;
+
+    #[test]
+    fn a_side_label_with_comma_quote_and_bar_stays_one_field_and_one_cell() {
+        let label = "a,b \"q\" p|q";
+        let case = CalibratedCase {
+            lead_deg: 15.0,
+            side: Side::Other(label.to_string()),
+            parameter: "Rz".to_string(),
+            measured_um: 1.0,
+            sigma_um: 0.1,
+            geometric_um: 1.0,
+            calibrated_um: 1.0,
+            loo_um: 1.0,
+            constant_loo_um: 1.0,
+            factor_loo_um: 1.0,
+        };
+        let cal = Calibration {
+            parameters: Vec::new(),
+            correlation: Vec::new(),
+            covariance: Vec::new(),
+            bounds: Vec::new(),
+            cases: vec![case],
+            chi2: 0.0,
+            dof: 0,
+            loo_rms_pct: 0.0,
+            fit_rms_pct: 0.0,
+            constant_loo_rms_pct: 0.0,
+            factor_loo_rms_pct: 0.0,
+            geometric_constant: true,
+        };
+        let text = calibration_csv(&cal);
+        let mut rows = csv::Reader::from_reader(text.as_bytes());
+        let head = rows.headers().unwrap().len();
+        let recs: Vec<csv::StringRecord> = rows.records().map(|r| r.unwrap()).collect();
+        assert_eq!(recs.len(), 1);
+        assert_eq!(recs[0].len(), head, "{text}");
+        assert_eq!(&recs[0][1], label);
+        // One Markdown cell: the bar escaped, the HTML shows it back.
+        let cell = crate::report::md_cell(label);
+        assert_eq!(cell, "a,b \"q\" p\\|q");
+        let row = format!("| x | {cell} | y |");
+        assert_eq!(row.split(" | ").count(), 3);
+    }
 }

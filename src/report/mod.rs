@@ -5,3 +5,9 @@
 pub mod calibration;
 pub mod regression;
 pub mod view;
+
+/// Text from the input as one Markdown table cell: `|` escaped (`\|`), line breaks as
+/// blanks, so a label cannot split or end the row.
+pub(crate) fn md_cell(text: &str) -> String {
+    text.replace('|', "\\|").replace(['\r', '\n'], " ")
+}

@@ -335,6 +335,7 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "| {} |", TABLE_HEAD.join(" | "));
     let _ = writeln!(s, "|{}", "---|".repeat(TABLE_HEAD.len()));
     for row in table_rows(r) {
+        let row: Vec<String> = row.iter().map(|c| super::md_cell(c)).collect();
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     let _ = writeln!(s);
@@ -345,6 +346,7 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s, "| {} |", MODEL_HEAD.join(" | "));
     let _ = writeln!(s, "|{}", "---|".repeat(MODEL_HEAD.len()));
     for row in model_rows(r) {
+        let row: Vec<String> = row.iter().map(|c| super::md_cell(c)).collect();
         let _ = writeln!(s, "| {} |", row.join(" | "));
     }
     let _ = writeln!(s);
@@ -365,9 +367,10 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
                 .map_or("".to_string(), |v| format!("{v:.3}"));
             let _ = writeln!(
                 s,
-                "| {} | {} | {name} | {ra} | {rz} |",
+                "| {} | {} | {} | {ra} | {rz} |",
                 fmt_g(c.lead_deg),
-                c.side.name()
+                super::md_cell(c.side.name()),
+                super::md_cell(name)
             );
         }
     }

@@ -219,8 +219,14 @@ fn finite(v: f64) -> serde_json::Value {
 }
 
 fn page(title: &str, data: &serde_json::Value) -> String {
-    // `</` cannot close the data's script element once written `<\/` (the same JSON).
-    let json = data.to_string().replace("</", "<\\/");
+    // No `<`, `>` or `&` in the data's script element (`</script>`, `<!--<script>` would
+    // end it or switch the HTML parser's script state): written `\u003c`, `\u003e`,
+    // `\u0026`, the same JSON (they occur only inside strings).
+    let json = data
+        .to_string()
+        .replace('<', "\\u003c")
+        .replace('>', "\\u003e")
+        .replace('&', "\\u0026");
     let mut s = String::with_capacity(THREE_JS.len() + json.len() + VIEWER_JS.len() + 4096);
     let _ = write!(
         s,

@@ -14,7 +14,7 @@ pub struct PathExtent {
     pub runs: usize,
     /// Slowest and fastest programmed feed, mm/min.
     pub feed_range_mm_min: Option<(f64, f64)>,
-    /// The first programmed spindle speed (SPINDL), rpm.
+    /// The highest programmed spindle speed (SPINDL), rpm.
     pub spindle_rpm: Option<f64>,
 }
 

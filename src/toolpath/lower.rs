@@ -100,6 +100,28 @@ fn check_coords(p: &Point3, line: u32, column: u32) -> Result<(), LowerError> {
     }
 }
 
+/// Refuse a programmed feed or spindle speed beyond its limits ([`crate::math::limits`]),
+/// at the record that sets it: every `FEDRAT` and `SPINDL`, not only the first. 0 (no feed,
+/// spindle stopped) is kept.
+fn check_rate(
+    what: &str,
+    unit: &str,
+    v: f64,
+    range: (f64, f64),
+    line: u32,
+    column: u32,
+) -> Result<(), LowerError> {
+    if v == 0.0 || crate::math::limits::within(what, unit, v, range).is_ok() {
+        return Ok(());
+    }
+    Err(invalid(
+        line,
+        column,
+        &format!("a {what} between {} and {} {unit} (or 0)", range.0, range.1),
+        format!("{v} {unit}"),
+    ))
+}
+
 /// Callback receiving each finished posture with the header of its path.
 pub type PostureSink<'a> = dyn FnMut(&Toolpath, &Posture) -> std::io::Result<()> + 'a;
 
@@ -582,6 +604,16 @@ impl Lowerer {
             }
             RecordKind::Msys(m) => {
                 let frame = MsysFrame::new(m, self.scale());
+                if let Some(f) = &frame
+                    && let Err(e) = crate::math::limits::coordinates(f.origin.as_slice())
+                {
+                    return Err(invalid(
+                        line,
+                        column,
+                        "an MSYS origin within ±100000 mm (100 m)",
+                        e,
+                    ));
+                }
                 if frame.is_none() {
                     return Err(invalid(
                         line,
@@ -642,10 +674,11 @@ impl Lowerer {
                     Some(FeedUnit::Ipm | FeedUnit::Ipr) => MM_PER_INCH,
                     Some(FeedUnit::Permin | FeedUnit::Perrev) | None => self.scale(),
                 };
-                if *value < 0.0 {
+                if value.is_nan() || *value < 0.0 {
                     return Err(invalid(line, column, "a feed ≥ 0", format!("{value}")));
                 }
                 let v = value * factor;
+                let feed = crate::math::limits::FEED_MM_MIN;
                 if per_rev {
                     self.feed_mm_rev = Some(v);
                     self.feed_mm_min = self.spindle_rpm.map(|rpm| v * rpm);
@@ -662,10 +695,13 @@ impl Lowerer {
                     self.feed_mm_min = Some(v);
                 }
                 if let Some(f) = self.feed_mm_min {
+                    check_rate("feed", "mm/min", f, feed, line, column)?;
                     self.note_feed(f);
+                } else if !v.is_finite() {
+                    return Err(invalid(line, column, "a finite feed", format!("{value}")));
                 }
             }
-            RecordKind::Spindl(args) => self.spindl(args, line, column),
+            RecordKind::Spindl(args) => self.spindl(args, line, column)?,
             RecordKind::Rapid => {
                 self.rapid_next = true;
                 self.path_mut().stats.rapids += 1;

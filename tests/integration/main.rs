@@ -11,6 +11,7 @@ mod fuzz_corpus; // the fuzz corpora replayed: every input returns (no panic, ab
 mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
 mod hostile; // hostile input and lost data (issue 18): each reproduction, -o like coreutils, budgets
+mod hostile2; // hostile input, second round (issue 37): limits on every route, CR line ends, located messages, escaped text
 mod install; // the version, completions, man pages and plain error lines of an installed crest
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`

@@ -7,9 +7,37 @@
 //! records: their motion is one path per tool, named by `PARTNO`, with the tool of the
 //! last `CUTTER`. A tool change (`LOADTL`, `CUTTER`) after motion starts the next path.
 
-use super::{Lowerer, PostureSink, RAW_LIMIT, SEEN_LIMIT, invalid, unit_as_written, vec3};
+use super::{
+    Lowerer, PostureSink, RAW_LIMIT, SEEN_LIMIT, check_rate, invalid, unit_as_written, vec3,
+};
 use crate::parse::{Arg, Numbers, RecordKind};
 use crate::toolpath::{LowerError, RawRecord, ToolData};
+
+/// Hold a tool of the file to the limits of `tool.toml` ([`crate::math::limits::tool_radius`],
+/// [`crate::math::limits::corner_radius`]): D/2 in (0, 500] mm, the corner radius in [0, D/2]
+/// (APT's seven-parameter shapes place their corner themselves: only finite and ≥ 0).
+fn check_tool(tool: &ToolData, record: &str, line: u32, column: u32) -> Result<(), LowerError> {
+    use crate::math::limits;
+    let r = 0.5 * tool.diameter_mm;
+    limits::tool_radius(r).map_err(|m| {
+        invalid(
+            line,
+            column,
+            &format!("a {record} radius D/2 that {m}"),
+            format!("D {} mm", tool.diameter_mm),
+        )
+    })?;
+    let bound = if tool.apt.is_some() { f64::INFINITY } else { r };
+    limits::corner_radius(tool.corner_radius_mm, bound).map_err(|m| {
+        invalid(
+            line,
+            column,
+            &format!("a {record} corner radius that {m}"),
+            format!("{} mm", tool.corner_radius_mm),
+        )
+    })?;
+    Ok(())
+}
 
 impl Lowerer {
     /// Tool data of a `TLDATA` record.
@@ -73,13 +101,8 @@ impl Lowerer {
                 format!("{} numbers", nums.len()),
             ));
         }
-        if tool.diameter_mm < 0.0 || tool.corner_radius_mm < 0.0 {
-            return Err(invalid(
-                line,
-                column,
-                "a tool diameter and radius ≥ 0",
-                format!("{} and {}", get(0), get(1)),
-            ));
+        if kind == "MILL" || kind == "DRILL" {
+            check_tool(&tool, &format!("TLDATA/{kind}"), line, column)?;
         }
         Ok(tool)
     }
@@ -91,14 +114,6 @@ impl Lowerer {
         let s = self.scale();
         let v = n.as_slice();
         let get = |k: usize| v.get(k).copied().unwrap_or(0.0);
-        if get(0) < 0.0 || get(1) < 0.0 {
-            return Err(invalid(
-                line,
-                column,
-                "a cutter diameter and corner radius ≥ 0",
-                format!("{} and {}", get(0), get(1)),
-            ));
-        }
         let apt = (v.len() == 7).then(|| {
             [
                 get(0) * s,
@@ -110,7 +125,7 @@ impl Lowerer {
                 get(6) * s,
             ]
         });
-        Ok(ToolData {
+        let tool = ToolData {
             kind: "MILL".to_string(),
             diameter_mm: get(0) * s,
             corner_radius_mm: get(1) * s,
@@ -118,7 +133,9 @@ impl Lowerer {
             taper_rad: get(5).to_radians(),
             tip_rad: get(4).to_radians(),
             apt,
-        })
+        };
+        check_tool(&tool, "CUTTER", line, column)?;
+        Ok(tool)
     }
 
     /// A tool change. In a path of its own (`TOOL PATH`) it changes nothing; in an APT
@@ -246,17 +263,22 @@ impl Lowerer {
         Ok(())
     }
 
-    pub(super) fn spindl(&mut self, args: &[Arg], line: u32, column: u32) {
+    pub(super) fn spindl(
+        &mut self,
+        args: &[Arg],
+        line: u32,
+        column: u32,
+    ) -> Result<(), LowerError> {
         let speed = args.iter().find_map(|a| match a {
             Arg::Num(v) => Some(*v),
             Arg::Word(_) => None,
         });
         if args.iter().any(|a| a.is_word("OFF")) {
             self.spindle_rpm = None;
-            return;
+            return Ok(());
         }
         let Some(mut v) = speed else {
-            return; // SPINDL/ON keeps the last speed.
+            return Ok(()); // SPINDL/ON keeps the last speed.
         };
         if v < 0.0 {
             self.warn(
@@ -297,10 +319,22 @@ impl Lowerer {
                 None
             }
         };
+        if let Some(r) = rpm {
+            check_rate(
+                "spindle speed",
+                "rpm",
+                r,
+                crate::math::limits::RPM,
+                line,
+                column,
+            )?;
+        }
         self.spindle_rpm = rpm;
         if let Some(fr) = self.feed_mm_rev {
             self.feed_mm_min = rpm.map(|r| fr * r);
             if let Some(f) = self.feed_mm_min {
+                let feed = crate::math::limits::FEED_MM_MIN;
+                check_rate("feed", "mm/min", f, feed, line, column)?;
                 self.note_feed(f);
             }
         }
@@ -310,6 +344,7 @@ impl Lowerer {
                 st.spindles_rpm.push(r);
             }
         }
+        Ok(())
     }
 }
 
