@@ -231,7 +231,7 @@ fn the_readme_walkthrough_runs_as_printed() {
         );
         let got: Vec<String> = String::from_utf8_lossy(&out.stdout)
             .lines()
-            .map(|l| untimed(l))
+            .map(&untimed)
             .collect();
         let want: Vec<String> = expected.iter().map(|l| untimed(l)).collect();
         assert_eq!(got, want, "{cmd}");

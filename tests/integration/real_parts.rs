@@ -190,7 +190,7 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
     // The large export's point lies on the lead-in and lead-out arcs, about 8.5 mm above
     // the floor (issue 33): refused with that distance by default, simulated from every
     // feed move with `--moves all` (with a warning, exit 1).
-    let large = shared("nx_5axis_varcontour_ijk_large.cls");
+    let large = ext.join("nx_5axis_varcontour_ijk_large.cls");
     let a = crest()
         .arg("simulate")
         .arg(&large)
