@@ -153,8 +153,9 @@ pub fn check(f: &Facts<'_>) -> Vec<String> {
             ));
         }
     }
-    // 4. A tool that does not finish with its corner or ball.
-    if r_eff <= 0.0 {
+    // 4. A tool that does not finish with its corner or ball: a flat end face and no
+    // corner (a cone or an engraver has no end face: its tip finishes).
+    if r_eff <= 0.0 && f.cutter.flat_end_radius_mm() > 0.0 {
         let wall = f
             .axis_normal_cos
             .is_some_and(|c| c < WALL_DEG.to_radians().sin());
