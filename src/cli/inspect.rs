@@ -451,5 +451,23 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
         return Ok(Outcome::CheckFailed);
     }
+    // Contradictory units fail the check (README "Sanity checks").
+    let units: Vec<_> = report
+        .warnings
+        .iter()
+        .filter(|w| w.message.starts_with(crest::toolpath::CONTRADICTORY_UNITS))
+        .collect();
+    for w in &units {
+        eprintln!(
+            "crest inspect: {}:{}:{}: {}",
+            args.file.display(),
+            w.line,
+            w.column,
+            w.message
+        );
+    }
+    if !units.is_empty() {
+        return Ok(Outcome::CheckFailed);
+    }
     Ok(Outcome::Ok)
 }

@@ -16,6 +16,7 @@ pub mod feed;
 pub mod progress;
 pub mod report;
 pub mod runout;
+pub mod sanity;
 pub mod simulate;
 pub mod tasks;
 pub mod tool;

@@ -971,6 +971,52 @@ pub fn simulate_shard(
             .map_err(|e| miette!("{file}: {e}"))?,
         )),
     };
+    // The sanity checks (README "Sanity checks"): each finding fails the run.
+    let mut sane = super::sanity::unit_findings(&program);
+    let no_heights: [f64; 0] = [];
+    let mut facts = super::sanity::Facts {
+        cutter: &cutter,
+        model: req.model,
+        fz_mm: cutting.fz_mm,
+        chord_tol_um: sopts.chord_tol_mm * 1e3,
+        stepover_mm: None,
+        ap_mm,
+        heights_um: &no_heights,
+        patch_mm: None,
+        axis_normal_cos: None,
+    };
+    if let Output::Grid(sim) = &output {
+        let (centre, normal) = sim.node_point(sim.map.nx / 2, sim.map.ny / 2);
+        let is_cut = |pi: usize, i: usize| program.paths[pi].postures[i].motion == MotionKind::Cut;
+        let far = 2.0 * cutter.radius_mm;
+        facts.stepover_mm = super::air::nearest(&program, &paths, &centre, far, true, is_cut)
+            .and_then(|n| n.stepover_mm);
+        facts.heights_um = &sim.map.z_um;
+        facts.patch_mm = match req.grid {
+            GridRequest::PatchNear {
+                length_mm,
+                width_mm,
+                ..
+            }
+            | GridRequest::PatchAt {
+                length_mm,
+                width_mm,
+                ..
+            } => Some((length_mm, width_mm)),
+            _ => None,
+        };
+        facts.axis_normal_cos = samples
+            .iter()
+            .min_by(|a, b| {
+                (a.position - centre)
+                    .norm()
+                    .total_cmp(&(b.position - centre).norm())
+            })
+            .map(|s| s.axis.dot(&normal).abs());
+    }
+    sane.extend(super::sanity::check(&facts));
+    warnings.extend(sane.iter().cloned());
+    failed_checks.extend(sane);
     let (nodes, nodes_cut) = match &output {
         Output::Grid(sim) => (sim.map.nx * sim.map.ny, sim.nodes_cut),
         Output::Map(m) => (m.points.len(), m.nodes_cut),

@@ -27,6 +27,10 @@ use std::collections::HashMap;
 
 /// mm per inch.
 pub const MM_PER_INCH: f64 = 25.4;
+
+/// The start of the warning of a file whose feeds are in inches (`FEDRAT/IPM`, `IPR`) and
+/// whose lengths are millimetres for want of a `UNITS` record: `simulate` fails on it.
+pub const CONTRADICTORY_UNITS: &str = "contradictory units";
 /// At most this many warnings of one kind are kept; the rest are counted.
 const WARNINGS_PER_KIND: usize = 5;
 /// At most this many distinct feeds/spindle speeds are listed per path.
@@ -163,6 +167,10 @@ pub struct Lowerer {
     frame: Option<MsysFrame>,
     /// The open path was started by a `TOOL PATH` record (and so needs `END-OF-PATH`).
     opened_by_record: bool,
+    /// A `UNITS` record was read.
+    units_seen: bool,
+    /// Where the first inch feed (`FEDRAT/IPM`, `IPR`) was read: line, column.
+    inch_feed_at: Option<(u32, u32)>,
     /// Records of the wider APT family were seen (`PARTNO`, `CUTTER`, `LOADTL`, …): such
     /// files have no `TOOL PATH` records, so motion outside one is no finding.
     apt: bool,
@@ -274,6 +282,8 @@ impl Lowerer {
             last_out: None,
             frame: None,
             opened_by_record: false,
+            units_seen: false,
+            inch_feed_at: None,
             apt: false,
             partno: None,
             cutter: None,
@@ -652,7 +662,10 @@ impl Lowerer {
                 }
             }
             RecordKind::Cutcom(_) => {}
-            RecordKind::Units(u) => self.inch = *u == LengthUnit::Inch,
+            RecordKind::Units(u) => {
+                self.inch = *u == LengthUnit::Inch;
+                self.units_seen = true;
+            }
             RecordKind::LoadTool { number, .. } => self.load_tool(*number, sink)?,
             RecordKind::SelectTool { .. } => {}
             RecordKind::Print { .. }
@@ -669,6 +682,11 @@ impl Lowerer {
                     unit,
                     Some(FeedUnit::Mmpr | FeedUnit::Ipr | FeedUnit::Perrev)
                 );
+                if matches!(unit, Some(FeedUnit::Ipm | FeedUnit::Ipr))
+                    && self.inch_feed_at.is_none()
+                {
+                    self.inch_feed_at = Some((line, column));
+                }
                 let factor = match unit {
                     Some(FeedUnit::Mmpm | FeedUnit::Mmpr) => 1.0,
                     Some(FeedUnit::Ipm | FeedUnit::Ipr) => MM_PER_INCH,
@@ -983,6 +1001,14 @@ impl Lowerer {
                 self.warn("no-end", 0, 0, "file ends without END-OF-PATH".into());
             }
             self.end_path(sink)?;
+        }
+        if let (Some((line, column)), false) = (self.inch_feed_at, self.units_seen) {
+            self.warn(
+                "units",
+                line,
+                column,
+                format!("{CONTRADICTORY_UNITS}: the feeds are in inches (FEDRAT/IPM or IPR) but the file has no UNITS record, so its coordinates and tool are read in millimetres; add UNITS/INCH or UNITS/MM"),
+            );
         }
         let mut counts: Vec<(&'static str, usize)> = self
             .warning_counts

@@ -35,7 +35,10 @@ pub mod regions;
 pub mod write;
 
 pub use geom::Spline;
-pub use lower::{LowerError, LowerOptions, Lowerer, PostureSink, derive_normal, lower_records};
+pub use lower::{
+    CONTRADICTORY_UNITS, LowerError, LowerOptions, Lowerer, PostureSink, derive_normal,
+    lower_records,
+};
 pub use moves::{MoveCounts, Moves};
 pub use write::{ClsfWriter, Contact12Writer};
 

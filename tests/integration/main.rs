@@ -22,6 +22,7 @@ mod process; // process effects: Brammertz limit of ploughing, calibration, run-
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
+mod sanity; // loud sanity checks (issue 33): heights beyond the bound, narrow patches, ap clipping the scallop, tools without corner, contradictory units
 mod shard; // `crest study --shard K/N` in separate processes and `crest merge`: the single-process bytes
 mod study; // `crest study`: designed experiments through the whole pipeline, their effects
 mod surface; // z-map and N-buffer: closed forms, patches, R7 trials, properties, `crest simulate`

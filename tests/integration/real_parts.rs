@@ -228,7 +228,9 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
             "all",
             1,
         ),
-        ("nx_fixed_contour_nurbs.cls", "-94.4,101,253", "cut", 0),
+        // A 4 mm patch across a 14.6 mm stepover: its areal parameters do not cover one
+        // scallop period (a sanity check, exit 1).
+        ("nx_fixed_contour_nurbs.cls", "-94.4,101,253", "cut", 1),
     ] {
         let out = dir.path().join(format!("{file}.gsf"));
         let a = crest()
@@ -261,6 +263,13 @@ fn patches_on_real_centre_line_exports_cut_most_of_their_nodes() {
                 j["warnings"]
                     .to_string()
                     .contains("engage and retract moves only"),
+                "{j}"
+            );
+        } else {
+            assert!(
+                j["warnings"]
+                    .to_string()
+                    .contains("narrower than the local stepover 14.59"),
                 "{j}"
             );
         }
