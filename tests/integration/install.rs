@@ -233,7 +233,7 @@ fn the_readme_walkthrough_runs_as_printed() {
             .lines()
             .map(untimed)
             .collect();
-        let want: Vec<String> = expected.iter().map(untimed).collect();
+        let want: Vec<String> = expected.iter().map(|l| untimed(l)).collect();
         assert_eq!(got, want, "{cmd}");
     }
 }
