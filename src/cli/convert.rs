@@ -9,7 +9,7 @@
 
 use super::Outcome;
 use super::reading::{RtcpArg, read_options};
-use crest::io::toolpath::{detect, stream_from, stream_written_from};
+use crest::io::toolpath::{stream_from, stream_written_from};
 use crest::nc::GcodeWriter;
 use crest::parse::Written;
 use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
@@ -75,8 +75,7 @@ pub struct Converted {
 pub fn convert(args: &Args) -> miette::Result<Converted> {
     let (input, output, all_moves, absolute) =
         (&args.file, &args.output, args.all_moves, args.absolute);
-    let kind = detect(input)?;
-    let reader = crest::io::toolpath::open(input)?;
+    let (kind, reader) = crest::io::toolpath::open_detected(input)?;
     let lower = LowerOptions {
         apply_msys: absolute,
         keep_postures: false,

@@ -42,7 +42,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let mut results: Vec<(String, serde_json::Value)> = Vec::new();
     for path in &args.shards {
         let file = path.display().to_string();
-        let text = crest::io::text::read_text(path, "shard file")?;
+        let text = crest::io::text::read_text(path, "shard file", crest::io::input::SHARD)?;
         for (i, line) in text.lines().enumerate() {
             if line.trim().is_empty() {
                 continue;

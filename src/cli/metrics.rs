@@ -165,6 +165,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let filtered = pp.lambda_s_um.is_some() || pp.lambda_c_um.is_some();
     let as_stored = HeightMapFormat::from_path(&args.file) == Some(HeightMapFormat::Gsf)
+        && crest::io::input::is_regular(&args.file)
         && !profile_mode
         && pp.level.degree() == 0
         && !filtered

@@ -358,8 +358,7 @@ fn stream_pass(
 ) -> miette::Result<PassResult> {
     let file = &args.file;
     let moves = crest::toolpath::Moves::from(args.moves);
-    let kind = detect(file)?;
-    let reader = crest::io::toolpath::open(file)?;
+    let (kind, reader) = crest::io::toolpath::open_detected(file)?;
     let lower = ReadOptions {
         lower: LowerOptions {
             keep_postures: false,

@@ -166,7 +166,7 @@ pub(crate) fn write_outputs(
 
 fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
     let (xs, zs) = crest::io::profile_csv::read_profile_csv(&a.profile)?;
-    let tool_text = crest::io::text::read_text(&a.tool, "tool file")?;
+    let tool_text = crest::io::text::read_text(&a.tool, "tool file", crest::io::input::CONFIG)?;
     let cutter = crest::pipeline::tool_from_text(&tool_text, &a.tool.display().to_string())?;
     let id = crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg)
         .map_err(|e| miette!("{}: {e}", a.profile.display()))?;

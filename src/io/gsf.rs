@@ -44,8 +44,9 @@ struct Header {
 }
 
 /// Parse the header from `bytes`, the file's first bytes (at least through the padding, or
-/// the whole file when it is shorter); `len` is the file's whole length.
-fn header(bytes: &[u8], len: usize) -> Result<Header, FormatError> {
+/// the whole file when it is shorter); `len` is the file's whole length (`None`: not known,
+/// the size not checked and the lateral scale left at zero, see [`stored_len`]).
+fn header(bytes: &[u8], len: Option<usize>) -> Result<Header, FormatError> {
     if !bytes.starts_with(MAGIC) {
         return Err(FormatError::byte(
             0,
@@ -137,6 +138,18 @@ fn header(bytes: &[u8], len: usize) -> Result<Header, FormatError> {
         .filter(|n| *n <= (usize::MAX >> 3))
         .ok_or_else(|| FormatError::file(format!("XRes×YRes = {nx}×{ny} is too large")))?;
     let need = n * 4;
+    let Some(len) = len else {
+        return Ok(Header {
+            nx,
+            ny,
+            dx_um: 0.0,
+            dy_um: 0.0,
+            x0_mm: 0.0,
+            y0_mm: 0.0,
+            z_um,
+            data_start,
+        });
+    };
     let have = len - data_start;
     if have != need {
         return Err(FormatError::byte(
@@ -158,8 +171,15 @@ fn header(bytes: &[u8], len: usize) -> Result<Header, FormatError> {
     })
 }
 
+/// The length of the whole file whose header is in `head` (its first bytes): the header
+/// and `XRes·YRes` float32 values; `None` when `head` holds no valid header.
+pub(crate) fn stored_len(head: &[u8]) -> Option<u64> {
+    let h = header(head, None).ok()?;
+    Some(h.data_start as u64 + (h.nx as u64).saturating_mul(h.ny as u64).saturating_mul(4))
+}
+
 pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
-    let h = header(bytes, bytes.len())?;
+    let h = header(bytes, Some(bytes.len()))?;
     let z: Vec<f64> = bytes[h.data_start..]
         .chunks_exact(4)
         .map(|c| f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]]) * h.z_um))
@@ -256,7 +276,7 @@ fn read_header(file: &std::fs::File) -> Result<Header, ReadError> {
             }
         }
     }
-    Ok(header(&head, len)?)
+    Ok(header(&head, Some(len))?)
 }
 
 /// A height beyond the limit: its index in the map and its value (µm).

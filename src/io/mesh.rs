@@ -106,9 +106,39 @@ pub fn read_part(path: &Path) -> Result<PartFile, MeshFileError> {
             "unknown mesh format (expected .stl, .obj or .ply)".into(),
         )
     })?;
-    super::output::register_input(path);
-    let bytes = std::fs::read(path).map_err(|e| err("1".into(), format!("cannot read: {e}")))?;
+    let bytes = super::input::read_staged(path, "mesh", |head| mesh_stage(format, head))
+        .map_err(|e| err("1".into(), e.detail()))?;
     part_from_bytes(&bytes, format, &file)
+}
+
+/// The budget of a mesh from its first bytes: a binary STL its header's size, an OBJ or
+/// ASCII STL text within [`super::input::MESH`], a PLY (ASCII or binary) that budget after
+/// its `ply` line; nothing more of a file that starts as none of them.
+fn mesh_stage(format: MeshFormat, head: &[u8]) -> super::input::Stage {
+    use super::input::{MESH, Stage, text_stage};
+    match format {
+        MeshFormat::Stl => {
+            let text_start = head
+                .iter()
+                .position(|b| !b.is_ascii_whitespace())
+                .is_some_and(|i| head[i..].starts_with(b"solid"));
+            if text_start && looks_like_ascii_stl(head) {
+                return text_stage(head, MESH);
+            }
+            let n = u64::from(u32::from_le_bytes([head[80], head[81], head[82], head[83]]));
+            match 84 + 50 * n {
+                len if len <= MESH.bytes => Stage::Budget(super::input::Budget {
+                    bytes: len,
+                    line: None,
+                    why: "84 bytes and 50 per triangle of the binary STL's count",
+                }),
+                _ => Stage::Budget(MESH),
+            }
+        }
+        MeshFormat::Obj => text_stage(head, MESH),
+        MeshFormat::Ply if head.starts_with(b"ply") => Stage::Budget(MESH),
+        MeshFormat::Ply => Stage::Stop,
+    }
 }
 
 /// [`read_part`] on the bytes of a file named `file` in `format`.
@@ -801,10 +831,18 @@ pub fn write_map_ply(points: &[MapPoint], out: &mut dyn Write) -> std::io::Resul
 /// `height_um`; normals optional).
 pub fn read_map_ply(path: &Path) -> Result<Vec<MapPoint>, MeshFileError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| MeshFileError {
+    let bytes = super::input::read_staged(path, "part map", |head| {
+        super::input::text_stage(head, super::input::MESH)
+    })
+    .map_err(|e| MeshFileError {
         file: file.clone(),
         at: "1".into(),
-        message: format!("cannot read: {e}"),
+        message: e.detail(),
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| MeshFileError {
+        file: file.clone(),
+        at: "1".into(),
+        message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
     })?;
     let err = |line: usize, message: String| MeshFileError {
         file: file.clone(),

@@ -19,6 +19,7 @@ mod gsf;
 mod sdf;
 mod xyz;
 
+pub mod input;
 pub mod measured;
 pub mod mesh;
 pub mod output;
@@ -144,6 +145,9 @@ pub enum HeightMapError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The file could not be read within its budget.
+    #[error("{0}")]
+    Input(Box<input::InputError>),
     /// The extension names no known format.
     #[error("{path}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf or .sdf)")]
     UnknownFormat {
@@ -174,19 +178,74 @@ pub struct ReadOptions {
 /// Grid CSV needs `opts.dx_um` (and `dy_um`, default = `dx_um`). For the other formats the
 /// spacing comes from the file; a spacing given in `opts` that disagrees by more than 1e-6
 /// relative is an error.
+///
+/// The file is read once, within the budget of its format ([`input::read_staged`]: a
+/// `.gsf` or binary `.sdf` to the size its header gives, a text map to the node limit); a
+/// path without an extension (`-` for standard input, a pipe) is told by its content
+/// ([`HeightMapFormat::sniff`]).
 pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, HeightMapError> {
-    let format = HeightMapFormat::from_path(path).ok_or_else(|| HeightMapError::UnknownFormat {
-        path: path.to_path_buf(),
-    })?;
-    output::register_input(path);
-    let bytes = std::fs::read(path).map_err(|source| HeightMapError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let by_name = HeightMapFormat::from_path(path);
+    if by_name.is_none() && path.extension().is_some() {
+        return Err(HeightMapError::UnknownFormat {
+            path: path.to_path_buf(),
+        });
+    }
+    let mut sniffed = None;
+    let bytes = input::read_staged(path, "height map", |head| {
+        let format = by_name.unwrap_or_else(|| HeightMapFormat::sniff(head));
+        sniffed = Some(format);
+        budget_of(format, head)
+    })
+    .map_err(|e| HeightMapError::Input(Box::new(e)))?;
+    let format = by_name
+        .or(sniffed)
+        .unwrap_or_else(|| HeightMapFormat::sniff(&bytes));
     parse_heightmap(&bytes, format, opts).map_err(|error| HeightMapError::Format {
         path: path.to_path_buf(),
         error,
     })
+}
+
+/// The budget of a height map of `format` from its first bytes `head` ([`input::Stage`]).
+fn budget_of(format: HeightMapFormat, head: &[u8]) -> input::Stage {
+    use input::Stage;
+    match format {
+        HeightMapFormat::Gsf => match gsf::stored_len(head) {
+            Some(len) if len <= input::GSF_MAX.bytes => Stage::Budget(input::Budget {
+                bytes: len,
+                line: None,
+                why: "XRes × YRes float32 values after the header",
+            }),
+            // Past the node limit: read no further than the limit allows.
+            Some(_) => Stage::Budget(input::GSF_MAX),
+            // No valid header in the first bytes: the parser says what is wrong with them.
+            None => Stage::Stop,
+        },
+        HeightMapFormat::Sdf => match head.first() {
+            Some(b'a') => input::text_stage(head, input::MAP_TEXT),
+            Some(b'b') => Stage::Budget(input::SDF_BINARY),
+            _ => Stage::Stop,
+        },
+        HeightMapFormat::Csv => input::text_stage(head, input::MAP_TEXT),
+        HeightMapFormat::Xyz => input::text_stage(head, input::MAP_XYZ),
+    }
+}
+
+impl HeightMapFormat {
+    /// The format the first bytes of a file show: `.gsf` and `.sdf` by their first line,
+    /// else CSV (a grid, or a point list with an `x,y,z` header).
+    pub fn sniff(head: &[u8]) -> HeightMapFormat {
+        if head.starts_with(b"Gwyddion Simple Field") {
+            HeightMapFormat::Gsf
+        } else if [b"aBCR", b"aISO", b"bBCR", b"bISO"]
+            .iter()
+            .any(|m| head.starts_with(*m))
+        {
+            HeightMapFormat::Sdf
+        } else {
+            HeightMapFormat::Csv
+        }
+    }
 }
 
 /// The mapping of an error in opening a `.gsf` to [`HeightMapError`].
@@ -207,9 +266,17 @@ fn gsf_error(path: &Path) -> impl Fn(gsf::ReadError) -> HeightMapError + '_ {
 /// in a few rows of memory: the header is read and checked (spacing against `opts`) now,
 /// the heights (the stored float32 values in µm, which [`read_heightmap`] widens to `f64`
 /// exactly) as they are handed on.
+///
+/// Only a regular file is read this way ([`input::is_regular`]); standard input, a pipe or
+/// a device is refused here (read it with [`read_heightmap`]).
 pub fn open_gsf_rows(path: &Path, opts: &ReadOptions) -> Result<GsfRows, HeightMapError> {
-    output::register_input(path);
     let err = gsf_error(path);
+    if !input::is_regular(path) {
+        return Err(err(gsf::ReadError::Io(std::io::Error::other(
+            "not a regular file: read it whole",
+        ))));
+    }
+    output::register_input(path);
     let file = std::fs::File::open(path).map_err(|e| err(gsf::ReadError::Io(e)))?;
     let rows = GsfRows::open(file, path).map_err(&err)?;
     check_against(opts.dx_um, rows.dx_um, "dx").map_err(|e| err(e.into()))?;

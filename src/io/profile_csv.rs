@@ -6,7 +6,7 @@ use std::path::Path;
 
 /// Read a profile CSV; errors name the file and line.
 pub fn read_profile_csv(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
-    let text = super::text::read_text(path, "profile")?;
+    let text = super::text::read_text(path, "profile", super::input::TABLE)?;
     parse_profile_csv(&text, &path.display().to_string())
 }
 

@@ -11,7 +11,8 @@ pub struct SeriesError(pub String);
 
 fn read_text(path: &Path) -> Result<String, SeriesError> {
     // `text::read_text` records the path as an input.
-    super::text::read_text(path, "table").map_err(|e| SeriesError(e.to_string()))
+    super::text::read_text(path, "table", super::input::TABLE)
+        .map_err(|e| SeriesError(e.to_string()))
 }
 
 /// A two-column numeric table: optional header line, `#` comments, fields separated by

@@ -6,17 +6,9 @@ use std::path::Path;
 /// Why a text file could not be read.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum TextError {
-    /// The file could not be opened or read.
-    #[error("{file}: cannot read the {what}: {source}")]
-    Io {
-        /// File name as given.
-        file: String,
-        /// What the file is (`tool file`, `measured table`, …).
-        what: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
+    /// The file could not be read within its budget.
+    #[error(transparent)]
+    Input(Box<super::input::InputError>),
     /// The file is not UTF-8 text.
     #[error("{file}:{line}:{column}: the {what} is not UTF-8 text (invalid byte 0x{byte:02X})")]
     Encoding {
@@ -33,16 +25,18 @@ pub enum TextError {
     },
 }
 
-/// Read `path` as UTF-8 text; `what` names the kind of file in errors. A UTF-8 byte-order
-/// mark at the start is dropped.
-pub fn read_text(path: &Path, what: &str) -> Result<String, TextError> {
+/// Read `path` (`-`: standard input) as UTF-8 text within `budget`
+/// ([`super::input::read_staged`]: refused past it, or for a NUL byte in its first 64 KiB);
+/// `what` names the kind of file in errors. A UTF-8 byte-order mark at the start is dropped.
+pub fn read_text(
+    path: &Path,
+    what: &str,
+    budget: super::input::Budget,
+) -> Result<String, TextError> {
     let file = path.display().to_string();
-    super::output::register_input(path);
-    let bytes = std::fs::read(path).map_err(|source| TextError::Io {
-        file: file.clone(),
-        what: what.to_string(),
-        source,
-    })?;
+    let bytes =
+        super::input::read_staged(path, what, |head| super::input::text_stage(head, budget))
+            .map_err(|e| TextError::Input(Box::new(e)))?;
     decode(bytes, &file, what)
 }
 

@@ -8,6 +8,7 @@
 //! G-code is read through the forward kinematics of the machine in [`ReadOptions`]
 //! (`crate::nc`).
 
+use super::input::Bounded;
 use crate::kinematics::Machine;
 use crate::nc::{NcReader, Rtcp};
 use crate::parse::Written;
@@ -17,7 +18,6 @@ use crate::parse::{
 };
 use crate::toolpath::{LowerError, LowerOptions, Lowerer, Posture, PostureSink, Program, Toolpath};
 use miette::{Diagnostic, MietteError, MietteSpanContents, SourceCode, SourceSpan, SpanContents};
-use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -197,10 +197,7 @@ pub struct IoFailure {
 pub fn parse_diagnostic(file: &Path, e: ParseError) -> miette::Report {
     match e {
         ParseError::Syntax(s) => miette::Report::new(InputError::new(file, &s)),
-        ParseError::Io(io) => miette::Report::new(IoFailure {
-            context: format!("{}: reading failed", file.display()),
-            source: io,
-        }),
+        ParseError::Io(io) => read_error(file, io),
     }
 }
 
@@ -243,12 +240,56 @@ pub fn name_output(e: miette::Report, output: &Path) -> miette::Report {
     }
 }
 
-/// Open a tool-path file for reading, its line ends made `\n` or `\r\n` ([`LoneCr`]).
-pub fn open(path: &Path) -> miette::Result<BufReader<LoneCr<File>>> {
-    super::output::register_input(path);
-    let f =
-        File::open(path).map_err(|e| miette::miette!("{}: cannot open: {e}", path.display()))?;
+/// Open a tool-path file (`-`: standard input) for reading within its budget
+/// ([`super::input::TOOLPATH`]: a line of at most 1 MiB, 8 GiB in all), its line ends made
+/// `\n` or `\r\n` ([`LoneCr`]).
+pub fn open(path: &Path) -> miette::Result<BufReader<LoneCr<Bounded>>> {
+    let f = super::input::open(path, "tool path", super::input::TOOLPATH)?;
     Ok(BufReader::with_capacity(1 << 16, LoneCr::new(f)))
+}
+
+/// A tool-path file opened once, its first bytes (read for [`open_detected`]) put back in
+/// front of the rest.
+pub type Opened = BufReader<std::io::Chain<std::io::Cursor<Vec<u8>>, BufReader<LoneCr<Bounded>>>>;
+
+/// Open `path` ([`open`]) and decide from its first 64 KiB, read once, whether it holds
+/// CLSF, contact12 or G-code; the reader hands on every byte from the first.
+pub fn open_detected(path: &Path) -> miette::Result<(InputKind, Opened)> {
+    let mut reader = open(path)?;
+    let mut head = Vec::with_capacity(1 << 16);
+    (&mut reader)
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .map_err(|e| read_error(path, e))?;
+    let kind = kind_of(&head);
+    Ok((
+        kind,
+        BufReader::with_capacity(1 << 16, std::io::Cursor::new(head).chain(reader)),
+    ))
+}
+
+/// A failed read of `path`: the budget's own error ([`super::input::InputError`]), or the
+/// I/O error with the file named.
+fn read_error(path: &Path, e: std::io::Error) -> miette::Report {
+    match super::input::take_error(e) {
+        Ok(budget) => miette::Report::new(budget),
+        Err(io) => miette::Report::new(IoFailure {
+            context: format!("{}: reading failed", path.display()),
+            source: io,
+        }),
+    }
+}
+
+/// The kind of a tool-path file from its first bytes.
+fn kind_of(head: &[u8]) -> InputKind {
+    let text = String::from_utf8_lossy(head);
+    if looks_like_contact12(&text) {
+        InputKind::Contact12
+    } else if looks_like_gcode(&text) {
+        InputKind::Gcode
+    } else {
+        InputKind::Clsf
+    }
 }
 
 /// A reader that turns every lone `\r` (classic Mac OS line ends) into `\n` and leaves
@@ -324,21 +365,10 @@ impl<R: Read> Read for LoneCr<R> {
     }
 }
 
-/// Decide whether `path` holds CLSF, contact12 or G-code, from its first 64 KiB.
+/// Decide whether `path` holds CLSF, contact12 or G-code, from its first 64 KiB (read
+/// once: standard input or a pipe is replayed to the next reader, see [`super::input`]).
 pub fn detect(path: &Path) -> miette::Result<InputKind> {
-    let mut head = Vec::with_capacity(1 << 16);
-    open(path)?
-        .take(1 << 16)
-        .read_to_end(&mut head)
-        .map_err(|e| miette::miette!("{}: cannot read: {e}", path.display()))?;
-    let text = String::from_utf8_lossy(&head);
-    Ok(if looks_like_contact12(&text) {
-        InputKind::Contact12
-    } else if looks_like_gcode(&text) {
-        InputKind::Gcode
-    } else {
-        InputKind::Clsf
-    })
+    Ok(open_detected(path)?.0)
 }
 
 /// Read `path` (CLSF or contact12, by content), lowering as it goes; `sink` receives
@@ -349,8 +379,7 @@ pub fn stream_program(
     opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
 ) -> miette::Result<Program> {
-    let kind = detect(path)?;
-    let reader = open(path)?;
+    let (kind, reader) = open_detected(path)?;
     stream_from(path, kind, reader, opts, sink)
 }
 
@@ -523,6 +552,7 @@ mod line_end_tests {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs::File;
     use std::io::Write;
 
     fn temp(text: &str, name: &str) -> (tempfile::TempDir, std::path::PathBuf) {

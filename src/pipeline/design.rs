@@ -47,12 +47,12 @@ pub struct DesignTexts {
 
 /// Read the design `path` and the tool file it names (relative to the design file).
 pub fn load_design_texts(path: &Path) -> miette::Result<DesignTexts> {
-    let design_toml = read_text(path, "design")?;
+    let design_toml = read_text(path, "design", crate::io::input::CONFIG)?;
     let design_file = path.display().to_string();
     let design = crate::config::design::parse_design(&design_toml, &design_file)?;
     let tool_path = path.parent().unwrap_or(Path::new(".")).join(&design.tool);
     let tool_file = tool_path.display().to_string();
-    let tool_toml = read_text(&tool_path, "tool file").wrap_err_with(|| {
+    let tool_toml = read_text(&tool_path, "tool file", crate::io::input::CONFIG).wrap_err_with(|| {
         format!(
             "{design_file}: cannot read tool file {tool_file} (the path is relative to the design file)"
         )

@@ -41,7 +41,7 @@ impl ToolFileError {
 
 /// Read `path` as a `tool.toml`.
 pub fn load_tool(path: &Path) -> miette::Result<Cutter> {
-    let text = read_text(path, "tool file")?;
+    let text = read_text(path, "tool file", crate::io::input::CONFIG)?;
     tool_from_text(&text, &path.display().to_string())
 }
 
@@ -94,7 +94,7 @@ pub fn tool_from_text(text: &str, file: &str) -> miette::Result<Cutter> {
 
 /// Read `path` as a machine description.
 pub fn load_machine(path: &Path) -> miette::Result<Machine> {
-    let text = read_text(path, "machine file")?;
+    let text = read_text(path, "machine file", crate::io::input::CONFIG)?;
     let file = path.display().to_string();
     Machine::from_toml_str(&text).map_err(|e| {
         let e = match &e {
@@ -136,14 +136,14 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
 /// (no file or no edge radius).
 pub fn tool_min_chip(path: Option<&Path>) -> miette::Result<Option<f64>> {
     let Some(path) = path else { return Ok(None) };
-    let text = read_text(path, "tool file")?;
+    let text = read_text(path, "tool file", crate::io::input::CONFIG)?;
     crate::config::load_tool_min_chip(&text)
         .map_err(|e| ToolFileError::new(&path.display().to_string(), &text, &e).into())
 }
 
 /// Read `path` as a `process.toml`.
 pub fn load_process(path: &Path) -> miette::Result<ProcessConfig> {
-    let text = read_text(path, "process file")?;
+    let text = read_text(path, "process file", crate::io::input::CONFIG)?;
     Ok(ProcessConfig::parse(&text, &path.display().to_string())?)
 }
 

@@ -28,11 +28,13 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
     let measured_name = measured.display().to_string();
     let study_name = study_path.display().to_string();
     let table = crate::io::measured::parse_measured(
-        &read_text(measured, "measured table")?,
+        &read_text(measured, "measured table", crate::io::input::TABLE)?,
         &measured_name,
     )?;
-    let mut study =
-        crate::config::regression::parse_study(&read_text(study_path, "study")?, &study_name)?;
+    let mut study = crate::config::regression::parse_study(
+        &read_text(study_path, "study", crate::io::input::CONFIG)?,
+        &study_name,
+    )?;
     let tool_path = study_path
         .parent()
         .unwrap_or(Path::new("."))

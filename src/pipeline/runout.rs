@@ -88,7 +88,7 @@ fn parse(text: &str, file: &str) -> miette::Result<Study> {
 
 /// Read the study `path` and the tool file it names (relative to the study file).
 pub fn load_runout_texts(path: &Path) -> miette::Result<RunoutTexts> {
-    let study_toml = read_text(path, "study file")?;
+    let study_toml = read_text(path, "study file", crate::io::input::CONFIG)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     runout_texts(&path.display().to_string(), study_toml, dir)
 }
@@ -102,7 +102,7 @@ pub fn runout_texts(
 ) -> miette::Result<RunoutTexts> {
     let study = parse(&study_toml, study_file)?;
     let tool_path = dir.join(&study.tool);
-    let tool_toml = read_text(&tool_path, "tool file")?;
+    let tool_toml = read_text(&tool_path, "tool file", crate::io::input::CONFIG)?;
     Ok(RunoutTexts {
         study_file: study_file.to_string(),
         study_toml,
