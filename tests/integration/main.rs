@@ -6,7 +6,8 @@
 mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
 mod convert;
 mod cutters; // general cutters (issue 23): round inserts, APT, profiles, circle segments, axial run-out // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
-mod dialects; // APT files of other CAM systems (samples/apt/), NX contact-contour data
+mod dialects;
+mod endless; // endless and special inputs (issue 37): budgets per format, FIFOs and standard input read once // APT files of other CAM systems (samples/apt/), NX contact-contour data
 mod fuzz_corpus; // the fuzz corpora replayed: every input returns (no panic, abort or hang)
 mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, simulate, inspect, errors
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
