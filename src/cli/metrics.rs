@@ -72,6 +72,10 @@ pub struct Args {
     /// Print one JSON object (keys = ISO symbols; null for undefined values).
     #[arg(long)]
     pub json: bool,
+    /// Most memory the parameters may take, GB (estimated from the nodes before computing;
+    /// refused beyond it with the `--params` that fit).
+    #[arg(long, default_value_t = 4.0, value_name = "GB")]
+    pub max_memory_gb: f64,
 }
 
 fn spec_label(s: ProfileSpec) -> String {
@@ -170,6 +174,17 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         && pp.level.degree() == 0
         && !filtered
         && set.passes_only();
+    // The memory of the parameters on a map in memory, up front where the header gives
+    // the nodes (a regular .gsf), and again once the map is read (missing nodes cost more).
+    let preprocessed = !(pp.level.degree() == 0 && !filtered);
+    if !as_stored
+        && !profile_mode
+        && HeightMapFormat::from_path(&args.file) == Some(HeightMapFormat::Gsf)
+        && crest::io::input::is_regular(&args.file)
+        && let Ok(rows) = open_gsf_rows(&args.file, &opts)
+    {
+        check_memory(&file, (rows.nx, rows.ny), &set, false, preprocessed, &args)?;
+    }
     let loaded = if as_stored {
         let rows = open_gsf_rows(&args.file, &opts).map_err(|e| miette!("{e}"))?;
         let (values, valid) = streamed(&rows, &set)?;
@@ -237,6 +252,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?
         }
         (Loaded::Map(map), None) => {
+            let missing = map.known() < map.z_um.len();
+            check_memory(&file, (map.nx, map.ny), &set, missing, preprocessed, &args)?;
             // Without form removal or filters the map is used as read (no copy of a large map).
             let processed;
             let m = if pp.level.degree() == 0 && !filtered {
@@ -293,4 +310,43 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
     }
     Ok(Outcome::Ok)
+}
+
+/// Refuse, before computing, parameters whose memory estimate
+/// ([`ParamSet::bytes_per_node`]) exceeds `--max-memory-gb`, naming the estimate and the
+/// `--params` that fit.
+fn check_memory(
+    file: &str,
+    (nx, ny): (usize, usize),
+    set: &ParamSet,
+    missing: bool,
+    preprocessed: bool,
+    args: &Args,
+) -> miette::Result<()> {
+    let max = args.max_memory_gb;
+    if !(max.is_finite() && max > 0.0) {
+        return Err(miette!("--max-memory-gb must be positive, got {max}"));
+    }
+    let nodes = nx as u64 * ny as u64;
+    let need = nodes * set.bytes_per_node(missing, preprocessed);
+    let limit = max * 1e9;
+    if (need as f64) <= limit {
+        return Ok(());
+    }
+    let per_node = (limit / nodes.max(1) as f64) as u64;
+    let fit = set.within(per_node, missing, preprocessed);
+    let list: Vec<&str> = fit.params().iter().map(|p| p.symbol()).collect();
+    let hint = if list.is_empty() {
+        "raise --max-memory-gb or cut the map".to_string()
+    } else {
+        format!(
+            "give --params {} (about {:.2} GB) or raise --max-memory-gb",
+            list.join(","),
+            (nodes * fit.bytes_per_node(missing, preprocessed)) as f64 / 1e9
+        )
+    };
+    Err(miette!(
+        "{file}: these parameters of {nx}×{ny} nodes need about {:.2} GB of memory, more than --max-memory-gb {max}: {hint}",
+        need as f64 / 1e9
+    ))
 }

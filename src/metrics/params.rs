@@ -357,6 +357,63 @@ impl ParamSet {
     pub fn passes_only(&self) -> bool {
         self.0.iter().all(|p| PASS_PARAMS.contains(p))
     }
+
+    /// Peak bytes per node of [`areal_parameters`] on a map in memory, the map's own 8
+    /// included (measured, reports/benchmarks.md): the ACF of Sal and Str on the padded
+    /// complex lattice (twice with missing nodes), the spectrum of Std and Ssw, the sorted
+    /// copy of the material-ratio parameters; a levelled or filtered copy adds its own.
+    pub fn bytes_per_node(&self, missing: bool, preprocessed: bool) -> u64 {
+        self.groups()
+            .iter()
+            .map(|&(_, b)| match b {
+                Group::Acf if missing => 180,
+                Group::Acf => 145,
+                Group::Spectrum => 50,
+                Group::Material => 24,
+                Group::Pass => 9,
+            })
+            .max()
+            .unwrap_or(9)
+            + if preprocessed { 16 } else { 0 }
+    }
+
+    /// The parameters of the set with the work each needs.
+    fn groups(&self) -> Vec<(Param, Group)> {
+        use Param::*;
+        self.0
+            .iter()
+            .map(|&p| {
+                let g = match p {
+                    Sal | Str => Group::Acf,
+                    Std | Ssw => Group::Spectrum,
+                    Sk | Spk | Svk | Smr1 | Smr2 | Vmp | Vmc | Vvc | Vvv | Sxp => Group::Material,
+                    _ => Group::Pass,
+                };
+                (p, g)
+            })
+            .collect()
+    }
+
+    /// The parameters of the set that [`ParamSet::bytes_per_node`] keeps within
+    /// `per_node` bytes per node.
+    pub fn within(&self, per_node: u64, missing: bool, preprocessed: bool) -> ParamSet {
+        ParamSet(
+            self.0
+                .iter()
+                .copied()
+                .filter(|&p| ParamSet(vec![p]).bytes_per_node(missing, preprocessed) <= per_node)
+                .collect(),
+        )
+    }
+}
+
+/// The work a parameter needs, for memory estimates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Group {
+    Pass,
+    Material,
+    Spectrum,
+    Acf,
 }
 
 /// The values of the pass parameters in `set` (NaN for the others, filled in by the caller).

@@ -320,3 +320,76 @@ fn standard_input_reads_as_the_file() {
     assert!(piped.status.success(), "{}", stderr(&piped));
     assert_eq!(stdout(&piped), stdout(&file).replace("a.cls.gsf", "-"));
 }
+
+/// A `.gsf` of `n × n` nodes at 2 µm: waves along x and y and a small pattern.
+fn gsf(n: usize) -> Vec<u8> {
+    let mut h = format!(
+        "Gwyddion Simple Field 1.0\nXRes = {n}\nYRes = {n}\nXReal = {}\nYReal = {}\nZUnits = m\n",
+        n as f64 * 2e-6,
+        n as f64 * 2e-6
+    )
+    .into_bytes();
+    h.extend(std::iter::repeat_n(0u8, 4 - h.len() % 4));
+    for i in 0..n {
+        for j in 0..n {
+            let (x, y) = (j as f64 * 2e-6, i as f64 * 2e-6);
+            let z = 1e-6 * (x / 2e-4 * std::f64::consts::TAU).sin()
+                + 3e-7 * (y / 7e-5 * std::f64::consts::TAU).cos()
+                + 5e-8 * (((i * 104_729 + j * 7919) % 1000) as f64 / 1000.0 - 0.5);
+            h.extend((z as f32).to_le_bytes());
+        }
+    }
+    h
+}
+
+#[test]
+fn metrics_beyond_the_memory_cap_are_refused_up_front_with_the_params_that_fit() {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path();
+    write(p, "m.gsf", gsf(600));
+    // The autocorrelation of 360 000 nodes needs about 52 MB; the rest fits in 40 MB.
+    let (out, took) = run_limited(p, &["metrics", "m.gsf", "--max-memory-gb", "0.04"], None);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(took < Duration::from_secs(5), "{took:?}");
+    assert!(
+        err.contains("m.gsf:")
+            && err.contains("600×600 nodes need about 0.0")
+            && err.contains("GB of memory, more than --max-memory-gb 0.04"),
+        "{err}"
+    );
+    let fit = err
+        .split("--params ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap_or_else(|| panic!("no --params in {err}"))
+        .to_string();
+    assert!(!fit.contains("Sal") && !fit.contains("Str"), "{fit}");
+    assert!(
+        fit.contains("Std") && fit.contains("Sk") && fit.contains("Sa"),
+        "{fit}"
+    );
+    // The parameters that fit run under the cap and give the numbers of the whole set.
+    let (some, _) = run_limited(
+        p,
+        &[
+            "metrics",
+            "m.gsf",
+            "--max-memory-gb",
+            "0.04",
+            "--params",
+            &fit,
+            "--json",
+        ],
+        None,
+    );
+    assert!(some.status.success(), "{}", stderr(&some));
+    let (all, _) = run_limited(p, &["metrics", "m.gsf", "--json"], None);
+    assert!(all.status.success(), "{}", stderr(&all));
+    let some: serde_json::Value = serde_json::from_slice(&some.stdout).unwrap();
+    let all: serde_json::Value = serde_json::from_slice(&all.stdout).unwrap();
+    for sym in fit.split(',') {
+        assert_eq!(some[sym], all[sym], "{sym}");
+    }
+    assert!(all["Sal"].is_number(), "{all}");
+}
