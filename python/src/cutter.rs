@@ -79,7 +79,8 @@ impl Cutter {
     /// Read a `tool.toml`.
     #[staticmethod]
     fn from_toml(path: PathBuf) -> PyResult<Cutter> {
-        let text = crest::io::text::read_text(&path, "tool file").map_err(|e| err(e.into()))?;
+        let text = crest::io::text::read_text(&path, "tool file", crest::io::input::CONFIG)
+            .map_err(|e| err(e.into()))?;
         Cutter::from_text(&text, &path.display().to_string())
     }
 

@@ -28,8 +28,8 @@ pub(crate) fn study_tasks<'py>(
         let d =
             crest::config::design::parse_design(design, "<design>").map_err(|e| err(e.into()))?;
         let tool_file = d.tool.display().to_string();
-        let tool_toml =
-            crest::io::text::read_text(&d.tool, "tool file").map_err(|e| err(e.into()))?;
+        let tool_toml = crest::io::text::read_text(&d.tool, "tool file", crest::io::input::CONFIG)
+            .map_err(|e| err(e.into()))?;
         crest::pipeline::design::DesignTexts {
             design_file: "<design>".into(),
             design_toml: design.to_string(),

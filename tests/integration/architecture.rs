@@ -278,3 +278,43 @@ tol = 0.01
     assert_relative_eq!(a.limits.tol, 0.01f64.to_radians(), epsilon = 1e-15);
     assert_eq!(m.rotary[1].travel, None, "limits = [] is endless");
 }
+
+/// Every input is read through `io::input` (ARCHITECTURE.md): no other source file opens or
+/// reads a file whole, and only `io::input` reads standard input. `io/mod.rs` opens a regular
+/// `.gsf` for `GsfRows` (`pread` at offsets) and `io/output.rs` reads back its own staged
+/// outputs.
+#[test]
+fn every_input_is_read_through_io_input() {
+    let reads = [
+        "File::open",
+        "fs::read(",
+        "read_to_string(",
+        "fs::read_to_string",
+        "io::stdin",
+    ];
+    let allowed = [
+        ("src/io/input.rs", ""),
+        ("src/io/mod.rs", "File::open"),
+        ("src/io/output.rs", "fs::read("),
+    ];
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let mut bad = Vec::new();
+    for p in files {
+        let rel = p
+            .strip_prefix(root())
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let text = code(&p);
+        for r in reads {
+            let ok = allowed
+                .iter()
+                .any(|(f, what)| rel == *f && (what.is_empty() || *what == r));
+            if !ok && text.contains(r) {
+                bad.push(format!("{rel}: {r}"));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "inputs read outside io::input: {bad:?}");
+}
