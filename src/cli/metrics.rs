@@ -176,7 +176,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         && set.passes_only();
     // The memory of the parameters on a map in memory, up front where the header gives
     // the nodes (a regular .gsf), and again once the map is read (missing nodes cost more).
-    let preprocessed = !(pp.level.degree() == 0 && !filtered);
+    let preprocessed = pp.level.degree() != 0 || filtered;
     if !as_stored
         && !profile_mode
         && HeightMapFormat::from_path(&args.file) == Some(HeightMapFormat::Gsf)
