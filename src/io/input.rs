@@ -17,7 +17,8 @@ use crate::math::limits::MAX_NODES;
 pub struct Budget {
     /// Most bytes of the whole input.
     pub bytes: u64,
-    /// Most bytes of one line (formats read line by line), if any.
+    /// Most bytes of one line (formats read line by line; a line ends at `\n` or `\r`), if
+    /// any.
     pub line: Option<u64>,
     /// Where the budget comes from, for the message.
     pub why: &'static str,
@@ -90,15 +91,16 @@ pub const HEAD: usize = 1 << 16;
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum InputError {
     /// The file could not be opened or read.
-    #[error("{file}: cannot read the {what}: {source}")]
+    #[error("{file}: cannot {action} the {what}: {cause}")]
     Io {
         /// File name as given.
         file: String,
+        /// `open` or `read`.
+        action: &'static str,
         /// What the file is.
         what: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
+        /// The cause (in the message, not repeated as a cause).
+        cause: std::io::Error,
     },
     /// The input goes on past its budget.
     #[error(
@@ -248,10 +250,11 @@ impl Bounded {
 
     /// The error of a failed read: the budget's own, or the I/O cause with the file named.
     pub fn error(&self, e: std::io::Error) -> InputError {
-        take_error(e).unwrap_or_else(|source| InputError::Io {
+        take_error(e).unwrap_or_else(|cause| InputError::Io {
             file: self.file.clone(),
+            action: "read",
             what: self.what.clone(),
-            source,
+            cause,
         })
     }
 
@@ -274,7 +277,8 @@ impl Read for Bounded {
         }
         if let Some(max) = self.budget.line {
             let mut at = 0;
-            for nl in memchr::memchr_iter(b'\n', &buf[..n]) {
+            // `\r` ends a line too: CR-only files (`io::toolpath::LoneCr`) have no `\n`.
+            for nl in memchr::memchr2_iter(b'\n', b'\r', &buf[..n]) {
                 self.line += (nl - at) as u64;
                 if self.line > max {
                     break;
@@ -318,10 +322,11 @@ pub fn take_error(e: std::io::Error) -> Result<InputError, std::io::Error> {
 /// file in errors. A regular file is opened as it is; standard input, a FIFO or a device is
 /// read from its source once, whatever the number of [`open`]s (see the module).
 pub fn open(path: &Path, what: &str, budget: Budget) -> Result<Bounded, InputError> {
-    let io = |source| InputError::Io {
+    let io = |cause| InputError::Io {
         file: path.display().to_string(),
+        action: "open",
         what: what.to_string(),
-        source,
+        cause,
     };
     let source = if is_stdin(path) {
         Source::Replay(Replay::of(path, || Ok(Box::new(std::io::stdin()))).map_err(io)?)
@@ -519,6 +524,10 @@ mod tests {
         }
         let e = read_bounded(&p, "tool path", budget(100, Some(5))).unwrap_err();
         assert!(e.to_string().contains("at byte 4"), "{e}");
+        // CR-only line ends count as line ends.
+        std::fs::write(&p, b"abc\rabcdef\rab\r").unwrap();
+        assert!(read_bounded(&p, "tool path", budget(100, Some(6))).is_ok());
+        assert!(read_bounded(&p, "tool path", budget(100, Some(5))).is_err());
     }
 
     #[test]
