@@ -1,38 +1,121 @@
-//! Two-dimensional complex FFTs on row-major buffers (rustfft along rows, transpose, rows).
+//! Two-dimensional complex FFTs on row-major buffers, in place: rustfft along rows, and
+//! along columns a few at a time through a small gathered block (no second buffer of the
+//! whole field).
 
 use rustfft::num_complex::Complex64;
-use rustfft::{FftDirection, FftPlanner};
+use rustfft::{Fft, FftDirection, FftPlanner};
 
-/// In-place 2-D FFT of a `rows × cols` row-major buffer. The result is left **transposed**
-/// (`cols × rows`) when `leave_transposed`, which saves a transpose when only element-wise
-/// work follows before the inverse.
-pub(crate) fn fft2(
-    data: &mut Vec<Complex64>,
+/// Columns gathered into one contiguous block for their FFTs.
+const BLOCK: usize = 16;
+
+/// The 1-D FFTs of one direction over a `rows × cols` row-major buffer.
+pub(crate) struct Fft2 {
+    f_row: std::sync::Arc<dyn Fft<f64>>,
+    f_col: std::sync::Arc<dyn Fft<f64>>,
+    scratch: Vec<Complex64>,
     rows: usize,
     cols: usize,
-    dir: FftDirection,
-    leave_transposed: bool,
-) {
-    let mut planner = FftPlanner::<f64>::new();
-    let f_row = planner.plan_fft(cols, dir);
-    let f_col = planner.plan_fft(rows, dir);
-    let mut scratch = vec![
-        Complex64::default();
-        f_row
-            .get_inplace_scratch_len()
-            .max(f_col.get_inplace_scratch_len())
-    ];
-    for r in data.chunks_exact_mut(cols) {
-        f_row.process_with_scratch(r, &mut scratch);
+}
+
+impl Fft2 {
+    /// Plans for a `rows × cols` field in direction `dir`.
+    pub(crate) fn new(rows: usize, cols: usize, dir: FftDirection) -> Fft2 {
+        let mut planner = FftPlanner::<f64>::new();
+        let f_row = planner.plan_fft(cols, dir);
+        let f_col = planner.plan_fft(rows, dir);
+        let scratch = vec![
+            Complex64::default();
+            f_row
+                .get_inplace_scratch_len()
+                .max(f_col.get_inplace_scratch_len())
+        ];
+        Fft2 {
+            f_row,
+            f_col,
+            scratch,
+            rows,
+            cols,
+        }
     }
-    let mut t = vec![Complex64::default(); rows * cols];
-    transpose::transpose(data, &mut t, cols, rows);
-    for c in t.chunks_exact_mut(rows) {
-        f_col.process_with_scratch(c, &mut scratch);
+
+    /// The FFT of every row, in place.
+    pub(crate) fn rows(&mut self, data: &mut [Complex64]) {
+        for r in data.chunks_exact_mut(self.cols) {
+            self.f_row.process_with_scratch(r, &mut self.scratch);
+        }
     }
-    if leave_transposed {
-        *data = t;
-    } else {
+
+    /// The FFT of every column, in place (each column is copied out, transformed and copied
+    /// back, so it gets the values a transposed buffer would give it, bit for bit).
+    pub(crate) fn columns(&mut self, data: &mut [Complex64]) {
+        let (rows, cols) = (self.rows, self.cols);
+        let mut block = vec![Complex64::default(); BLOCK.min(cols) * rows];
+        for c0 in (0..cols).step_by(BLOCK) {
+            let w = BLOCK.min(cols - c0);
+            for r in 0..rows {
+                let row = &data[r * cols + c0..r * cols + c0 + w];
+                for (k, v) in row.iter().enumerate() {
+                    block[k * rows + r] = *v;
+                }
+            }
+            for col in block[..w * rows].chunks_exact_mut(rows) {
+                self.f_col.process_with_scratch(col, &mut self.scratch);
+            }
+            for r in 0..rows {
+                let row = &mut data[r * cols + c0..r * cols + c0 + w];
+                for (k, v) in row.iter_mut().enumerate() {
+                    *v = block[k * rows + r];
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The previous form: rows, a transpose into a second buffer, rows again.
+    fn transposed_fft2(data: &mut [Complex64], rows: usize, cols: usize, dir: FftDirection) {
+        let mut planner = FftPlanner::<f64>::new();
+        let f_row = planner.plan_fft(cols, dir);
+        let f_col = planner.plan_fft(rows, dir);
+        let mut scratch = vec![
+            Complex64::default();
+            f_row
+                .get_inplace_scratch_len()
+                .max(f_col.get_inplace_scratch_len())
+        ];
+        for r in data.chunks_exact_mut(cols) {
+            f_row.process_with_scratch(r, &mut scratch);
+        }
+        let mut t = vec![Complex64::default(); rows * cols];
+        transpose::transpose(data, &mut t, cols, rows);
+        for c in t.chunks_exact_mut(rows) {
+            f_col.process_with_scratch(c, &mut scratch);
+        }
         transpose::transpose(&t, data, rows, cols);
+    }
+
+    #[test]
+    fn in_place_columns_give_the_transposed_bits() {
+        for (rows, cols) in [(6, 40), (34, 17), (1, 5), (50, 1)] {
+            let start: Vec<Complex64> = (0..rows * cols)
+                .map(|k| Complex64::new(((k * 37 % 101) as f64).sin(), 0.0))
+                .collect();
+            let mut old = start.clone();
+            transposed_fft2(&mut old, rows, cols, FftDirection::Forward);
+            let mut new = start;
+            let mut f = Fft2::new(rows, cols, FftDirection::Forward);
+            f.rows(&mut new);
+            f.columns(&mut new);
+            assert!(
+                old.iter()
+                    .zip(&new)
+                    .all(|(a, b)| a.re.to_bits() == b.re.to_bits()
+                        && a.im.to_bits() == b.im.to_bits()),
+                "{rows}×{cols}"
+            );
+        }
     }
 }

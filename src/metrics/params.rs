@@ -360,15 +360,16 @@ impl ParamSet {
 
     /// Peak bytes per node of [`areal_parameters`] on a map in memory, the map's own 8
     /// included (measured, reports/benchmarks.md): the ACF of Sal and Str on the padded
-    /// complex lattice (twice with missing nodes), the spectrum of Std and Ssw, the sorted
+    /// complex lattice, 4 nodes of 16 bytes per node (twice with missing nodes), the
+    /// spectrum of Std and Ssw, the sorted
     /// copy of the material-ratio parameters; a levelled or filtered copy adds its own.
     pub fn bytes_per_node(&self, missing: bool, preprocessed: bool) -> u64 {
         self.groups()
             .iter()
             .map(|&(_, b)| match b {
-                Group::Acf if missing => 180,
-                Group::Acf => 145,
-                Group::Spectrum => 50,
+                Group::Acf if missing => 140,
+                Group::Acf => 105,
+                Group::Spectrum => 35,
                 Group::Material => 24,
                 Group::Pass => 9,
             })

@@ -13,7 +13,7 @@
 use rustfft::FftDirection;
 use rustfft::num_complex::Complex64;
 
-use super::fft::fft2;
+use super::fft::Fft2;
 use crate::surface::HeightMap;
 
 /// Decay lengths of the ACF.
@@ -49,19 +49,28 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
 }
 
 /// Linear autocorrelation of a `ny × nx` field on the padded `py × px` lattice (unnormalised).
-fn linear_autocorr(field: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<f64> {
+///
+/// One complex buffer of the padded lattice (16 bytes per lattice node), transformed in
+/// place: rows then columns forward, columns then rows back (the order of the 1-D FFTs of
+/// the former transposing form, so the same values bit for bit). `field` is dropped once
+/// copied in.
+fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) -> Vec<f64> {
     let mut buf = vec![Complex64::default(); px * py];
     for r in 0..ny {
         for c in 0..nx {
             buf[r * px + c] = Complex64::new(field[r * nx + c], 0.0);
         }
     }
-    fft2(&mut buf, py, px, FftDirection::Forward, true);
+    drop(field);
+    let mut fwd = Fft2::new(py, px, FftDirection::Forward);
+    fwd.rows(&mut buf);
+    fwd.columns(&mut buf);
     for v in buf.iter_mut() {
         *v = Complex64::new(v.norm_sqr(), 0.0);
     }
-    // The buffer is transposed (px × py); a 2-D inverse on it returns the py × px layout.
-    fft2(&mut buf, px, py, FftDirection::Inverse, true);
+    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
+    inv.columns(&mut buf);
+    inv.rows(&mut buf);
     let scale = 1.0 / (px * py) as f64;
     buf.iter().map(|v| v.re * scale).collect()
 }
@@ -72,14 +81,14 @@ pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
     let (nx, ny) = (map.nx, map.ny);
     let (px, py) = (2 * nx, 2 * ny);
     let (e, missing) = centred(map);
-    let raw = linear_autocorr(&e, nx, ny, px, py);
+    let raw = linear_autocorr(e, nx, ny, px, py);
     let counts = if missing {
         let mask: Vec<f64> = map
             .z_um
             .iter()
             .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
             .collect();
-        Some(linear_autocorr(&mask, nx, ny, px, py))
+        Some(linear_autocorr(mask, nx, ny, px, py))
     } else {
         None
     };
@@ -232,7 +241,10 @@ pub fn spectrum_direction(map: &HeightMap) -> Spectrum {
     let (nx, ny) = (map.nx, map.ny);
     let (e, _) = centred(map);
     let mut buf: Vec<Complex64> = e.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-    fft2(&mut buf, ny, nx, FftDirection::Forward, false);
+    drop(e);
+    let mut fwd = Fft2::new(ny, nx, FftDirection::Forward);
+    fwd.rows(&mut buf);
+    fwd.columns(&mut buf);
     let freq = |k: usize, n: usize, d: f64| {
         let s = if k < n.div_ceil(2) {
             k as f64

@@ -347,15 +347,15 @@ fn metrics_beyond_the_memory_cap_are_refused_up_front_with_the_params_that_fit()
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
     write(p, "m.gsf", gsf(600));
-    // The autocorrelation of 360 000 nodes needs about 52 MB; the rest fits in 40 MB.
-    let (out, took) = run_limited(p, &["metrics", "m.gsf", "--max-memory-gb", "0.04"], None);
+    // The autocorrelation of 360 000 nodes needs about 38 MB; the rest fits in 30 MB.
+    let (out, took) = run_limited(p, &["metrics", "m.gsf", "--max-memory-gb", "0.03"], None);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(took < Duration::from_secs(5), "{took:?}");
     assert!(
         err.contains("m.gsf:")
             && err.contains("600×600 nodes need about 0.0")
-            && err.contains("GB of memory, more than --max-memory-gb 0.04"),
+            && err.contains("GB of memory, more than --max-memory-gb 0.03"),
         "{err}"
     );
     let fit = err
@@ -376,7 +376,7 @@ fn metrics_beyond_the_memory_cap_are_refused_up_front_with_the_params_that_fit()
             "metrics",
             "m.gsf",
             "--max-memory-gb",
-            "0.04",
+            "0.03",
             "--params",
             &fit,
             "--json",
