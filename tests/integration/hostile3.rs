@@ -175,3 +175,57 @@ fn r37_synth_with_a_blocked_mesh_changes_nothing() {
         "part.stl",
     );
 }
+
+/// A design with a run past the budget of a simulation (the grid's nodes, the resampled
+/// poses, the memory of a run) or an impossible scallop is refused before its first run,
+/// naming the run or the key, the estimate and the limit (the old code built each run's
+/// path first: 14 GB for a 1 m window). Nothing is written.
+#[test]
+fn r37_a_design_past_the_budget_is_refused_before_its_runs() {
+    let d = tempdir();
+    let p = d.path();
+    let tool = Path::new(ROOT).join("samples/tools/torus-r5-rc1.5.toml");
+    let design = |extra: &str, step: &str| {
+        format!(
+            "title = \"t\"\nsurface = \"plane\"\ntool = \"{}\"\nrpm = 15000.0\ngrid_um = 2.0\n\
+             {extra}responses = [\"Sz\", \"Sq\"]\n[factors]\ntilt_deg = [10.0]\n{step}\n\
+             feed_mm_min = [2000.0, 4000.0]\n",
+            tool.display()
+        )
+    };
+    for (name, text, needles) in [
+        (
+            "w1000.toml",
+            design("window_mm = [1000, 1000]\n", "stepover_mm = [0.05]"),
+            &["w1000.toml", "run 1", "2.500e11 nodes", "4e8", "window_mm"][..],
+        ),
+        (
+            "w50.toml",
+            design("window_mm = [50, 50]\n", "stepover_mm = [0.05]"),
+            &["w50.toml", "run 2", "6.251e8 nodes", "4e8"][..],
+        ),
+        (
+            "w10.toml",
+            design("window_mm = [10, 10]\n", "stepover_mm = [0.05]"),
+            &[
+                "w10.toml",
+                "run 1",
+                "GB",
+                "more than the 1 GB a run may take",
+            ][..],
+        ),
+        (
+            "scallop.toml",
+            design("", "scallop_um = [0.0001]"),
+            &["scallop.toml:9:", "scallop_um", "0.001 to 1e4"][..],
+        ),
+    ] {
+        write(p, name, text);
+        changes_nothing(p, &["study", name, "-o", "out"], needles[0]);
+        let (code, err) = run(p, &["study", name, "-o", "out"]);
+        assert_eq!(code, 2, "{name}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{name}: {n:?} not in {err}");
+        }
+    }
+}
