@@ -229,3 +229,39 @@ fn r37_a_design_past_the_budget_is_refused_before_its_runs() {
         }
     }
 }
+
+/// On a terminal (`script` gives one), the graphical report of a CLSF line holding
+/// `ESC ]0;pwned BEL` and `ESC [2J` shows them escaped: under NO_COLOR no ESC, BEL or NUL byte
+/// reaches the terminal at all (the old code printed the line raw).
+#[test]
+fn r37_no_control_character_from_the_input_reaches_a_terminal() {
+    let d = tempdir();
+    let bad = d.path().join("bad\x07.cls");
+    std::fs::write(
+        &bad,
+        "TOOL PATH/X,TOOL,T\nGOTO/1,2,zz\x1b]0;pwned\x07\x1b[2J\0\n",
+    )
+    .unwrap();
+    let bin = assert_cmd::cargo::cargo_bin("crest");
+    let line = format!("'{}' inspect '{}'", bin.display(), bad.display());
+    let out = match std::process::Command::new("script")
+        .args(["-qec", &line, "/dev/null"])
+        .env("NO_COLOR", "1")
+        .output()
+    {
+        Ok(o) => o,
+        Err(_) => {
+            eprintln!("script (util-linux) not found: the terminal rendering is not checked");
+            return;
+        }
+    };
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(text.contains('│') && text.contains(":2:"), "{text}");
+    assert!(text.contains("\\x1b]0;pwned"), "the input escaped: {text}");
+    for b in [0x1b, 0x07, 0x00] {
+        assert!(
+            !out.stdout.contains(&b),
+            "byte {b:#04x} on the terminal: {text:?}"
+        );
+    }
+}
