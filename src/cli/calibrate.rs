@@ -29,6 +29,9 @@ pub struct Args {
 
 /// Run `crest calibrate`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    if let Some(dir) = &args.output {
+        super::check_output_folder(dir, &["calibration.json".into(), "calibration.csv".into()])?;
+    }
     let inputs = crest::pipeline::report::load(&args.measured, &args.study)?;
     let cal = crest::pipeline::report::calibrate(&inputs, &args.free)?;
     let json = crest::report::regression::calibration_json(&cal);

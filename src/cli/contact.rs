@@ -52,6 +52,7 @@ pub struct Args {
 
 /// Run `crest contact`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    super::check_outputs([args.output.as_path()])?;
     let req = ContactRequest {
         file: args.file.clone(),
         part: args.part.clone(),

@@ -75,6 +75,7 @@ pub struct Converted {
 pub fn convert(args: &Args) -> miette::Result<Converted> {
     let (input, output, all_moves, absolute) =
         (&args.file, &args.output, args.all_moves, args.absolute);
+    super::check_outputs([output.as_path()])?;
     let (kind, reader) = crest::io::toolpath::open_detected(input)?;
     let lower = LowerOptions {
         apply_msys: absolute,

@@ -2,7 +2,8 @@
 //! line, wrapping at the terminal's width) only when stderr is a terminal; to a pipe or a
 //! file, one plain line per cause, never wrapped, so that logs can be searched and tests do
 //! not depend on the width of a terminal or the length of a path. Control characters that
-//! came from an input (ESC, BEL, NUL, …) are shown escaped (`\x1b`) in the plain lines.
+//! came from an input (ESC, BEL, NUL, …) are shown escaped (`\x1b`) in the plain lines and in
+//! the graphical report (which keeps only its own colour codes).
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -11,7 +12,10 @@ use std::io::IsTerminal;
 pub fn render(e: &miette::Report) -> String {
     if std::io::stderr().is_terminal() {
         // miette's own handler: it honours NO_COLOR (and FORCE_COLOR) and the terminal width.
-        format!("{e:?}\n")
+        // Its own colour codes are kept (none under NO_COLOR); every other control character
+        // (from a file name, a message or the offending line) is escaped.
+        let colour = std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty());
+        escape_graphical(&format!("{e:?}\n"), colour)
     } else {
         plain(e)
     }
@@ -41,6 +45,35 @@ fn one_line(text: &str) -> String {
         .filter(|l| !l.trim().is_empty())
         .collect();
     escape_controls(&lines.join("; "))
+}
+
+/// miette's graphical report with every control character escaped as in
+/// [`escape_controls`], except line breaks and tabs and, when `colour`, the colour codes
+/// miette writes (`ESC [ digits;… m`). A colour code from an input is then kept too (it can
+/// only colour text); under NO_COLOR no escape character is left at all.
+pub fn escape_graphical(text: &str, colour: bool) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(c) = rest.chars().next() {
+        if colour && c == '\x1b' {
+            let sgr = rest[1..].strip_prefix('[').and_then(|t| {
+                let n = t.find(|d: char| !(d.is_ascii_digit() || d == ';'))?;
+                t[n..].starts_with('m').then_some(2 + n + 1)
+            });
+            if let Some(len) = sgr {
+                out.push_str(&rest[..len]);
+                rest = &rest[len..];
+                continue;
+            }
+        }
+        if c == '\n' || c == '\t' {
+            out.push(c);
+        } else {
+            out.push_str(&escape_controls(c.encode_utf8(&mut [0; 4])));
+        }
+        rest = &rest[c.len_utf8()..];
+    }
+    out
 }
 
 /// Every control character but the tab as `\xNN` (or `\u{NNNN}` beyond ASCII), as ripgrep
@@ -89,6 +122,18 @@ mod tests {
         assert_eq!(lines[1], "  caused by: inner: bad\\x1b]0;title\\x07 value");
         assert_eq!(lines[2], "  help: check the line");
         assert!(!text.contains('\x1b') && !text.contains('\x07'));
+    }
+
+    #[test]
+    fn the_graphical_report_keeps_only_its_colours() {
+        let t = "\x1b[31merror\x1b[0m: a\x1b]0;pwned\x07b\x1b[2Jc\0\n  │ next\tline\n";
+        assert_eq!(
+            escape_graphical(t, true),
+            "\x1b[31merror\x1b[0m: a\\x1b]0;pwned\\x07b\\x1b[2Jc\\x00\n  │ next\tline\n"
+        );
+        let plain = escape_graphical(t, false);
+        assert!(!plain.contains('\x1b') && !plain.contains('\x07') && !plain.contains('\0'));
+        assert!(plain.starts_with("\\x1b[31merror"), "{plain}");
     }
 
     #[test]

@@ -81,6 +81,7 @@ pub fn resolve_feed_source(
 
 /// Run `crest feed`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    super::check_outputs(args.output.as_deref())?;
     let machine = crest::pipeline::load_machine(&args.machine)?;
     let level = match args.level {
         LevelArg::Jerk => Level::Jerk,

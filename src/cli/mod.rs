@@ -182,6 +182,23 @@ fn is_broken_pipe(e: &miette::Report) -> bool {
         })
 }
 
+/// Refuse, before a command's work, output files that cannot be written (a folder in the
+/// way, a missing folder, an input; `crest::io::output::check_file`). The outputs are
+/// written later through `crest::io::output::Outputs`, all or none.
+pub(crate) fn check_outputs<'a>(
+    paths: impl IntoIterator<Item = &'a std::path::Path>,
+) -> miette::Result<()> {
+    for p in paths {
+        crest::io::output::check_file(p).map_err(|e| miette::miette!("cannot write {e}"))?;
+    }
+    Ok(())
+}
+
+/// As [`check_outputs`] for the files `names` in the output folder `dir` (made if needed).
+pub(crate) fn check_output_folder(dir: &std::path::Path, names: &[String]) -> miette::Result<()> {
+    crest::io::output::check_folder(dir, names).map_err(|e| miette::miette!("cannot write {e}"))
+}
+
 /// Run one parsed command line.
 pub fn run(cli: Cli) -> miette::Result<Outcome> {
     match cli.command {

@@ -189,7 +189,8 @@ pub struct FeedArgs {
 fn check_format(path: &Path) -> miette::Result<()> {
     Format::from_path(path)
         .map(|_| ())
-        .ok_or_else(|| miette!("{}: unknown plot format (use .svg or .png)", path.display()))
+        .ok_or_else(|| miette!("{}: unknown plot format (use .svg or .png)", path.display()))?;
+    super::check_outputs([path])
 }
 
 fn done(common: &Common, kind: &str, extra: serde_json::Value) -> miette::Result<Outcome> {

@@ -66,6 +66,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         free: args.free.clone(),
         monte_carlo: args.monte_carlo.map(|n| (n, args.seed)),
     };
+    super::check_output_folder(&args.output, &["report.md".into(), "report.html".into()])?;
     let reg = crest::pipeline::report::regression(
         &args.measured,
         &args.study,

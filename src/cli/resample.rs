@@ -110,6 +110,7 @@ pub struct Args {
 
 /// Run `crest resample`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    super::check_outputs([args.output.as_path()])?;
     let mode = match args.mode {
         ModeArg::Fz => Mode::FeedPerTooth,
         ModeArg::Dtheta => Mode::SpindleStep {

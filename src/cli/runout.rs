@@ -76,6 +76,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let (Some(study_path), Some(out_dir)) = (args.study, args.out) else {
         return Err(miette!("crest runout needs STUDY.TOML and -o DIR"));
     };
+    let names = match args.shard {
+        Some((k, n)) => vec![format!("shard-{k}-of-{n}.jsonl")],
+        None => vec!["runout.csv".to_string()],
+    };
+    super::check_output_folder(&out_dir, &names)?;
     if let Some((k, n)) = args.shard {
         return run_shard(&study_path, &out_dir, k, n, args.json);
     }

@@ -276,6 +276,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             }
         ));
     }
+    // A blocked output is refused before the simulation, not after it.
+    match args.shard {
+        Some((k, n)) => super::check_output_folder(&args.output, &[shard_name(k, n)])?,
+        None => super::check_outputs(
+            std::iter::once(args.output.as_path()).chain(args.view.as_deref()),
+        )?,
+    }
     let req = SimulateRequest {
         file: args.file.clone(),
         tool: args.tool.clone().map(crest::pipeline::ToolSource::File),
@@ -347,32 +354,39 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
         None => None,
     };
-    // The heights' statistics are taken while the file is written (the same values).
-    let (written, st) = match &run.output {
+    // The heights' statistics are taken while the file is staged (the same values); the
+    // height map and the page land together or not at all.
+    let mut outputs = crest::io::output::Outputs::new();
+    let (staged, st) = match &run.output {
         Output::Grid(sim) => pool.install(|| {
             rayon::join(
-                || crest::io::write_heightmap(&args.output, &sim.map),
+                || crest::io::stage_heightmap(&mut outputs, &args.output, &sim.map),
                 || crest::metrics::height_stats(&sim.map.z_um),
             )
         }),
         Output::Map(m) => {
             let heights: Vec<f64> = m.points.iter().map(|p| p.height_um).collect();
             (
-                crest::io::write_atomic(&args.output, |w| {
+                outputs.file(&args.output, |w| {
                     crest::io::mesh::write_map_ply(&m.points, w)
                 }),
                 crest::metrics::height_stats(&heights),
             )
         }
     };
-    written
+    staged
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
     if let (Some(path), Some(html)) = (&args.view, &page) {
-        crest::io::write_atomic(path, |w| w.write_all(html.as_bytes()))
+        outputs
+            .file(path, |w| w.write_all(html.as_bytes()))
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", path.display()))?;
     }
+    outputs
+        .land()
+        .into_diagnostic()
+        .wrap_err("cannot write the outputs (none was changed)")?;
     let elapsed = started.elapsed().as_secs_f64();
     let fraction = run.nodes_cut as f64 / run.nodes.max(1) as f64;
     let thin = fraction < 0.1;
@@ -428,6 +442,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     Ok(Outcome::Ok)
 }
 
+fn shard_name(k: usize, n: usize) -> String {
+    format!("shard-{k}-of-{n}.jsonl")
+}
+
 /// `crest simulate --map-mm … --shard K/N`: write the shard's cells as one JSON line.
 fn write_shard(
     args: &Args,
@@ -440,7 +458,7 @@ fn write_shard(
     let (k, n) = (result.shard, result.shards);
     let mut text = serde_json::to_vec(&result).into_diagnostic()?;
     text.push(b'\n');
-    let name = format!("shard-{k}-of-{n}.jsonl");
+    let name = shard_name(k, n);
     crest::io::write_files(&args.output, &[(name.clone(), text)])
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write into {}", args.output.display()))?;

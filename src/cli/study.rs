@@ -9,8 +9,9 @@
 //! resample → surface → areal parameters), the runs in parallel; the results do not depend
 //! on the thread count. Nothing is written until every run has succeeded: then `DIR` is
 //! created if needed and `runs.csv`, `effects.csv`, `effects.svg` (001 Fig 11) and, for each
-//! factor with more than two levels, `effects-<factor>.svg` (001 Fig 12) are written, each
-//! through `crest::io::write_atomic`. A progress bar is drawn on stderr when it is a
+//! factor with more than two levels, `effects-<factor>.svg` (001 Fig 12) are written, all
+//! or none (`crest::io::output::Outputs`); a blocked name (a folder in its place) is refused
+//! before the first run. A progress bar is drawn on stderr when it is a
 //! terminal.
 //!
 //! With `--shard K/N` only runs K, K+N, … are simulated and their results written as JSON
@@ -70,6 +71,25 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if let Some(n) = args.monte_carlo {
         crest::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
+    // A blocked output is refused before the first run, not after the last.
+    let names: Vec<String> = match args.shard {
+        Some((k, n)) => vec![format!("shard-{k}-of-{n}.jsonl")],
+        None => {
+            let mut names = vec![
+                "runs.csv".to_string(),
+                "effects.csv".to_string(),
+                "effects.svg".to_string(),
+            ];
+            if monte_carlo.is_some() {
+                names.push("bands.svg".to_string());
+            }
+            for f in design.factors().iter().filter(|f| f.levels.len() > 2) {
+                names.push(format!("effects-{}.svg", f.name));
+            }
+            names
+        }
+    };
+    super::check_output_folder(&args.output, &names)?;
     if let Some((k, n)) = args.shard {
         return run_shard(&args, k, n, design.runs().len(), started);
     }

@@ -233,6 +233,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     spec.feed_mm_min = args.feed_mm_min;
     spec.feed_end_mm_min = args.feed_end_mm_min;
     spec.spindle_rpm = args.rpm;
+    super::check_outputs(std::iter::once(args.output.as_path()).chain(args.part_stl.as_deref()))?;
     let synth = generate(&spec).map_err(|e| miette!("crest synth: {e}"))?;
     let part = match &args.part_stl {
         Some(_) => Some(
@@ -249,7 +250,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     };
 
     let program = &synth.program;
-    let written = crest::io::write_atomic(&args.output, |w| match kind {
+    let mut outputs = crest::io::output::Outputs::new();
+    let staged = outputs.file(&args.output, |w| match kind {
         OutKind::Clsf => crest::toolpath::write_clsf(program, w),
         OutKind::Contact12 => match program.paths.first() {
             // Every move, so that the clearance moves between passes survive.
@@ -257,14 +259,19 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             None => Ok(()),
         },
     });
-    written
+    staged
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write {}", args.output.display()))?;
     if let (Some(path), Some(mesh)) = (&args.part_stl, &part) {
-        crest::io::write_atomic(path, |w| crest::io::mesh::write_stl(mesh, w))
+        outputs
+            .file(path, |w| crest::io::mesh::write_stl(mesh, w))
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", path.display()))?;
     }
+    outputs
+        .land()
+        .into_diagnostic()
+        .wrap_err("cannot write the outputs (none was changed)")?;
 
     let postures: usize = program.paths.iter().map(|p| p.postures.len()).sum();
     let (tilt_deg, yaw_deg) = match args.lead_deg {

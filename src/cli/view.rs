@@ -38,6 +38,7 @@ pub struct Args {
 
 /// Run `crest view`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    super::check_outputs([args.out.as_path()])?;
     let file = args.file.display().to_string();
     let info = ViewInfo {
         title: args.title.clone().unwrap_or_else(|| {

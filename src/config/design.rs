@@ -31,6 +31,8 @@ use toml::Spanned;
 
 /// Largest number of runs a design may expand to.
 pub const MAX_RUNS: usize = 10_000;
+/// Smallest scallop height of a design, µm (1 nm, the smallest feed per tooth).
+pub const MIN_SCALLOP_UM: f64 = 1e-3;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -205,7 +207,9 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
             let ok = list.iter().all(|x| {
                 x.is_finite()
                     && match key {
-                        "scallop_um" | "stepover_mm" => *x > 0.0 && *x <= 1e4,
+                        // A scallop under 1 nm is not machining (as a feed per tooth).
+                        "scallop_um" => *x >= MIN_SCALLOP_UM && *x <= 1e4,
+                        "stepover_mm" => *x > 0.0 && *x <= 1e4,
                         "feed_mm_min" => {
                             let (lo, hi) = crate::math::limits::FEED_MM_MIN;
                             (lo..=hi).contains(x)
@@ -217,7 +221,20 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
             if !ok {
                 return Err(at(
                     v.span().start,
-                    format!("{key} has a level out of range: {list:?}"),
+                    format!(
+                        "{key} has a level out of range: {list:?} ({})",
+                        match key {
+                            "scallop_um" => format!("{MIN_SCALLOP_UM} to 1e4 µm"),
+                            "stepover_mm" => "above 0, at most 1e4 mm".to_string(),
+                            "feed_mm_min" => format!(
+                                "{} to {} mm/min",
+                                crate::math::limits::FEED_MM_MIN.0,
+                                crate::math::limits::FEED_MM_MIN.1
+                            ),
+                            "tilt_deg" | "lead_deg" => "0 to under 90°".to_string(),
+                            _ => "finite".to_string(),
+                        }
+                    ),
                 ));
             }
             runs = runs.saturating_mul(list.len());

@@ -400,6 +400,18 @@ fn as_text(bytes: &[u8]) -> Result<&str, FormatError> {
 /// µm), `.xyz`/`.txt` (x,y,z point list, µm), `.gsf` (Gwyddion Simple Field, metres,
 /// float32) or `.sdf` (ISO 25178-71 / BCR text, metres, float64 values).
 pub fn write_heightmap(path: &Path, map: &HeightMap) -> std::io::Result<()> {
+    let mut set = output::Outputs::new();
+    stage_heightmap(&mut set, path, map)?;
+    set.land().map(drop)
+}
+
+/// Stage a height map as [`write_heightmap`] writes it, into a set of outputs that lands
+/// together ([`output::Outputs`]).
+pub fn stage_heightmap(
+    set: &mut output::Outputs,
+    path: &Path,
+    map: &HeightMap,
+) -> std::io::Result<()> {
     let format = HeightMapFormat::from_path(path).ok_or_else(|| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
@@ -420,7 +432,7 @@ pub fn write_heightmap(path: &Path, map: &HeightMap) -> std::io::Result<()> {
             ),
         ));
     }
-    write_atomic(path, |w| write_heightmap_to(w, format, map))
+    set.file(path, |w| write_heightmap_to(w, format, map))
 }
 
 /// Write a height map in `format` to any writer (see [`write_heightmap`]).

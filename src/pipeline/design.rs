@@ -100,12 +100,20 @@ pub fn run_monte_carlo(
     if let Some((n, _)) = monte_carlo {
         crate::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
+    check_budget(&design, &cutter, file)?;
     let results = run_design(
         &design,
         |p| evaluate(&design, &cutter, p, monte_carlo),
         tick,
     );
     finish(design, results, file, monte_carlo)
+}
+
+/// Refuse a design any of whose runs is estimated past the budget of a run
+/// ([`crate::study::run::check_runs`]: the grid's nodes, the resampled poses, the memory),
+/// before the first run starts.
+pub fn check_budget(design: &Design, cutter: &Cutter, file: &str) -> miette::Result<()> {
+    crate::study::run::check_runs(design, cutter).map_err(|e| miette!("{file}: {e}"))
 }
 
 /// Evaluate run `p` of `design`: [`simulate_run`], or with `monte_carlo` = (N, S)

@@ -254,6 +254,9 @@ pub fn run_shard_with(
     if let Some((samples, _)) = mc {
         crate::study::montecarlo::check_samples(samples).map_err(|e| miette!("{e}"))?;
     }
+    // Every run of the design, as `crest study` checks them: a shard is refused like the
+    // whole.
+    super::design::check_budget(&design, &cutter, &t.design_file)?;
     let all = design.runs();
     let runs = all.len();
     let points: Vec<_> = all

@@ -139,13 +139,41 @@ pub struct PreparedRun {
     pub params: Vec<crate::metrics::Param>,
 }
 
-/// Plan and resample run `p` of `design` with the nominal `cutter` (see [`simulate_run`]).
-pub fn prepare_run(
+/// What one run of a design plans before it builds anything: its tool posture, pass
+/// interval, feed per tooth and window (shared by [`prepare_run`] and [`estimate_run`]).
+struct RunPlan {
+    orientation: crate::synth::Orientation,
+    step_mm: f64,
+    fz_mm: f64,
+    window: RunWindow,
+}
+
+/// Pass intervals and reaches already worked out, by the bits of their inputs: the runs of a
+/// design share a few orientations and steps (they are the slow part of a plan).
+#[derive(Default)]
+struct PlanCache {
+    steps: std::collections::HashMap<[u64; 4], Result<f64, String>>,
+    sections: std::collections::HashMap<[u64; 3], Result<crate::synth::CrossSection, String>>,
+    /// Relative tolerance of the pass interval (0 for a run, a lower bound for a budget).
+    step_rel: f64,
+    reaches: std::collections::HashMap<[u64; 3], Result<(f64, f64), String>>,
+}
+
+fn plan_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<PreparedRun, String> {
-    use crate::synth::{Orientation, PathSpec, Step, Surface};
+) -> Result<RunPlan, String> {
+    plan_run_with(design, cutter, p, &mut PlanCache::default())
+}
+
+fn plan_run_with(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+    cache: &mut PlanCache,
+) -> Result<RunPlan, String> {
+    use crate::synth::Orientation;
     let lead = design.factors.lead_deg.is_some();
     let orientation = if lead {
         Orientation::Lead {
@@ -165,7 +193,32 @@ pub fn prepare_run(
             } else {
                 orientation.axis_fgn()
             };
-            crate::synth::exact_step_mm(cutter, &axis, h * 1e-3).map_err(|e| e.to_string())?
+            let key = [
+                axis.x.to_bits(),
+                axis.y.to_bits(),
+                axis.z.to_bits(),
+                h.to_bits(),
+            ];
+            match cache.steps.get(&key) {
+                Some(step) => step.clone()?,
+                None => {
+                    // The same as `synth::exact_step_mm`, the section kept for the next scallop.
+                    let section = cache
+                        .sections
+                        .entry([key[0], key[1], key[2]])
+                        .or_insert_with(|| {
+                            crate::synth::CrossSection::new(cutter, &axis)
+                                .map_err(|e| e.to_string())
+                        })
+                        .as_ref()
+                        .map_err(Clone::clone)?;
+                    let step = section
+                        .step_for_scallop_within(h * 1e-3, cache.step_rel)
+                        .map_err(|e| e.to_string());
+                    cache.steps.insert(key, step.clone());
+                    step?
+                }
+            }
         }
     };
     let z = cutter.teeth().max(1) as f64;
@@ -176,8 +229,243 @@ pub fn prepare_run(
         fz_mm,
         crate::math::limits::FZ_MM,
     )?;
-    let reach = reach_mm(cutter, &orientation.axis_fgn(), REACH_HEIGHT_MM)?;
-    let win = run_window(design, reach, fz_mm, step_mm);
+    let a = orientation.axis_fgn();
+    let reach = cache
+        .reaches
+        .entry([a.x.to_bits(), a.y.to_bits(), a.z.to_bits()])
+        .or_insert_with(|| reach_mm(cutter, &a, REACH_HEIGHT_MM))
+        .clone()?;
+    let window = run_window(design, reach, fz_mm, step_mm);
+    Ok(RunPlan {
+        orientation,
+        step_mm,
+        fz_mm,
+        window,
+    })
+}
+
+/// Most memory one run of a design may take by its estimate ([`estimate_run`]), bytes: the
+/// synthetic path and its resampled poses are held whole, unlike `crest simulate`'s stream.
+pub const MAX_RUN_BYTES: f64 = 1.0e9;
+
+/// Bytes per node of a run's grid (the height map, the z-buffer and the areal parameters'
+/// work arrays), for [`estimate_run`].
+const BYTES_PER_NODE: f64 = 32.0;
+
+/// Bytes the surface model takes per resampled pose beyond the pose itself (its edges and
+/// tiles), for [`estimate_run`]: peak memory of single-thread runs of a unit cell at a
+/// 0.0001 µm scallop (285 MB for 442 000 poses) and of a 2 mm window (115 MB for 197 000
+/// poses and 1 million nodes) lies under the estimate.
+const SURFACE_BYTES_PER_SAMPLE: f64 = 512.0;
+
+/// The size of one run of a design, estimated from its plan alone (nothing is built).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunEstimate {
+    /// Passes of the synthetic path.
+    pub passes: f64,
+    /// Postures of the synthetic path.
+    pub postures: f64,
+    /// Resampled poses ([`crate::resample::estimate_samples`]).
+    pub samples: f64,
+    /// Nodes of the evaluated grid.
+    pub nodes: f64,
+    /// Memory, bytes: the path, its poses and the grid.
+    pub bytes: f64,
+}
+
+/// Estimate run `p` of `design` with `cutter` (pass interval, window and path field as
+/// [`prepare_run`] plans them; the passes and points as `synth::generate` lays them out;
+/// the poses by [`crate::resample::estimate_samples`]).
+pub fn estimate_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<RunEstimate, String> {
+    Ok(estimate_plan(
+        design,
+        cutter,
+        p,
+        &plan_run(design, cutter, p)?,
+    ))
+}
+
+fn estimate_plan(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+    plan: &RunPlan,
+) -> RunEstimate {
+    let (length, width) = plan.window.field_mm;
+    let passes = (width / plan.step_mm - 1e-9).ceil().max(0.0) + 1.0;
+    let points = (length / POINT_STEP_MM).ceil().max(1.0) + 1.0;
+    let postures = passes * (points + 2.0);
+    let dtheta = design.dtheta_deg.unwrap_or(DEFAULT_DTHETA_DEG).to_radians();
+    let (_, mode) = design
+        .model
+        .with_resampling(dtheta, plan.fz_mm, cutter.teeth());
+    let extent = crate::resample::PathExtent {
+        cutting_mm: passes * length,
+        runs: passes.min(usize::MAX as f64) as usize,
+        feed_range_mm_min: Some((p.feed_mm_min, p.feed_mm_min)),
+        spindle_rpm: Some(design.rpm),
+    };
+    let samples = crate::resample::estimate_samples(
+        &extent,
+        mode,
+        plan.fz_mm,
+        cutter.teeth(),
+        Some(design.rpm),
+    );
+    let d = design.grid_um * 1e-3;
+    let nodes = match plan.window.grid {
+        crate::surface::GridSpec::Window {
+            x0_mm,
+            y0_mm,
+            x1_mm,
+            y1_mm,
+        } => (((x1_mm - x0_mm) / d).floor() + 1.0) * (((y1_mm - y0_mm) / d).floor() + 1.0),
+        _ => f64::INFINITY,
+    };
+    let bytes = postures * std::mem::size_of::<crate::toolpath::Posture>() as f64
+        + samples
+            * (std::mem::size_of::<crate::resample::Sample>() as f64 + SURFACE_BYTES_PER_SAMPLE)
+        + nodes * BYTES_PER_NODE;
+    RunEstimate {
+        passes,
+        postures,
+        samples,
+        nodes,
+        bytes,
+    }
+}
+
+/// [`estimate_run`], refused past the limits of a simulation (README "Limits": the nodes of
+/// a grid, the resampled poses) and [`MAX_RUN_BYTES`]: the error gives the estimate, the
+/// limit and the keys that bring the run within it.
+pub fn check_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<RunEstimate, String> {
+    let plan = plan_run(design, cutter, p)?;
+    check_estimate(design, p, estimate_plan(design, cutter, p, &plan))
+}
+
+fn check_estimate(design: &Design, p: &RunPoint, e: RunEstimate) -> Result<RunEstimate, String> {
+    use crate::math::limits::{MAX_NODES, MAX_SAMPLES};
+    // NaN (an impossible plan) counts as beyond.
+    let beyond = |v: f64, cap: f64| v.is_nan() || v > cap;
+    let over = if beyond(e.nodes, MAX_NODES as f64) {
+        Some(format!(
+            "its grid would have about {:.3e} nodes, more than the {:.0e} of a simulation (raise grid_um = {}{})",
+            e.nodes,
+            MAX_NODES as f64,
+            design.grid_um,
+            match design.window_mm {
+                Some([a, b]) => format!(" or shrink window_mm = [{a}, {b}]"),
+                None => String::new(),
+            }
+        ))
+    } else if beyond(e.samples, MAX_SAMPLES as f64) {
+        Some(format!(
+            "its {:.3e} passes would be resampled into about {:.3e} poses, more than the {:.0e} of a simulation (raise the pass interval, dtheta_deg or the feed)",
+            e.passes, e.samples, MAX_SAMPLES as f64
+        ))
+    } else if beyond(e.bytes, MAX_RUN_BYTES) {
+        Some(format!(
+            "it would hold about {:.1} GB ({:.3e} passes, {:.3e} path postures, {:.3e} poses, {:.3e} nodes), more than the {:.0} GB a run may take (raise the pass interval, dtheta_deg or grid_um{})",
+            e.bytes / 1e9,
+            e.passes,
+            e.postures,
+            e.samples,
+            e.nodes,
+            MAX_RUN_BYTES / 1e9,
+            match design.window_mm {
+                Some(_) => ", or shrink window_mm",
+                None => "",
+            }
+        ))
+    } else {
+        None
+    };
+    match over {
+        Some(why) => Err(format!(
+            "{} is refused before it starts: {why}",
+            describe(design, p)
+        )),
+        None => Ok(e),
+    }
+}
+
+/// Check every run of `design` against the budget of [`check_run`] before the first one
+/// starts (nothing is built: a few milliseconds a run). A run whose plan itself fails (a
+/// feed per tooth out of range, …) is left to fail as it runs. The error names the refused
+/// runs (the first three) and how many there are.
+pub fn check_runs(design: &Design, cutter: &crate::tool::Cutter) -> Result<(), String> {
+    let runs = design.runs();
+    let mut refused = Vec::new();
+    let mut count = 0usize;
+    // A pass interval at most 0.1 % under the exact one: the passes are never fewer.
+    let mut cache = PlanCache {
+        step_rel: 1e-3,
+        ..PlanCache::default()
+    };
+    for p in &runs {
+        let Ok(plan) = plan_run_with(design, cutter, p, &mut cache) else {
+            continue;
+        };
+        if let Err(e) = check_estimate(design, p, estimate_plan(design, cutter, p, &plan)) {
+            count += 1;
+            if refused.len() < 3 {
+                refused.push(e);
+            }
+        }
+    }
+    if count == 0 {
+        return Ok(());
+    }
+    Err(format!(
+        "{count} of {} runs are past the budget, nothing was run:\n  {}{}",
+        runs.len(),
+        refused.join("\n  "),
+        if count > refused.len() {
+            format!("\n  … and {} more", count - refused.len())
+        } else {
+            String::new()
+        }
+    ))
+}
+
+/// "run 3 (yaw_deg = 0, scallop_um = 5, …)".
+fn describe(design: &Design, p: &RunPoint) -> String {
+    let levels: Vec<String> = design
+        .factors()
+        .iter()
+        .zip(&p.values)
+        .map(|(f, v)| format!("{} = {v}", f.name))
+        .collect();
+    format!("run {} ({})", p.run, levels.join(", "))
+}
+
+/// Points along a pass of a run's synthetic path, mm.
+const POINT_STEP_MM: f64 = 1.0;
+
+/// Plan and resample run `p` of `design` with the nominal `cutter` (see [`simulate_run`]);
+/// a run past the budget ([`check_run`]) is refused before its path is built.
+pub fn prepare_run(
+    design: &Design,
+    cutter: &crate::tool::Cutter,
+    p: &RunPoint,
+) -> Result<PreparedRun, String> {
+    use crate::synth::{PathSpec, Step, Surface};
+    let plan = plan_run(design, cutter, p)?;
+    check_estimate(design, p, estimate_plan(design, cutter, p, &plan))?;
+    let RunPlan {
+        orientation,
+        step_mm,
+        fz_mm,
+        window: win,
+    } = plan;
     let mut spec = PathSpec::new(
         Surface::Plane,
         cutter.clone(),
@@ -188,7 +476,7 @@ pub fn prepare_run(
         win.field_mm,
     );
     spec.pattern = design.pattern;
-    spec.point_step_mm = 1.0;
+    spec.point_step_mm = POINT_STEP_MM;
     spec.clearance_mm = 1.0;
     spec.feed_mm_min = p.feed_mm_min;
     spec.spindle_rpm = design.rpm;

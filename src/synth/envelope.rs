@@ -281,6 +281,13 @@ impl CrossSection {
     /// The exact path interval for scallop height `h_mm`: solves h(s) = h_target by
     /// bisection (h is nondecreasing in s). Returns the largest s with h(s) ≤ h_target.
     pub fn step_for_scallop(&self, h_mm: f64) -> Result<f64, SynthError> {
+        self.step_for_scallop_within(h_mm, 0.0)
+    }
+
+    /// [`CrossSection::step_for_scallop`] to a relative tolerance `rel` (0: to the last
+    /// bit): a step at most `rel` below the exact one and never above it, so the passes it
+    /// gives are never fewer (for budgets, in far fewer evaluations).
+    pub fn step_for_scallop_within(&self, h_mm: f64, rel: f64) -> Result<f64, SynthError> {
         if h_mm.is_nan() || h_mm <= 0.0 || !h_mm.is_finite() {
             return Err(SynthError::Invalid(format!(
                 "the scallop height must be positive, got {h_mm} mm"
@@ -301,7 +308,7 @@ impl CrossSection {
         }
         for _ in 0..200 {
             let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
+            if mid <= lo || mid >= hi || hi - lo <= rel * hi {
                 break;
             }
             match self.scallop_mm(mid) {

@@ -13,6 +13,7 @@ mod gcode; // 5-axis G-code through the machine: CLSF → G-code → postures, s
 mod heightmap_io; // height-map files (CSV, XYZ, GSF, SDF): round trips, malformed files
 mod hostile; // hostile input and lost data (issue 18): each reproduction, -o like coreutils, budgets
 mod hostile2; // hostile input, second round (issue 37): limits on every route, CR line ends, located messages, escaped text
+mod hostile3; // hostile input, third round (issue 37): failed commands change nothing, designs refused before their runs, no control characters on a terminal
 mod install; // the version, completions, man pages and plain error lines of an installed crest
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
