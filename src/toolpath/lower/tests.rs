@@ -1,3 +1,5 @@
+//! Unit tests of lowering: records to postures, MSYS, circles, NURBS, tool data and feed checks.
+
 use super::*;
 use crate::parse::clsf::parse_str;
 use approx::assert_relative_eq;
