@@ -1,4 +1,4 @@
-//! Unit tests of lowering: records to postures, MSYS, circles, NURBS, tool data and feed checks.
+//! Unit tests of lowering: modal state, units and feeds, MSYS, contact forms and derived normals, arcs and cycles, positioned errors.
 
 use super::*;
 use crate::parse::clsf::parse_str;
