@@ -260,7 +260,11 @@ impl Ctx<'_> {
             }
         };
         if !v.is_finite() || v <= 0.0 {
-            return Err(self.invalid(key, value, format!("must be > 0 {unit}, got {v}")));
+            return Err(self.invalid(
+                key,
+                value,
+                format!("must be > 0 {unit}, got {}", crate::math::limits::shown(v)),
+            ));
         }
         if v < kind.plausible_min(rotary) {
             let hint = match (kind, rotary) {
@@ -276,7 +280,10 @@ impl Ctx<'_> {
             return Err(self.invalid(
                 key,
                 value,
-                format!("= {v} {unit} is implausibly small: was it given in {hint}"),
+                format!(
+                    "= {} {unit} is implausibly small: was it given in {hint}",
+                    crate::math::limits::shown(v)
+                ),
             ));
         }
         if v > kind.plausible_max(rotary) {
@@ -287,7 +294,10 @@ impl Ctx<'_> {
             return Err(self.invalid(
                 key,
                 value,
-                format!("= {v} {unit} is implausibly large: was it given in {hint}"),
+                format!(
+                    "= {} {unit} is implausibly large: was it given in {hint}",
+                    crate::math::limits::shown(v)
+                ),
             ));
         }
         Ok(v)

@@ -373,7 +373,8 @@ fn check_spacing_value(name: &str, v: f64) -> Result<(), FormatError> {
         Ok(())
     } else {
         Err(FormatError::file(format!(
-            "{name} must be a positive number of µm, got {v}"
+            "{name} must be a positive number of µm, got {}",
+            crate::math::limits::shown(v)
         )))
     }
 }

@@ -19,6 +19,18 @@ pub const MAX_NODES: usize = 400_000_000;
 /// Largest number of resampled poses a simulation may generate before culling.
 pub const MAX_SAMPLES: u64 = 1_000_000_000;
 
+/// `v` as a message shows it: plain decimals for ordinary magnitudes, scientific notation
+/// (`1e300`, `3e-9`) past them, where Rust's `Display` would write every digit (a hostile
+/// `1e300` is 301 characters).
+pub fn shown(v: f64) -> String {
+    let a = v.abs();
+    if v.is_finite() && v != 0.0 && !(1e-4..1e9).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// `v` if it lies in `range` (inclusive) and is finite, else an error naming `what` with its
 /// unit.
 pub fn within(what: &str, unit: &str, v: f64, range: (f64, f64)) -> Result<f64, String> {
@@ -26,8 +38,10 @@ pub fn within(what: &str, unit: &str, v: f64, range: (f64, f64)) -> Result<f64, 
         Ok(v)
     } else {
         Err(format!(
-            "{what} must lie between {} and {} {unit}, got {v}",
-            range.0, range.1
+            "{what} must lie between {} and {} {unit}, got {}",
+            range.0,
+            range.1,
+            shown(v)
         ))
     }
 }
@@ -62,7 +76,8 @@ pub fn corner_radius(rc: f64, r: f64) -> Result<f64, String> {
 pub fn coordinates(p: &[f64]) -> Result<(), String> {
     match p.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD_MM) {
         Some(c) => Err(format!(
-            "coordinate {c} mm is beyond the ±{MAX_COORD_MM} mm (100 m) limit"
+            "coordinate {} mm is beyond the ±{MAX_COORD_MM} mm (100 m) limit",
+            shown(*c)
         )),
         None => Ok(()),
     }
@@ -71,6 +86,26 @@ pub fn coordinates(p: &[f64]) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn huge_and_tiny_values_are_shown_short() {
+        assert_eq!(shown(1e300), "1e300");
+        assert_eq!(shown(-3e38), "-3e38");
+        assert_eq!(shown(2.5e-9), "2.5e-9");
+        assert_eq!(shown(0.05), "0.05");
+        assert_eq!(shown(12345.5), "12345.5");
+        assert_eq!(shown(0.0), "0");
+        assert!(
+            within("fz", "mm", 1e300, FZ_MM)
+                .unwrap_err()
+                .ends_with("got 1e300")
+        );
+        assert!(
+            coordinates(&[0.0, 1e300])
+                .unwrap_err()
+                .contains("coordinate 1e300 mm")
+        );
+    }
 
     #[test]
     fn within_names_the_value_and_its_range() {

@@ -260,7 +260,10 @@ pub fn resolve_cutting(
         if let Some(v) = v
             && !(v.is_finite() && v > 0.0)
         {
-            return Err(miette!("--{name} must be positive, got {v}"));
+            return Err(miette!(
+                "--{name} must be positive, got {}",
+                crate::math::limits::shown(v)
+            ));
         }
     }
     let rpm = req

@@ -320,7 +320,8 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
             Ok(())
         } else {
             Err(SurfaceError::InvalidOption(format!(
-                "{name} must be positive, got {v}"
+                "{name} must be positive, got {}",
+                crate::math::limits::shown(v)
             )))
         }
     };

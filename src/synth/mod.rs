@@ -314,7 +314,8 @@ fn check_positive(name: &str, v: f64) -> Result<(), SynthError> {
         Ok(())
     } else {
         Err(SynthError::Invalid(format!(
-            "{name} must be positive, got {v}"
+            "{name} must be positive, got {}",
+            crate::math::limits::shown(v)
         )))
     }
 }

@@ -98,7 +98,7 @@ fn check_coords(p: &Point3, line: u32, column: u32) -> Result<(), LowerError> {
             line,
             column,
             "a coordinate within ±100000 mm (100 m)",
-            format!("{c}"),
+            crate::math::limits::shown(*c),
         )),
         None => Ok(()),
     }
@@ -122,7 +122,7 @@ fn check_rate(
         line,
         column,
         &format!("a {what} between {} and {} {unit} (or 0)", range.0, range.1),
-        format!("{v} {unit}"),
+        format!("{} {unit}", crate::math::limits::shown(v)),
     ))
 }
 

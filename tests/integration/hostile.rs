@@ -510,9 +510,18 @@ fn r18_5_outputs_do_not_destroy_what_is_there() {
     );
 }
 
+/// SIGINT (Ctrl-C), SIGTERM (kill) and SIGHUP (a closed terminal, a dropped ssh; issue 37)
+/// each remove the temporary output and exit with 128 + the signal, as a shell reports it.
 #[cfg(unix)]
 #[test]
 fn r18_6_an_interrupted_run_leaves_no_temporary_file() {
+    for (signal, code) in [("-INT", 130), ("-TERM", 143), ("-HUP", 129)] {
+        interrupted_run_leaves_no_temporary_file(signal, code);
+    }
+}
+
+#[cfg(unix)]
+fn interrupted_run_leaves_no_temporary_file(signal: &str, code: i32) {
     let d = tempfile::tempdir().unwrap();
     let p = d.path();
     let plane = repo("samples/synth/plane-trial3.cls");
@@ -548,11 +557,11 @@ fn r18_6_an_interrupted_run_leaves_no_temporary_file() {
     }
     assert!(tmp(), "no temporary output appeared");
     let _ = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+        .args([signal, &child.id().to_string()])
         .status();
     let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130));
-    assert!(!tmp(), "a temporary file was left behind");
+    assert_eq!(status.code(), Some(code), "{signal}");
+    assert!(!tmp(), "{signal}: a temporary file was left behind");
     assert!(!p.join("big.csv").exists());
 }
 

@@ -24,7 +24,7 @@ fn check_tool(tool: &ToolData, record: &str, line: u32, column: u32) -> Result<(
             line,
             column,
             &format!("a {record} radius D/2 that {m}"),
-            format!("D {} mm", tool.diameter_mm),
+            format!("D {} mm", crate::math::limits::shown(tool.diameter_mm)),
         )
     })?;
     let bound = if tool.apt.is_some() { f64::INFINITY } else { r };
