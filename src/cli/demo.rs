@@ -19,7 +19,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The embedded tool: 002's ball end with 10 µm of run-out in the direction of tooth 1.
-const DEMO_TOOL: &str = r#"# 002 case-study tool with 10 µm of run-out
+const DEMO_TOOL: &str = r#"# the case-study tool of Marin et al. 2023 with 10 µm of run-out
 shape = "ball"
 radius_mm = 5.0
 teeth = 4
@@ -181,7 +181,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     };
     crest::plot::trochoid::plot_trochoids(&cutter, &troch_opts, &troch)
         .map_err(|e| miette::miette!("{}: {e}", troch.display()))?;
-    wrote.push((troch, "trochoids of ICE elements (002 Fig 14)".into()));
+    wrote.push((
+        troch,
+        "trochoids of the cutting-edge elements (as Marin et al. 2023, Fig 14)".into(),
+    ));
     let view = dir.join("view.html");
     let info = crest::report::view::ViewInfo {
         title: "crest demo: simulated surface (ICE model, 10 µm run-out)".into(),
@@ -218,7 +221,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     );
     let _ = writeln!(
         md,
-        "| quantity | closed form (002 Eqs 7, 8, 14) | simulated |\n|---|---|---|"
+        "| quantity | closed form (Marin et al. 2023, Eqs 7, 8, 14) | simulated |\n|---|---|---|"
     );
     let _ = writeln!(md, "| participating teeth | {} of {teeth} | |", analysis.zc);
     let _ = writeln!(
@@ -261,7 +264,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write the demo into {}", out.display()))?;
 
-    outln!("crest demo: the 002 case study on a plane, with 10 µm of run-out");
+    outln!("crest demo: the case study of Marin et al. 2023 on a plane, with 10 µm of run-out");
     outln!(
         "  teeth cutting: {} of {teeth}, feed marks {:.3} mm apart, crest {:.3} µm (closed form), Rz {:.3} µm (simulated)",
         analysis.zc,

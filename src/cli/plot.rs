@@ -182,8 +182,78 @@ pub struct FeedArgs {
     /// Feed, mm/min, where the path states none (contact12 has no feed).
     #[arg(long)]
     pub feed_mm_min: Option<f64>,
+    /// Plot only from this path length on, mm (the cutting length the x axis shows).
+    #[arg(long, value_name = "MM")]
+    pub from_mm: Option<f64>,
+    /// Plot only up to this path length, mm.
+    #[arg(long, value_name = "MM")]
+    pub to_mm: Option<f64>,
     #[command(flatten)]
     pub common: Common,
+}
+
+/// A point of the feed plot over a range of path length: posture `i` itself, or a point at
+/// path length `s` on the move ending at posture `i` (where the range cuts that move).
+#[derive(Clone, Copy)]
+enum RangePoint {
+    Posture(usize),
+    Cut(f64, usize),
+}
+
+/// The points of `s` (path length, NaN between runs) within `[from, to]`, with a point where
+/// the range cuts a move (so a long move across a bound is drawn up to it); runs still apart
+/// (one NaN point between them). Errors when the range is empty or holds no cutting move.
+fn length_range(
+    s: &[f64],
+    from: Option<f64>,
+    to: Option<f64>,
+    total: f64,
+) -> miette::Result<Vec<RangePoint>> {
+    let (lo, hi) = (from.unwrap_or(0.0), to.unwrap_or(f64::INFINITY));
+    if !(lo.is_finite() && lo >= 0.0) || hi.is_nan() || lo >= hi {
+        return Err(miette!(
+            "--from-mm {} and --to-mm {} do not give a range of path length (0 … {total:.3} mm)",
+            crest::math::limits::shown(lo),
+            crest::math::limits::shown(hi)
+        ));
+    }
+    let mut keep: Vec<RangePoint> = Vec::new();
+    let gap = |k: &RangePoint| matches!(*k, RangePoint::Posture(i) if s[i].is_nan());
+    for (i, &v) in s.iter().enumerate() {
+        if v.is_nan() {
+            if keep.last().is_some_and(|k| !gap(k)) {
+                keep.push(RangePoint::Posture(i));
+            }
+            continue;
+        }
+        let prev = (i > 0 && s[i - 1].is_finite()).then(|| s[i - 1]);
+        if let Some(p) = prev
+            && p < lo
+            && v > lo
+        {
+            keep.push(RangePoint::Cut(lo, i));
+        }
+        if (lo..=hi).contains(&v) {
+            keep.push(RangePoint::Posture(i));
+        }
+        if let Some(p) = prev
+            && p < hi
+            && v > hi
+        {
+            keep.push(RangePoint::Cut(hi, i));
+        }
+    }
+    while keep.last().is_some_and(gap) {
+        keep.pop();
+    }
+    if keep.is_empty() {
+        return Err(miette!(
+            "no cutting move between {} and {} mm of path length (the cutting length is {total:.3} mm)",
+            crest::math::limits::shown(lo),
+            crest::math::limits::shown(hi)
+        ));
+    }
+    Ok(keep)
 }
 
 fn check_format(path: &Path) -> miette::Result<()> {
@@ -496,6 +566,26 @@ fn run_feed(a: FeedArgs) -> miette::Result<Outcome> {
             feed.push(p.feed_mm_min.or(a.feed_mm_min).unwrap_or(f64::NAN));
             rpm.push(a.rpm.or(p.spindle_rpm).unwrap_or(f64::NAN));
         }
+    }
+    if a.from_mm.is_some() || a.to_mm.is_some() {
+        let keep = length_range(&s, a.from_mm, a.to_mm, len)?;
+        let pick = |v: &[f64], at_cut: bool| {
+            keep.iter()
+                .map(|k| match *k {
+                    RangePoint::Posture(i) => v[i],
+                    RangePoint::Cut(x, _) if at_cut => x,
+                    RangePoint::Cut(_, i) => v[i],
+                })
+                .collect::<Vec<f64>>()
+        };
+        (s, feed, rpm) = (pick(&s, true), pick(&feed, false), pick(&rpm, false));
+        lines = keep
+            .iter()
+            .map(|k| match *k {
+                RangePoint::Posture(i) => lines[i],
+                RangePoint::Cut(..) => None,
+            })
+            .collect();
     }
     let name = file_stem(&a.path);
     if a.crest {

@@ -57,7 +57,7 @@ params! {
     Rq => "Rq", "µm", "Root-mean-square deviation of the profile.";
     Rp => "Rp", "µm", "Mean of the section peak heights.";
     Rv => "Rv", "µm", "Mean of the section valley depths.";
-    Rz => "Rz", "µm", "Mean of the section heights (002 Eq 15).";
+    Rz => "Rz", "µm", "Mean of the section heights (ISO 21920-2; Marin et al. 2023, Eq 15).";
     Rt => "Rt", "µm", "Total height over the evaluation length.";
     Rsk => "Rsk", "1", "Profile skewness.";
     Rku => "Rku", "1", "Profile kurtosis.";

@@ -209,11 +209,11 @@ fn findings(r: &Regression) -> Vec<String> {
 fn method_text(r: &Regression) -> Vec<String> {
     let mut v = vec![
         "Measured: mean and sample standard deviation σ (n − 1 convention) of the samples of \
-         each case, as 002 Table 2 prints them."
+         each case, as Marin et al. 2023, Table 2 prints them."
             .to_string(),
-        "Crest model (002 §3.3, computed by `crest::tool::analyse`): the generating point of a \
+        "Crest model (Marin et al. 2023, §3.3, computed by `crest::tool::analyse`): the generating point of a \
          ball end at lead β lies at height z = R(1 − cos β). Paper rule: the teeth whose local \
-         radius r_j(z) (run-out included) exceeds max r_j − hc(fz) cut (002 Eq 8; hc is Eq 14 \
+         radius r_j(z) (run-out included) exceeds max r_j − hc(fz) cut (Marin et al. 2023, Eq 8; hc is Eq 14 \
          at the programmed fz), the marks are fz_eff = fz·Z/zc apart (Eq 7) and the crest is \
          Eq 14 with fz_eff. Exact rule: the profile is the lower envelope of every tooth's arc \
          (radius R + Δ_j, Δ_j its run-out along the normal) at its own mark, period Z·fz, and \
@@ -225,7 +225,7 @@ fn method_text(r: &Regression) -> Vec<String> {
              valley is a sample) over 5 sampling lengths λc chosen by ISO 4288 from RSm = fz_eff \
              (λc = 0.8 mm for 0.13 < RSm ≤ 0.4 mm). The periodic profile has no form, so no \
              filter is applied: Ra = mean |z − z̄| over the evaluation length, Rz = mean of the \
-             5 peak-to-valley heights (002 Eq 15), which equals the crest hc for evenly spaced marks.",
+             5 peak-to-valley heights (Marin et al. 2023, Eq 15), which equals the crest hc for evenly spaced marks.",
             fmt_g(PROFILE_STEP_MM * 1e3)
         ),
         "Curvature: without a local surface radius a case is computed as on a plane, so the \
@@ -274,7 +274,7 @@ fn method_text(r: &Regression) -> Vec<String> {
         ));
     }
     v.push(format!(
-        "Effective radius (002 Table 3, model.md §6): R_ef,max = R sin(β + acos((R − ap)/R)) at \
+        "Effective radius (Marin et al. 2023, Table 3; model.md §6): R_ef,max = R sin(β + acos((R − ap)/R)) at \
          ap = {} mm; Vc,ef/Vc = R_ef,max/R{}. It does not enter the crest; it shows how close \
          the slow tool centre is to the cut (plowing).",
         fmt_g(r.ap_mm),

@@ -308,3 +308,50 @@ fn closed_stdout_is_not_a_failure() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// `plot feed --from-mm/--to-mm` (issue 33): only the cutting length asked is drawn; a range
+/// with no cutting move in it is refused and nothing is written.
+#[test]
+fn feed_plot_over_a_range_of_path_length() {
+    let dir = tempdir();
+    let cls = dir.path().join("line.cls");
+    // One cutting run along x, a posture every 1 mm: path lengths 0, 1, …, 10 mm.
+    let gotos: String = (0..=10).map(|i| format!("GOTO/{i},0,0,0,0,1\n")).collect();
+    std::fs::write(
+        &cls,
+        format!(
+            "TOOL PATH/LINE,TOOL,BALL\nTLDATA/MILL,10,5,50,0,0\nSPINDL/RPM,10000,CLW\nFEDRAT/MMPM,1000\n{gotos}END-OF-PATH\n"
+        ),
+    )
+    .unwrap();
+    let svg = dir.path().join("f.svg");
+    let points = |range: &[&str]| {
+        let out = crest()
+            .args(["plot", "feed"])
+            .arg(&cls)
+            .args(range)
+            .args(["--json", "-o"])
+            .arg(&svg)
+            .output()
+            .unwrap();
+        output_json(&out)["points"].as_u64().unwrap()
+    };
+    assert_eq!(points(&[]), 11);
+    // The bounds cut the moves 2 → 3 and 6 → 7: a point at 2.5 and at 6.5 mm.
+    assert_eq!(points(&["--from-mm", "2.5", "--to-mm", "6.5"]), 6);
+    assert_eq!(points(&["--from-mm", "8"]), 3);
+    assert_eq!(points(&["--to-mm", "0.5"]), 2);
+    std::fs::remove_file(&svg).unwrap();
+    for range in [["--from-mm", "10.5"], ["--to-mm", "-1"]] {
+        let out = crest()
+            .args(["plot", "feed"])
+            .arg(&cls)
+            .args(range)
+            .arg("-o")
+            .arg(&svg)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{range:?}");
+        assert!(!svg.exists(), "{range:?}");
+    }
+}
