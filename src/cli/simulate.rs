@@ -129,8 +129,9 @@ pub struct Args {
         allow_negative_numbers = true
     )]
     pub patch_at: Option<f64>,
-    /// A patch centred at the part point nearest X,Y,Z (the design surface of --part, or the
-    /// surface derived from the path), along the local feed and across it.
+    /// A patch centred at the part point nearest X,Y,Z (on the design surface of --part;
+    /// without it, the nearest contact point of the cut moves), along the local feed and
+    /// across it. The output line says where the patch is centred.
     #[arg(
         long,
         value_name = "X,Y,Z",
@@ -404,17 +405,32 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     } else {
         let nan = f64::NAN;
         let shape = match &run.output {
-            Output::Grid(sim) => format!(
-                "{} × {} nodes at {} µm{}",
-                sim.map.nx,
-                sim.map.ny,
-                run.grid_um,
-                if args.grid_um.is_none() {
-                    " (a tenth of fz; --grid-um to change)"
-                } else {
-                    ""
-                }
-            ),
+            Output::Grid(sim) => {
+                // Where a patch landed (--patch-at, --patch-near): its centre in the file's frame.
+                let (m, f) = (&sim.map, &sim.frame);
+                let centre = f.origin
+                    + f.u * (m.x0_mm + 0.5e-3 * m.dx_um * (m.nx.max(1) - 1) as f64)
+                    + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64);
+                format!(
+                    "{} × {} nodes at {} µm{}{}",
+                    m.nx,
+                    m.ny,
+                    run.grid_um,
+                    if args.grid_um.is_none() {
+                        " (a tenth of fz; --grid-um to change)"
+                    } else {
+                        ""
+                    },
+                    if args.window.is_none() {
+                        format!(
+                            ", centred at {:.4},{:.4},{:.4}",
+                            centre.x, centre.y, centre.z
+                        )
+                    } else {
+                        String::new()
+                    }
+                )
+            }
             Output::Map(m) => format!("{} part points in {} cells", m.points.len(), m.tiles),
         };
         outln!(
@@ -567,6 +583,10 @@ fn summary(
             j["dy_um"] = num(m.dy_um);
             j["x0_mm"] = num(m.x0_mm);
             j["y0_mm"] = num(m.y0_mm);
+            let centre = f.origin
+                + f.u * (m.x0_mm + 0.5e-3 * m.dx_um * (m.nx.max(1) - 1) as f64)
+                + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64);
+            j["centre_mm"] = serde_json::json!([num(centre.x), num(centre.y), num(centre.z)]);
             j["origin"] = serde_json::json!({
                 "wcs_mm": [num(origin.x), num(origin.y), num(origin.z)],
                 "u": v3(&f.u),

@@ -281,6 +281,17 @@ fn a_patch_on_the_passes_takes_the_cut_feed() {
     let v: serde_json::Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {out}"));
     assert_eq!(v["feed_mm_min"].as_f64(), Some(CUT_FEED), "{v}");
     assert_eq!(v["moves"], "cut");
+    // Without --part the patch is centred at the nearest contact point: on pass 3 or 4
+    // (y = 1.5 or 2, the point asked is half-way), on the floor, near x = 10.
+    let c: Vec<f64> = v["centre_mm"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no centre_mm: {v}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap_or(f64::NAN))
+        .collect();
+    assert!((c[0] - 10.0).abs() < 0.1, "centre {c:?}");
+    assert!(c[1] == 1.5 || c[1] == 2.0, "centre {c:?}");
+    assert!(c[2].abs() < 1e-9, "centre {c:?}");
     let h = &v["heights_um"];
     let (lo, hi) = (h["min"].as_f64(), h["max"].as_f64());
     assert!(
