@@ -1,5 +1,9 @@
 //! `crest convert`: CLSF → contact12 CSV, contact12 → CLSF with contact data, and any of
-//! them (G-code included) → G-code through a machine's inverse kinematics.
+//! them (G-code included) → G-code through a machine's inverse kinematics; and height maps
+//! between their formats (`crest convert MAP -o MAP.x3p|.gsf|.sdf|.csv|.xyz`).
+//!
+//! A height-map conversion is chosen when the input is a `.gsf`, `.sdf` or `.x3p` or the
+//! output is a `.gsf`, `.sdf`, `.x3p` or `.xyz` (a grid `.csv` input needs `--dx-um`).
 //!
 //! The input kind is detected by content; the output kind by the extension of `-o`
 //! (`.cls`, `.clsf`, `.cl`, `.apt` = CLSF; `.nc`, `.mpf`, `.spf`, `.tap`, `.gcode`, `.ngc`,
@@ -44,6 +48,58 @@ pub struct Args {
     /// otherwise joint positions with inverse-time feed (G93).
     #[arg(long, value_enum, default_value = "auto")]
     pub rtcp: RtcpArg,
+    /// Height-map input as a grid `.csv`: its x spacing, µm.
+    #[arg(long, value_name = "UM")]
+    pub dx_um: Option<f64>,
+    /// Height-map input as a grid `.csv`: its y spacing, µm (default: --dx-um).
+    #[arg(long, value_name = "UM")]
+    pub dy_um: Option<f64>,
+}
+
+/// True when `args` converts a height map (see the module docs).
+fn is_map_conversion(args: &Args) -> bool {
+    use crest::io::HeightMapFormat as F;
+    let input = F::from_path(&args.file);
+    let output = F::from_path(&args.output);
+    matches!(input, Some(F::Gsf | F::Sdf | F::X3p))
+        || matches!(output, Some(F::Gsf | F::Sdf | F::X3p | F::Xyz))
+}
+
+/// `crest convert MAP -o MAP2`: read a height map and write it in the output's format.
+fn convert_map(args: &Args) -> miette::Result<Outcome> {
+    use miette::IntoDiagnostic;
+    let Some(format) = crest::io::HeightMapFormat::from_path(&args.output) else {
+        return Err(miette::miette!(
+            "{}: a height map converts to .csv, .xyz, .txt, .gsf, .sdf or .x3p",
+            args.output.display()
+        ));
+    };
+    if let (Ok(a), Ok(b)) = (args.file.canonicalize(), args.output.canonicalize())
+        && a == b
+    {
+        return Err(miette::miette!(
+            "{}: the output is the input; write the conversion to another file",
+            args.output.display()
+        ));
+    }
+    super::check_outputs([args.output.as_path()])?;
+    let opts = crest::io::ReadOptions {
+        dx_um: args.dx_um,
+        dy_um: args.dy_um,
+    };
+    let map = crest::io::read_heightmap(&args.file, &opts).map_err(|e| miette::miette!("{e}"))?;
+    crest::io::write_heightmap(&args.output, &map).into_diagnostic()?;
+    let valid = map.z_um.iter().filter(|z| z.is_finite()).count();
+    outln!(
+        "{} ({} × {} nodes at {} × {} µm, {valid} measured) → {} ({format:?})",
+        args.file.display(),
+        map.nx,
+        map.ny,
+        map.dx_um,
+        map.dy_um,
+        args.output.display()
+    );
+    Ok(Outcome::Ok)
 }
 
 /// True when `path` names a CLSF output.
@@ -203,6 +259,15 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
 
 /// Run `crest convert`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
+    if is_map_conversion(&args) {
+        return convert_map(&args);
+    }
+    if args.dx_um.is_some() || args.dy_um.is_some() {
+        return Err(miette::miette!(
+            "--dx-um and --dy-um are for height maps; {} converts a tool path",
+            args.file.display()
+        ));
+    }
     let c = convert(&args)?;
     let _ = std::io::stderr().flush();
     if c.postures == 0 {

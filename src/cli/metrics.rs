@@ -35,7 +35,7 @@ some direction (any 1-D lay). Sbi, Sci and Svi are not computed."
 )]
 pub struct Args {
     /// Height map: `.csv` grid (rows = y ascending, µm; needs --dx-um), `.xyz`/`.txt` or a
-    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`.
+    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`, ISO 25178-72 `.x3p` (OpenGPS).
     pub file: PathBuf,
     /// Spacing along x, µm (needed for grid CSV; checked against the other formats).
     #[arg(long, value_name = "D")]

@@ -122,7 +122,7 @@ pub struct RunoutArgs {
 /// Options of height-map input.
 #[derive(Debug, clap::Args)]
 pub struct MapInput {
-    /// Height map: `.csv` (grid, µm; needs --dx-um), `.xyz`/`.txt`, `.gsf` or `.sdf`.
+    /// Height map: `.csv` (grid, µm; needs --dx-um), `.xyz`/`.txt`, `.gsf`, `.sdf` or `.x3p`.
     pub map: PathBuf,
     /// Grid spacing along x, µm (grid CSV).
     #[arg(long)]

@@ -3,7 +3,7 @@
 //! ```text
 //! crest simulate FILE --tool tool.toml [--process process.toml] [--rpm N] [--feed-mm-min V]
 //!     [--fz-mm F] --model dome|ice [--dtheta-deg D] --grid-um G
-//!     (--window X0,Y0,X1,Y1 | --patch-at S_MM --patch-mm L,W) -o OUT.(csv|gsf|sdf) [--json]
+//!     (--window X0,Y0,X1,Y1 | --patch-at S_MM --patch-mm L,W) -o OUT.(csv|gsf|sdf|x3p) [--json]
 //! crest simulate FILE --part PART.stl --map-mm D [--region …] -o MAP.ply
 //! crest simulate FILE --part PART.stl --map-mm D --shard K/N -o DIR   (then crest merge)
 //! ```
@@ -169,7 +169,7 @@ pub struct Args {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Output: a height map .csv (µm), .gsf or .sdf; a part map (--map-mm) .ply.
+    /// Output: a height map .csv (µm), .gsf, .sdf or .x3p (ISO 25178-72, opens in MountainsMap and the x3p viewers); a part map (--map-mm) .ply.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
     /// Also write the result as a self-contained 3-D viewer page (HTML, as `crest view OUT
@@ -273,7 +273,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             if map {
                 ".ply for a part map"
             } else {
-                ".csv, .gsf or .sdf"
+                ".csv, .gsf, .sdf or .x3p"
             }
         ));
     }

@@ -19,7 +19,7 @@ profile between them: its Rz is the one `crest metrics MAP --profile line:X0,Y0,
 --params Rz` prints (taken from the full map when it has at most 1 048 576 nodes, from the \
 displayed block means otherwise; the page says which).")]
 pub struct Args {
-    /// Height map (`.csv` grid with --dx-um, `.csv`/`.xyz` point list, `.gsf`, `.sdf`) or a
+    /// Height map (`.csv` grid with --dx-um, `.csv`/`.xyz` point list, `.gsf`, `.sdf`, `.x3p`) or a
     /// part map (`.ply` from `crest simulate --map-mm`).
     pub file: PathBuf,
     /// The page to write (HTML).

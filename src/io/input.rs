@@ -71,6 +71,13 @@ pub const SDF_BINARY: Budget = Budget {
     line: None,
     why: "400 million nodes × 8 bytes + 1 MiB of header and trailer",
 };
+/// An `.x3p` (a zip archive): the node limit in float64, its validity bits and 16 MiB of
+/// XML and zip structure (each entry is held to its own budget as it is decompressed).
+pub const X3P: Budget = Budget {
+    bytes: NODES * 8 + NODES / 8 + 16 * MIB,
+    line: None,
+    why: "400 million nodes × 8 bytes, their validity bits and 16 MiB of XML",
+};
 /// A text height map (grid CSV, text `.sdf`): the node limit at 26 bytes per height.
 pub const MAP_TEXT: Budget = Budget {
     bytes: NODES * 26 + MIB,

@@ -1,5 +1,5 @@
 //! File formats and safe writing: height-map readers and writers (CSV grid, x,y,z point
-//! lists, Gwyddion `.gsf`, ISO 25178-71 / BCR `.sdf`), and [`write_atomic`], which never
+//! lists, Gwyddion `.gsf`, ISO 25178-71 / BCR `.sdf`, ISO 25178-72 `.x3p`), and [`write_atomic`], which never
 //! leaves a partial file.
 //!
 //! Every format maps onto [`HeightMap`]: row `i` is `y = y0 + i·dy` (ascending), column `j`
@@ -13,10 +13,12 @@
 //! | `.csv` with an `x,y,z` header, `.xyz` | one point per line, any order | from the coordinates, µm | µm | absent line or `NaN` |
 //! | `.gsf` | Gwyddion Simple Field 1.0, float32 LE | `XReal`/`YReal` (pixels), metres | metres (`ZUnits`) | NaN |
 //! | `.sdf` | ISO 25178-71 / BCR, text (`aBCR`/`aISO`) and binary reading; text writing | `Xscale`/`Yscale`, metres | value·`Zscale`, metres | `NaN` (text) |
+//! | `.x3p` | ISO 25178-72 (OpenGPS) zip: `main.xml` + binary or listed heights, I/L/F/D read, D written, checksums verified | `CX`/`CY` `Increment`, `Offset`, metres | value·`CZ/Increment` + `Offset`, metres | validity mask, NaN or infinite |
 
 mod csv_grid;
 mod gsf;
 mod sdf;
+mod x3p;
 mod xyz;
 
 pub mod input;
@@ -53,11 +55,13 @@ pub enum HeightMapFormat {
     Gsf,
     /// ISO 25178-71 / BCR surface data file (`.sdf`).
     Sdf,
+    /// ISO 25178-72 XML surface file (`.x3p`, OpenGPS).
+    X3p,
 }
 
 impl HeightMapFormat {
     /// The format named by a path's extension (case-insensitive): `.csv`, `.xyz`/`.txt`,
-    /// `.gsf`, `.sdf`.
+    /// `.gsf`, `.sdf`, `.x3p`.
     pub fn from_path(path: &Path) -> Option<HeightMapFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
@@ -65,6 +69,7 @@ impl HeightMapFormat {
             "xyz" | "txt" => Some(HeightMapFormat::Xyz),
             "gsf" => Some(HeightMapFormat::Gsf),
             "sdf" => Some(HeightMapFormat::Sdf),
+            "x3p" => Some(HeightMapFormat::X3p),
             _ => None,
         }
     }
@@ -149,7 +154,7 @@ pub enum HeightMapError {
     #[error("{0}")]
     Input(Box<input::InputError>),
     /// The extension names no known format.
-    #[error("{path}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf or .sdf)")]
+    #[error("{path}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf, .sdf or .x3p)")]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -226,6 +231,7 @@ fn budget_of(format: HeightMapFormat, head: &[u8]) -> input::Stage {
             Some(b'b') => Stage::Budget(input::SDF_BINARY),
             _ => Stage::Stop,
         },
+        HeightMapFormat::X3p => Stage::Budget(input::X3P),
         HeightMapFormat::Csv => input::text_stage(head, input::MAP_TEXT),
         HeightMapFormat::Xyz => input::text_stage(head, input::MAP_XYZ),
     }
@@ -242,6 +248,8 @@ impl HeightMapFormat {
             .any(|m| head.starts_with(*m))
         {
             HeightMapFormat::Sdf
+        } else if x3p::is_zip(head) {
+            HeightMapFormat::X3p
         } else {
             HeightMapFormat::Csv
         }
@@ -361,6 +369,7 @@ pub fn parse_heightmap(
         HeightMapFormat::Xyz => xyz::parse(as_text(bytes)?)?,
         HeightMapFormat::Gsf => gsf::parse(bytes)?,
         HeightMapFormat::Sdf => sdf::parse(bytes)?,
+        HeightMapFormat::X3p => x3p::parse(bytes)?,
     };
     check_heights(&map)?;
     check_against(opts.dx_um, map.dx_um, "dx")?;
@@ -399,7 +408,8 @@ fn as_text(bytes: &[u8]) -> Result<&str, FormatError> {
 
 /// Write a height map, the format chosen by the extension: `.csv` (rows = y ascending,
 /// µm), `.xyz`/`.txt` (x,y,z point list, µm), `.gsf` (Gwyddion Simple Field, metres,
-/// float32) or `.sdf` (ISO 25178-71 / BCR text, metres, float64 values).
+/// float32), `.sdf` (ISO 25178-71 / BCR text, metres, float64 values) or `.x3p` (ISO
+/// 25178-72, metres, float64).
 pub fn write_heightmap(path: &Path, map: &HeightMap) -> std::io::Result<()> {
     let mut set = output::Outputs::new();
     stage_heightmap(&mut set, path, map)?;
@@ -417,7 +427,7 @@ pub fn stage_heightmap(
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             format!(
-                "{}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf or .sdf)",
+                "{}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf, .sdf or .x3p)",
                 path.display()
             ),
         )
@@ -447,6 +457,7 @@ pub fn write_heightmap_to(
         HeightMapFormat::Xyz => xyz::write(w, map),
         HeightMapFormat::Gsf => gsf::write(w, map),
         HeightMapFormat::Sdf => sdf::write(w, map),
+        HeightMapFormat::X3p => x3p::write(w, map),
     }
 }
 

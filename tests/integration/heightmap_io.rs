@@ -168,9 +168,14 @@ proptest! {
         }).collect();
         let m = HeightMap::from_rows(nx, ny, dx, dy, z).unwrap();
         let dir = tempdir();
-        for ext in ["csv", "gsf", "sdf", "xyz"] {
+        for ext in ["csv", "gsf", "sdf", "xyz", "x3p"] {
             let path = dir.path().join(format!("p.{ext}"));
             write_heightmap(&path, &m).unwrap();
+            // An x3p with no measured point is refused (the instrument measured nothing).
+            if ext == "x3p" && m.z_um.iter().all(|v| v.is_nan()) {
+                prop_assert!(read_heightmap(&path, &ReadOptions::default()).is_err());
+                continue;
+            }
             let opts = ReadOptions { dx_um: Some(dx), dy_um: Some(dy) };
             // xyz with one row or column cannot know the other spacing: skip the check there.
             if ext == "xyz" && (nx == 1 || ny == 1 || m.z_um.iter().all(|v| v.is_nan())) {

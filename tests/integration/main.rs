@@ -32,3 +32,4 @@ mod synth; // `crest synth`: synthetic paths, exact stepovers, CLSF and contact1
 mod tool; // cutters: model.md R1-R3, properties, `crest tool`, `crest runout`
 mod util;
 mod viewer; // `crest view`: the 3-D viewer page in headless Chromium, `simulate --view` // helpers written once: commands, paths, files, JSON/CSV outputs, passes, generators
+mod x3p; // ISO 25178-72 `.x3p`: what surfalize reads, round trips, damaged files refused
