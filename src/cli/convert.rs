@@ -61,8 +61,14 @@ fn is_map_conversion(args: &Args) -> bool {
     use crest::io::HeightMapFormat as F;
     let input = F::from_path(&args.file);
     let output = F::from_path(&args.output);
+    // `.txt` is also contact12's extension: only `.xyz` names a point-list map output.
+    let xyz = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xyz"));
     matches!(input, Some(F::Gsf | F::Sdf | F::X3p))
-        || matches!(output, Some(F::Gsf | F::Sdf | F::X3p | F::Xyz))
+        || matches!(output, Some(F::Gsf | F::Sdf | F::X3p))
+        || xyz
 }
 
 /// `crest convert MAP -o MAP2`: read a height map and write it in the output's format.
