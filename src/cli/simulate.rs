@@ -407,10 +407,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         let shape = match &run.output {
             Output::Grid(sim) => {
                 // Where a patch landed (--patch-at, --patch-near): its centre in the file's frame.
-                let (m, f) = (&sim.map, &sim.frame);
-                let centre = f.origin
-                    + f.u * (m.x0_mm + 0.5e-3 * m.dx_um * (m.nx.max(1) - 1) as f64)
-                    + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64);
+                let (m, centre) = (&sim.map, grid_centre(sim));
                 format!(
                     "{} × {} nodes at {} µm{}{}",
                     m.nx,
@@ -507,6 +504,14 @@ fn write_shard(
     Ok(Outcome::Ok)
 }
 
+/// The centre of a simulated grid in the file's frame: where a patch landed.
+fn grid_centre(sim: &crest::surface::Simulation) -> crest::math::Point3 {
+    let (m, f) = (&sim.map, &sim.frame);
+    f.origin
+        + f.u * (m.x0_mm + 0.5e-3 * m.dx_um * (m.nx.max(1) - 1) as f64)
+        + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64)
+}
+
 fn num(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
 }
@@ -583,9 +588,7 @@ fn summary(
             j["dy_um"] = num(m.dy_um);
             j["x0_mm"] = num(m.x0_mm);
             j["y0_mm"] = num(m.y0_mm);
-            let centre = f.origin
-                + f.u * (m.x0_mm + 0.5e-3 * m.dx_um * (m.nx.max(1) - 1) as f64)
-                + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64);
+            let centre = grid_centre(sim);
             j["centre_mm"] = serde_json::json!([num(centre.x), num(centre.y), num(centre.z)]);
             j["origin"] = serde_json::json!({
                 "wcs_mm": [num(origin.x), num(origin.y), num(origin.z)],

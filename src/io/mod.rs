@@ -473,6 +473,23 @@ pub fn as_stored(map: &HeightMap, format: HeightMapFormat) -> Result<HeightMap, 
     parse_heightmap(&bytes, format, &opts).map_err(|e| e.to_string())
 }
 
+/// Seconds since 1970-01-01T00:00:00Z as (year, month, day, hour, minute, second), UTC, in
+/// the proleptic Gregorian calendar (days to a civil date by H. Hinnant's
+/// `civil_from_days`): the dates the `.sdf` and `.x3p` writers stamp.
+pub(crate) fn civil_utc(secs: i64) -> [i64; 6] {
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    [y, m, d, rem / 3600, rem / 60 % 60, rem % 60]
+}
+
 /// Parse one number of a text format; `NaN`, `nan`, `NA`, `N/A` and empty mean missing.
 pub(crate) fn parse_value(s: &str) -> Option<f64> {
     let t = s.trim();

@@ -84,18 +84,12 @@ fn convert_and_metrics_take_x3p() {
     // The same file with no extension: told by its content.
     std::fs::copy(&src, p.join("noext")).unwrap();
     let metrics = |f: &Path| {
-        let out = crest()
-            .arg("metrics")
-            .arg(f)
-            .args(["--params", "Sa,Sq,Sz", "--json"])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        crate::util::json(&out.stdout)
+        crate::util::success_json(
+            crest()
+                .arg("metrics")
+                .arg(f)
+                .args(["--params", "Sa,Sq,Sz", "--json"]),
+        )
     };
     let (x, y) = (metrics(&src), metrics(&p.join("noext")));
     for k in ["Sa", "Sq", "Sz"] {
