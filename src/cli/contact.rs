@@ -37,7 +37,9 @@ pub struct Args {
     /// (an air cut), µm.
     #[arg(long, value_name = "UM", default_value_t = DEFAULT_TOLERANCE_UM)]
     pub tolerance_um: f64,
-    /// Output: `.cls`/`.clsf` for CLSF with contact data, else contact12 CSV
+    /// Output: `.cls`/`.clsf` for CLSF with contact data; `.stl` for the surface the
+    /// contacts describe as a binary STL mesh (neighbouring passes stitched, gaps left
+    /// open), to give as `--part` where no CAD export is at hand; else contact12 CSV
     /// (x,y,z,i,j,k,cx,cy,cz,nx,ny,nz; contact columns empty where there is none).
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
@@ -75,8 +77,25 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 .iter()
                 .any(|x| e.eq_ignore_ascii_case(x))
         });
+    let stl = args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+    let mesh = stl.then(|| crest::pipeline::contact::contact_mesh(&run.program));
+    if let Some(m) = &mesh {
+        if m.mesh.triangles.is_empty() {
+            return Err(miette::miette!(
+                "{}: the contacts make no triangle (one pass, or no neighbouring passes): no surface to write to {}",
+                args.file.display(),
+                args.output.display()
+            ));
+        }
+    }
     crest::io::write_atomic(&args.output, |w| {
-        if clsf {
+        if let Some(m) = &mesh {
+            crest::io::mesh::write_stl(&m.mesh, w)?;
+        } else if clsf {
             let mut cw = ClsfWriter::new();
             for path in &run.program.paths {
                 cw.begin_path(path, w)?;
@@ -106,6 +125,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "postures": run.postures,
             "with_contact": run.with_contact,
             "without_contact": without,
+            "inconsistent": run.inconsistent,
+            "triangles": mesh.as_ref().map(|m| m.mesh.triangles.len()),
+            "triangles_left_out": mesh.as_ref().map(|m| m.left_out),
             "max_gouge_um": run.max_gouge_um,
             "max_gap_um": run.max_gap_um,
             "tolerance_um": args.tolerance_um,

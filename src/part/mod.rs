@@ -11,7 +11,9 @@
 //! Queries use parry3d (f64): `TriMesh` and its QBVH.
 
 pub mod contact;
+pub mod derive;
 mod mesh;
+pub mod stitch;
 
 pub use mesh::{Mesh, MeshCheck, MeshError};
 

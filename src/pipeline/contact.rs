@@ -6,7 +6,9 @@
 use crate::io::mesh::read_part;
 use crate::math::{Point3, Vec3};
 use crate::part::contact::touch_all;
+use crate::part::derive::Inconsistency;
 use crate::toolpath::{Contact, LowerOptions, MotionKind, Moves, Program};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Default distance within which a cutter touches the part, µm.
@@ -40,6 +42,8 @@ pub struct ContactRun {
     pub postures: usize,
     /// Cutting postures that got a contact.
     pub with_contact: usize,
+    /// Cutting postures whose derived contact was inconsistent with the cutter (left out).
+    pub inconsistent: usize,
     /// Deepest penetration of the cutter into the part, µm (0 when none).
     pub max_gouge_um: f64,
     /// Largest cutter-to-part distance of a cutting posture, µm (0 when none).
@@ -100,6 +104,7 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
     }
     let tol = req.tolerance_um * 1e-3;
     let (mut gouge, mut gap, mut with_contact) = (0.0f64, 0.0f64, 0usize);
+    let mut inconsistent = 0;
     let source = match &req.part {
         Some(part_path) => {
             let f = read_part(part_path)?;
@@ -147,7 +152,10 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
                     p.contact = None;
                 }
             }
-            with_contact = super::simulate::derive_contacts(&mut program, &cutter);
+            let found = derive_contacts(&mut program, &cutter);
+            with_contact = found.with_contact;
+            inconsistent = found.inconsistent.len();
+            warnings.extend(found.summary());
             "derived from the path"
         }
     };
@@ -160,6 +168,7 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
         program,
         postures,
         with_contact,
+        inconsistent,
         max_gouge_um: gouge.max(0.0) * 1e3,
         max_gap_um: gap.max(0.0) * 1e3,
         tool_source,
@@ -200,4 +209,102 @@ fn check_orientation(
         ));
     }
     Ok(())
+}
+
+/// Thinning cell of the offset points when contacts are derived from the path, mm.
+pub const DERIVE_CELL_MM: f64 = 0.1;
+
+/// What deriving contacts from the path found.
+#[derive(Debug, Clone, Default)]
+pub struct DerivedContacts {
+    /// Cutting postures that got a contact.
+    pub with_contact: usize,
+    /// Cutting postures whose derived contact is inconsistent with the cutter and was left
+    /// out: (path, posture, why).
+    pub inconsistent: Vec<(usize, usize, Inconsistency)>,
+}
+
+impl DerivedContacts {
+    /// A warning counting the inconsistent contacts by reason, when there are any.
+    pub fn summary(&self) -> Option<String> {
+        if self.inconsistent.is_empty() {
+            return None;
+        }
+        let mut by: BTreeMap<Inconsistency, usize> = BTreeMap::new();
+        for (_, _, why) in &self.inconsistent {
+            *by.entry(*why).or_default() += 1;
+        }
+        let reasons: Vec<String> = by
+            .iter()
+            .map(|(why, n)| format!("{n}: {}", why.describe()))
+            .collect();
+        Some(format!(
+            "{} of {} contacts derived from the path are inconsistent with the cutter and were left out ({}); heights near them need the part (--part PART.stl)",
+            self.inconsistent.len(),
+            self.with_contact + self.inconsistent.len(),
+            reasons.join("; ")
+        ))
+    }
+}
+
+/// Give every cutting posture of `program` that has no contact data the contact derived
+/// from the path (see [`crate::part::derive`]); inconsistent ones are left out and listed.
+pub fn derive_contacts(program: &mut Program, cutter: &crate::tool::Cutter) -> DerivedContacts {
+    let mut out = DerivedContacts::default();
+    for (pi, path) in program.paths.iter_mut().enumerate() {
+        let idx: Vec<usize> = (0..path.postures.len())
+            .filter(|&i| {
+                let p = &path.postures[i];
+                p.contact.is_none() && p.motion == MotionKind::Cut
+            })
+            .collect();
+        let poses: Vec<(Point3, Vec3)> = idx
+            .iter()
+            .map(|&i| (path.postures[i].position, path.postures[i].axis))
+            .collect();
+        // A posture follows the one before along a cut move when they are neighbours.
+        let joined: Vec<bool> = idx
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| k > 0 && idx[k - 1] + 1 == i)
+            .collect();
+        let got = crate::part::derive::derive(cutter, &poses, &joined, DERIVE_CELL_MM);
+        for (k, &i) in idx.iter().enumerate() {
+            if let Some((point, normal)) = got.contacts[k] {
+                path.postures[i].contact = Some(Contact {
+                    point,
+                    normal,
+                    normal_derived: true,
+                });
+                out.with_contact += 1;
+            }
+            if let Some(why) = got.flags[k] {
+                out.inconsistent.push((pi, i, why));
+            }
+        }
+    }
+    out
+}
+
+/// The surface the contacts of `program` describe, as a mesh ([`crate::part::stitch`]): each
+/// run of cutting postures with a contact is a pass.
+pub fn contact_mesh(program: &Program) -> crate::part::stitch::Stitched {
+    let mut runs: Vec<Vec<(Point3, Vec3)>> = Vec::new();
+    for path in &program.paths {
+        let mut run = Vec::new();
+        for p in &path.postures {
+            match (&p.contact, p.motion == MotionKind::Cut) {
+                (Some(c), true) => run.push((c.point, c.normal)),
+                _ => {
+                    if !run.is_empty() {
+                        runs.push(std::mem::take(&mut run));
+                    }
+                }
+            }
+        }
+        if !run.is_empty() {
+            runs.push(run);
+        }
+    }
+    crate::part::stitch::stitch(&runs)
 }

@@ -10,7 +10,7 @@ use crate::resample::{self, Sample};
 use crate::surface::cull::{Reach, Subset};
 use crate::surface::{self, GridFrame, GridSpec, ModelKind, PartMap, Reference, Simulation};
 use crate::tool::Cutter;
-use crate::toolpath::{Contact, LowerOptions, MotionKind, Moves, Posture, Program, Toolpath};
+use crate::toolpath::{LowerOptions, MotionKind, Moves, Posture, Program, Toolpath};
 use miette::miette;
 use std::path::{Path, PathBuf};
 
@@ -385,39 +385,6 @@ pub fn default_grid_um(fz_mm: f64) -> f64 {
     nice * decade
 }
 
-/// Give every cutting posture of `program` that has no contact data the contact derived
-/// from the path (see [`crate::part::contact::derive`]). Returns how many postures got one.
-pub fn derive_contacts(program: &mut Program, cutter: &Cutter) -> usize {
-    let mut n = 0;
-    for path in &mut program.paths {
-        let idx: Vec<usize> = (0..path.postures.len())
-            .filter(|&i| {
-                let p = &path.postures[i];
-                p.contact.is_none() && p.motion == MotionKind::Cut
-            })
-            .collect();
-        let poses: Vec<(Point3, Vec3)> = idx
-            .iter()
-            .map(|&i| (path.postures[i].position, path.postures[i].axis))
-            .collect();
-        let got = crate::part::contact::derive(cutter, &poses, DERIVE_CELL_MM);
-        for (&i, c) in idx.iter().zip(got) {
-            if let Some((point, normal)) = c {
-                path.postures[i].contact = Some(Contact {
-                    point,
-                    normal,
-                    normal_derived: true,
-                });
-                n += 1;
-            }
-        }
-    }
-    n
-}
-
-/// Thinning cell of the offset points when contacts are derived from the path, mm.
-pub const DERIVE_CELL_MM: f64 = 0.1;
-
 fn has_contacts(program: &Program) -> bool {
     program
         .paths
@@ -563,6 +530,7 @@ pub fn simulate_shard(
     let file = req.file.display().to_string();
     // Contact data: the file's, else derived from the path when the heights need it.
     let from_file = has_contacts(&program);
+    let mut derived: Option<super::contact::DerivedContacts> = None;
     let needs_contacts = part.is_none() && !matches!(req.grid, GridRequest::Map { .. });
     let reference = if part.is_some() && !matches!(req.grid, GridRequest::PatchAt { .. }) {
         ReferenceSource::Part
@@ -570,7 +538,12 @@ pub fn simulate_shard(
         ReferenceSource::File
     } else if needs_contacts || matches!(req.grid, GridRequest::PatchAt { .. }) {
         progress.phase("deriving contact points from the path", "");
-        if derive_contacts(&mut program, &cutter) == 0 {
+        let found = super::contact::derive_contacts(&mut program, &cutter);
+        if let Some(w) = found.summary() {
+            warnings.push(w);
+        }
+        derived = Some(found.clone());
+        if found.with_contact == 0 {
             match req.grid {
                 GridRequest::Window { .. } => ReferenceSource::None,
                 _ => {
@@ -974,6 +947,45 @@ pub fn simulate_shard(
             .map_err(|e| miette!("{file}: {e}"))?,
         )),
     };
+    // Derived contacts left out as inconsistent fail the run where their cutter touches the
+    // grid: the reference surface there is not the one the cutter touched. A posture
+    // touches it when its lowest point along the grid's normal (its contact, were the
+    // surface level there) lies over the grid and within `TOUCH_MM` of its plane.
+    if let (Output::Grid(sim), Some(d)) = (&output, &derived) {
+        const TOUCH_MM: f64 = 0.5;
+        let (centre, w) = sim.node_point(sim.map.nx / 2, sim.map.ny / 2);
+        let half =
+            0.5e-3 * (sim.map.nx as f64 * sim.map.dx_um).hypot(sim.map.ny as f64 * sim.map.dy_um);
+        let rc = cutter.corner_radius_mm();
+        let rd = cutter.radius_mm - rc;
+        let reaching: Vec<_> = d
+            .inconsistent
+            .iter()
+            .filter(|(pi, _, _)| paths.contains(pi))
+            .filter(|(pi, i, _)| {
+                let p = &program.paths[*pi].postures[*i];
+                let a = p.axis.normalize();
+                let lowest =
+                    p.position + a * rc + crate::part::derive::radial(&w, &a) * rd - w * rc;
+                let d = lowest - centre;
+                let up = d.dot(&w);
+                up.abs() <= TOUCH_MM && (d - w * up).norm() <= half + TOUCH_MM
+            })
+            .collect();
+        if let Some((pi, i, why)) = reaching.first() {
+            let p = &program.paths[*pi].postures[*i];
+            let w = format!(
+                "{} postures whose derived contact is inconsistent reach the grid (the first at {:.4},{:.4},{:.4}: {}): the reference surface there is not the one the cutter touched; give the part (--part PART.stl)",
+                reaching.len(),
+                p.position.x,
+                p.position.y,
+                p.position.z,
+                why.describe()
+            );
+            warnings.push(w.clone());
+            failed_checks.push(w);
+        }
+    }
     // The sanity checks (README "Sanity checks"): each finding fails the run.
     let mut sane = super::sanity::unit_findings(&program);
     let no_heights: [f64; 0] = [];

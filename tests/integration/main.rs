@@ -28,6 +28,7 @@ mod sanity; // loud sanity checks (issue 33): heights beyond the bound, narrow p
 mod shard; // `crest study --shard K/N` in separate processes and `crest merge`: the single-process bytes
 mod study; // `crest study`: designed experiments through the whole pipeline, their effects
 mod surface; // z-map and N-buffer: closed forms, patches, R7 trials, properties, `crest simulate`
+mod swept_reference; // the swept ball and bull nose on a freeform NX-style 5-axis export against a reference written in the test (issue 33)
 mod synth; // `crest synth`: synthetic paths, exact stepovers, CLSF and contact12 outputs
 mod tool; // cutters: model.md R1-R3, properties, `crest tool`, `crest runout`
 mod util;
