@@ -453,9 +453,12 @@ mod tests {
     use super::*;
     use crate::tool::Shape;
 
-    /// Every pose joined to the one before (one run).
+    /// Each pose joined to the one before when it is less than 1 mm away (a pass; passes
+    /// are not joined).
     fn joined(tips: &[(Point3, Vec3)]) -> Vec<bool> {
-        (0..tips.len()).map(|i| i > 0).collect()
+        (0..tips.len())
+            .map(|i| i > 0 && (tips[i].0 - tips[i - 1].0).norm() < 1.0)
+            .collect()
     }
 
     /// Poses of a ball or torus over the cylinder of radius `rs` about x (convex, top at

@@ -4,11 +4,13 @@
 //! where no CAD export is at hand.
 //!
 //! Two runs are zipped together from their nearest ends (a zig-zag pass runs the other
-//! way), each step taking the shorter diagonal. A triangle is left out when it bridges a
+//! way), each step taking the shorter diagonal. A posture without a contact leaves a hole:
+//! no triangle spans it. A triangle is left out when it bridges a
 //! gap rather than a pass spacing: when its corner across from the pass edge lies more than
 //! [`MAX_SPACINGS`] median spacings away, or when it is turned more than
-//! [`MAX_TURN_DEG`] from the normals at its corners. Triangles are wound so that their
-//! normal faces the tool (the contact normals' side), as `Part` expects.
+//! [`MAX_TURN_DEG`] from the normals at its corners. Each strip between two runs is wound
+//! so that most of its triangles face the tool (the contact normals' side), as `Part`
+//! expects; a triangle of it facing the other way is a fold and is left out too.
 
 use super::Mesh;
 use crate::math::{Point3, Vec3};
@@ -29,40 +31,86 @@ pub struct Stitched {
     pub left_out: usize,
 }
 
-/// A candidate triangle: its corners (indices) and its height across the pass.
+/// A candidate triangle: its corners (indices), its height across the pass, and whether
+/// it spans a posture without a contact.
 struct Candidate {
     corners: [u32; 3],
     across: f64,
+    hole: bool,
+    /// The pair of runs it joins.
+    strip: usize,
 }
 
-/// Stitch neighbouring runs of contact points (point, unit normal) into a mesh.
-pub fn stitch(runs: &[Vec<(Point3, Vec3)>]) -> Stitched {
+/// A point of a run: its vertex, and whether a posture without a contact lies between it
+/// and the point before.
+#[derive(Clone, Copy)]
+struct Node {
+    vertex: u32,
+    gap_before: bool,
+}
+
+/// Stitch neighbouring runs (passes: per posture its contact point and unit normal, `None`
+/// where it has none) into a mesh.
+pub fn stitch(runs: &[Vec<Option<(Point3, Vec3)>>]) -> Stitched {
     let mut vertices: Vec<Point3> = Vec::new();
     let mut normals: Vec<Vec3> = Vec::new();
-    let mut starts = Vec::with_capacity(runs.len());
+    let mut nodes: Vec<Vec<Node>> = Vec::with_capacity(runs.len());
     for run in runs {
-        starts.push(vertices.len() as u32);
-        for (p, n) in run {
-            vertices.push(*p);
-            normals.push(*n);
+        let mut list = Vec::new();
+        let mut gap = false;
+        for c in run {
+            match c {
+                Some((p, n)) => {
+                    list.push(Node {
+                        vertex: vertices.len() as u32,
+                        gap_before: gap && !list.is_empty(),
+                    });
+                    vertices.push(*p);
+                    normals.push(*n);
+                    gap = false;
+                }
+                None => gap = true,
+            }
         }
+        nodes.push(list);
     }
     let mut candidates: Vec<Candidate> = Vec::new();
-    for k in 1..runs.len() {
-        let (a, b) = (&runs[k - 1], &runs[k]);
+    for k in 1..nodes.len() {
+        let (a, b) = (&nodes[k - 1], &nodes[k]);
         if a.len() < 2 || b.len() < 2 {
             continue;
         }
-        let ia: Vec<u32> = (0..a.len() as u32).map(|i| starts[k - 1] + i).collect();
-        let mut ib: Vec<u32> = (0..b.len() as u32).map(|i| starts[k] + i).collect();
-        // Run b the same way as a.
         let d = |i: u32, j: u32| (vertices[i as usize] - vertices[j as usize]).norm();
-        if d(ia[0], ib[ib.len() - 1]) + d(ia[ia.len() - 1], ib[0])
-            < d(ia[0], ib[0]) + d(ia[ia.len() - 1], ib[ib.len() - 1])
-        {
-            ib.reverse();
+        let (a0, a1) = (a[0].vertex, a[a.len() - 1].vertex);
+        let (b0, b1) = (b[0].vertex, b[b.len() - 1].vertex);
+        // Run b the same way as a (a gap then lies before the other point of the pair).
+        let b: Vec<Node> = if d(a0, b1) + d(a1, b0) < d(a0, b0) + d(a1, b1) {
+            (0..b.len())
+                .rev()
+                .map(|i| Node {
+                    vertex: b[i].vertex,
+                    gap_before: i + 1 < b.len() && b[i + 1].gap_before,
+                })
+                .collect()
+        } else {
+            b.clone()
+        };
+        let first = candidates.len();
+        zip(&vertices, a, &b, &mut candidates);
+        for c in &mut candidates[first..] {
+            c.strip = k;
         }
-        zip(&vertices, &ia, &ib, &mut candidates);
+    }
+    // A strip is wound one way: the way most of its triangles face the tool. A triangle
+    // facing the other way is a fold and is left out.
+    let facing = |c: &Candidate| {
+        let [i, j, k] = c.corners.map(|v| v as usize);
+        let n = (vertices[j] - vertices[i]).cross(&(vertices[k] - vertices[i]));
+        n.dot(&(normals[i] + normals[j] + normals[k]))
+    };
+    let mut votes = vec![0i64; nodes.len()];
+    for c in &candidates {
+        votes[c.strip] += if facing(c) >= 0.0 { 1 } else { -1 };
     }
     // The median height across: the pass spacing.
     let mut across: Vec<f64> = candidates
@@ -86,13 +134,14 @@ pub fn stitch(runs: &[Vec<(Point3, Vec3)>]) -> Stitched {
             continue;
         };
         let mean = normals[i] + normals[j] + normals[k];
-        let (n, corners) = if n.dot(&mean) >= 0.0 {
+        let (n, corners) = if votes[c.strip] >= 0 {
             (n, c.corners)
         } else {
             (-n, [c.corners[0], c.corners[2], c.corners[1]])
         };
+        let fold = n.dot(&mean) < 0.0;
         let turned = [i, j, k].iter().any(|&v| n.dot(&normals[v]) < cos_turn);
-        if c.across > MAX_SPACINGS * spacing || turned {
+        if c.hole || fold || c.across > MAX_SPACINGS * spacing || turned {
             left_out += 1;
             continue;
         }
@@ -101,20 +150,20 @@ pub fn stitch(runs: &[Vec<(Point3, Vec3)>]) -> Stitched {
     Stitched { mesh, left_out }
 }
 
-/// Zip runs `a` and `b` (vertex indices, the same way round) into triangles, starting from
-/// the nearest pair at their starts and taking the shorter diagonal at each step.
-fn zip(v: &[Point3], a: &[u32], b: &[u32], out: &mut Vec<Candidate>) {
+/// Zip runs `a` and `b` (the same way round) into triangles, starting from the nearest
+/// pair at their starts and taking the shorter diagonal at each step.
+fn zip(v: &[Point3], a: &[Node], b: &[Node], out: &mut Vec<Candidate>) {
     let d = |i: u32, j: u32| (v[i as usize] - v[j as usize]).norm();
     // Start where the runs overlap: skip the part of one that lies before the other.
-    let nearest = |from: u32, run: &[u32]| {
+    let nearest = |from: u32, run: &[Node]| {
         (0..run.len())
-            .min_by(|&x, &y| d(from, run[x]).total_cmp(&d(from, run[y])))
+            .min_by(|&x, &y| d(from, run[x].vertex).total_cmp(&d(from, run[y].vertex)))
             .unwrap_or(0)
     };
     let (mut i, mut j) = {
-        let ja = nearest(a[0], b);
-        let ib = nearest(b[0], a);
-        if d(a[0], b[ja]) <= d(b[0], a[ib]) {
+        let ja = nearest(a[0].vertex, b);
+        let ib = nearest(b[0].vertex, a);
+        if d(a[0].vertex, b[ja].vertex) <= d(b[0].vertex, a[ib].vertex) {
             (0, ja)
         } else {
             (ib, 0)
@@ -136,18 +185,24 @@ fn zip(v: &[Point3], a: &[u32], b: &[u32], out: &mut Vec<Candidate>) {
         } else if j + 1 >= b.len() {
             true
         } else {
-            d(a[i + 1], b[j]) <= d(a[i], b[j + 1])
+            d(a[i + 1].vertex, b[j].vertex) <= d(a[i].vertex, b[j + 1].vertex)
         };
         if advance_a {
+            let (p, q, r) = (a[i].vertex, a[i + 1].vertex, b[j].vertex);
             out.push(Candidate {
-                corners: [a[i], a[i + 1], b[j]],
-                across: height(a[i], a[i + 1], b[j]),
+                corners: [p, q, r],
+                across: height(p, q, r),
+                hole: a[i + 1].gap_before,
+                strip: 0,
             });
             i += 1;
         } else {
+            let (p, q, r) = (a[i].vertex, b[j + 1].vertex, b[j].vertex);
             out.push(Candidate {
-                corners: [a[i], b[j + 1], b[j]],
-                across: height(b[j], b[j + 1], a[i]),
+                corners: [p, q, r],
+                across: height(r, q, p),
+                hole: b[j + 1].gap_before,
+                strip: 0,
             });
             j += 1;
         }
@@ -159,14 +214,14 @@ mod tests {
     use super::*;
 
     /// Passes over the cylinder z = sqrt(r² − y²) along x, zig-zag, at every `dy` of y.
-    fn cylinder_runs(r: f64, dy: f64, passes: usize) -> Vec<Vec<(Point3, Vec3)>> {
+    fn cylinder_runs(r: f64, dy: f64, passes: usize) -> Vec<Vec<Option<(Point3, Vec3)>>> {
         (0..passes)
             .map(|k| {
                 let y = (k as f64 - passes as f64 / 2.0) * dy;
                 let z = (r * r - y * y).sqrt();
                 let n = Vec3::new(0.0, y / r, z / r);
-                let mut run: Vec<(Point3, Vec3)> = (0..=20)
-                    .map(|i| (Point3::new(i as f64 * 0.5, y, z), n))
+                let mut run: Vec<Option<(Point3, Vec3)>> = (0..=20)
+                    .map(|i| Some((Point3::new(i as f64 * 0.5, y, z), n)))
                     .collect();
                 if k % 2 == 1 {
                     run.reverse();
@@ -207,12 +262,23 @@ mod tests {
         for run in cylinder_runs(20.0, 0.5, 4) {
             runs.push(
                 run.into_iter()
-                    .map(|(p, n)| (p + Vec3::new(0.0, 10.0, 0.0), n))
+                    .map(|c| c.map(|(p, n)| (p + Vec3::new(0.0, 10.0, 0.0), n)))
                     .collect(),
             );
         }
         let s = stitch(&runs);
         assert!(s.left_out >= 20, "{}", s.left_out);
         assert_eq!(s.mesh.triangles.len(), 6 * 40);
+    }
+
+    #[test]
+    fn a_posture_without_contact_leaves_a_hole() {
+        let mut runs = cylinder_runs(20.0, 0.5, 3);
+        runs[1][10] = None;
+        let s = stitch(&runs);
+        // The two edges of pass 1 around the missing point are each in one triangle of
+        // either strip: four triangles fewer, and the mesh reads back as a surface.
+        assert_eq!(s.mesh.triangles.len(), 2 * 40 - 4, "{}", s.left_out);
+        assert!(s.mesh.clone().checked().is_ok());
     }
 }

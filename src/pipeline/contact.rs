@@ -287,19 +287,16 @@ pub fn derive_contacts(program: &mut Program, cutter: &crate::tool::Cutter) -> D
 }
 
 /// The surface the contacts of `program` describe, as a mesh ([`crate::part::stitch`]): each
-/// run of cutting postures with a contact is a pass.
+/// run of cutting postures is a pass; a posture without a contact leaves a hole.
 pub fn contact_mesh(program: &Program) -> crate::part::stitch::Stitched {
-    let mut runs: Vec<Vec<(Point3, Vec3)>> = Vec::new();
+    let mut runs: Vec<Vec<Option<(Point3, Vec3)>>> = Vec::new();
     for path in &program.paths {
         let mut run = Vec::new();
         for p in &path.postures {
-            match (&p.contact, p.motion == MotionKind::Cut) {
-                (Some(c), true) => run.push((c.point, c.normal)),
-                _ => {
-                    if !run.is_empty() {
-                        runs.push(std::mem::take(&mut run));
-                    }
-                }
+            if p.motion == MotionKind::Cut {
+                run.push(p.contact.as_ref().map(|c| (c.point, c.normal)));
+            } else if !run.is_empty() {
+                runs.push(std::mem::take(&mut run));
             }
         }
         if !run.is_empty() {

@@ -278,3 +278,76 @@ fn the_large_export_gives_no_height_beyond_the_bound_with_exit_0() {
         assert!(!err.trim().is_empty());
     }
 }
+
+/// Issue 33: on the large NX export (bull nose D32 R5, the axis turning up the walls) no
+/// derived contact crest keeps has a normal facing away from the tool or jumps across the
+/// cutter between neighbouring postures; the contacts the path contradicts are counted and
+/// left out, and the floor keeps its own.
+#[test]
+fn the_large_export_keeps_no_contact_facing_away_and_counts_the_left_out() {
+    let Some(dir) = crate::util::external_samples() else {
+        return;
+    };
+    let file = dir.join("nx_5axis_varcontour_ijk_large.cls");
+    let tmp = tempdir();
+    let out_csv = tmp.path().join("c.csv");
+    let out = crest()
+        .arg("contact")
+        .arg(&file)
+        .args(["--teeth", "2", "--json", "-o"])
+        .arg(&out_csv)
+        .output()
+        .unwrap_or_else(|e| panic!("{e}"));
+    let j = json(&out.stdout);
+    let left_out = j["inconsistent"].as_u64().unwrap_or(0);
+    let kept = j["with_contact"].as_u64().unwrap_or(0);
+    assert!(left_out > 0 && kept > 1000, "{j}");
+    assert!(
+        warnings(&j).iter().any(|w| w.contains("inconsistent")),
+        "{j}"
+    );
+    let text = std::fs::read_to_string(&out_csv).unwrap_or_else(|e| panic!("{e}"));
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let mut floor = 0;
+    let mut prev: Option<([f64; 3], [f64; 3])> = None;
+    for r in &rows {
+        let (tip, a, cc, n) = (
+            [r[0], r[1], r[2]],
+            [r[3], r[4], r[5]],
+            [r[6], r[7], r[8]],
+            [r[9], r[10], r[11]],
+        );
+        if !cc[0].is_finite() {
+            prev = None;
+            continue;
+        }
+        let norm = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let na = (n[0] * a[0] + n[1] * a[1] + n[2] * a[2]) / norm;
+        assert!(na > 0.0, "normal faces away at {tip:?}: n·a = {na}");
+        if na > 0.999_999 {
+            floor += 1;
+        }
+        // The contact moves with the tool: never across the cutter (2 (R − rc) = 22 mm)
+        // while the tip moves less than 2 mm.
+        if let Some((ptip, pcc)) = prev {
+            let dt = ((tip[0] - ptip[0]).powi(2)
+                + (tip[1] - ptip[1]).powi(2)
+                + (tip[2] - ptip[2]).powi(2))
+            .sqrt();
+            let dc =
+                ((cc[0] - pcc[0]).powi(2) + (cc[1] - pcc[1]).powi(2) + (cc[2] - pcc[2]).powi(2))
+                    .sqrt();
+            assert!(!(dt < 2.0 && dc > 10.0), "contact jumps {dc} mm at {tip:?}");
+        }
+        prev = Some((tip, cc));
+    }
+    assert!(floor > 1000, "{floor} contacts on the floor");
+}
