@@ -423,6 +423,10 @@ pub fn run_patch(
 /// A finished atlas (or one shard of it).
 #[derive(Debug, Clone)]
 pub struct Atlas {
+    /// The tool-path file, as given.
+    pub file: String,
+    /// Spacing of the patches, mm.
+    pub every_mm: f64,
     /// Rows in patch order.
     pub rows: Vec<AtlasRow>,
     /// Patches of the whole atlas.
@@ -472,6 +476,8 @@ pub fn run(
         progress.advance(done as u64 + 1, mine.len() as u64);
     }
     Ok(Atlas {
+        file: req.simulate.file.display().to_string(),
+        every_mm: req.every_mm,
         rows,
         patches_total: total,
         regions: placed.regions,
