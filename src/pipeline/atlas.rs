@@ -107,8 +107,14 @@ impl Pass {
             axes: Vec::new(),
             s: Vec::new(),
         };
+        // Where the pass has contact points, only those: the first posture of a run may be
+        // the end of a rapid in the air (a plunge), without one.
+        let with_contacts = run.clone().any(|i| ps[i].contact.is_some());
         for i in run {
             let p = &ps[i];
+            if with_contacts && p.contact.is_none() {
+                continue;
+            }
             let (q, n) = p
                 .contact
                 .as_ref()
