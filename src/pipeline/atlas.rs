@@ -356,7 +356,7 @@ pub fn run_patch(
     if sim.grid_um.is_none() {
         sim.grid_um = Some(default_grid_um(placed.fz_mm, (length, width)));
     }
-    let paths: Vec<usize> = vec![site.path - 1];
+    let paths = [site.path - 1];
     let is_cut = |pi: usize, i: usize| placed.program.paths[pi].postures[i].motion == MotionKind::Cut;
     let r = placed.corner_radius_mm;
     let stepover = super::air::nearest(
