@@ -19,7 +19,8 @@ use std::time::Instant;
 
 /// Options of `crest atlas`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Patches: in each finishing region (crest inspect --regions) every \
+#[command(
+    after_help = "Patches: in each finishing region (crest inspect --regions) every \
 k-th pass, k = max(1, round(D / median stepover)), and along each chosen pass of length L \
 floor(L / D) patches D apart, centred on the pass. Each patch is simulated as `crest simulate \
 --patch-near` would, and measured. A patch that is refused (in the air, no cut near it) or \
@@ -27,7 +28,8 @@ fails a sanity check keeps its row with the reason in `warnings`; a run in which
 produced numbers fails (exit 2). Columns: patch, path, region, pass, s_mm, x, y, z, nx, ny, nz, \
 Sa_um, Sq_um, Sz_um, scallop_um (across the feed), feed_mark_um (along the feed), \
 scallop_closed_um, feed_mark_closed_um, stepover_mm, curvature_along_per_mm, \
-curvature_across_per_mm, lead_deg, tilt_deg, nodes, nodes_cut, warnings.")]
+curvature_across_per_mm, lead_deg, tilt_deg, nodes, nodes_cut, warnings."
+)]
 pub struct Args {
     /// Tool-path file (NX CLSF or APT, contact12).
     pub file: PathBuf,
@@ -96,13 +98,23 @@ pub struct Args {
     pub threads: Option<usize>,
     /// Output: the table (.csv) or the point cloud (.ply, coloured by any column in `crest
     /// view --colour-by`); give -o twice for both. With --shard, the folder of the shard file.
-    #[arg(short = 'o', long = "output", value_name = "atlas.csv|atlas.ply", required = true)]
+    #[arg(
+        short = 'o',
+        long = "output",
+        value_name = "atlas.csv|atlas.ply",
+        required = true
+    )]
     pub output: Vec<PathBuf>,
     /// Also draw the atlas as a map over the part's x, y (SVG or PNG).
     #[arg(long, value_name = "MAP.svg|png")]
     pub plot: Option<PathBuf>,
     /// The column the map is coloured by.
-    #[arg(long, value_name = "COLUMN", default_value = "Sa_um", requires = "plot")]
+    #[arg(
+        long,
+        value_name = "COLUMN",
+        default_value = "Sa_um",
+        requires = "plot"
+    )]
     pub plot_column: String,
     /// Print one JSON object (counts, time, output paths, the rows) on stdout.
     #[arg(long)]
@@ -184,7 +196,10 @@ pub fn write_outputs(
     }
     if let Some((p, column)) = plot {
         let png = crest::plot::Format::from_path(p) == Some(crest::plot::Format::Png);
-        let title = format!("{column} of {} patches, {every_mm} mm apart", atlas.rows.len());
+        let title = format!(
+            "{column} of {} patches, {every_mm} mm apart",
+            atlas.rows.len()
+        );
         let bytes = crest::plot::atlas::atlas_map(&atlas.rows, column, &title, every_mm, png)
             .map_err(|e| miette!("{}: {e}", p.display()))?;
         set.file(p, |w| w.write_all(&bytes))
@@ -318,9 +333,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             shard: k,
             shards: n,
         };
-        let out = pool.install(|| {
-            crest::pipeline::tasks::atlas::run_atlas_task_with(&task, &progress)
-        });
+        let out =
+            pool.install(|| crest::pipeline::tasks::atlas::run_atlas_task_with(&task, &progress));
         progress.finish();
         let result = out?;
         let mut text = serde_json::to_vec(&result).into_diagnostic()?;
@@ -357,9 +371,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     write_outputs(
         &atlas,
         &args.output,
-        args.plot
-            .as_deref()
-            .map(|p| (p, args.plot_column.as_str())),
+        args.plot.as_deref().map(|p| (p, args.plot_column.as_str())),
         args.json,
         started,
     )

@@ -69,8 +69,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let (html, what) = if is_ply {
         let column = args.colour_by.as_deref().unwrap_or("height_um");
-        let points = crest::io::mesh::read_map_ply_column(&args.file, column)
-            .map_err(|e| miette!("{e}"))?;
+        let points =
+            crest::io::mesh::read_map_ply_column(&args.file, column).map_err(|e| miette!("{e}"))?;
         let html = view::part_map_page(&points, &info).map_err(|e| miette!("{file}: {e}"))?;
         (
             html,

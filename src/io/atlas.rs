@@ -63,9 +63,11 @@ pub fn write_atlas_ply(rows: &[AtlasRow], w: &mut dyn Write) -> std::io::Result<
         "comment crest roughness atlas: one point per patch; heights in µm, nan = no number"
     )?;
     writeln!(w, "element vertex {}", rows.len())?;
-    for p in ["x", "y", "z", "nx", "ny", "nz", "patch", "region", "warnings"]
-        .iter()
-        .chain(NUMBER_COLUMNS.iter())
+    for p in [
+        "x", "y", "z", "nx", "ny", "nz", "patch", "region", "warnings",
+    ]
+    .iter()
+    .chain(NUMBER_COLUMNS.iter())
     {
         writeln!(w, "property float {p}")?;
     }
@@ -125,6 +127,11 @@ mod tests {
         write_atlas_ply(&[row], &mut ply).unwrap_or_else(|e| panic!("{e}"));
         let text = String::from_utf8(ply).unwrap_or_default();
         assert!(text.contains("property float Sa_um"));
-        assert!(text.lines().last().unwrap_or("").starts_with("1 2 3 0 0 1 1 1 1 0.1 0.2"));
+        assert!(
+            text.lines()
+                .last()
+                .unwrap_or("")
+                .starts_with("1 2 3 0 0 1 1 1 1 0.1 0.2")
+        );
     }
 }

@@ -107,22 +107,35 @@ impl Pass {
             axes: Vec::new(),
             s: Vec::new(),
         };
-        // Where the pass has contact points, only those: the first posture of a run may be
-        // the end of a rapid in the air (a plunge), without one.
+        // Where the pass has contact points, only those; the first posture of a run (where
+        // the first cut leaves, often the end of a lead-in arc, without a contact) is its CL
+        // point carried by the next posture's contact offset, kept when the first cut runs
+        // along the surface (within 30° of its tangent plane), not when it plunges.
         let with_contacts = run.clone().any(|i| ps[i].contact.is_some());
+        let first = run.start;
         for i in run {
             let p = &ps[i];
-            if with_contacts && p.contact.is_none() {
-                continue;
-            }
-            let (q, n) = p
-                .contact
-                .as_ref()
-                .map_or((p.position, p.axis), |c| (c.point, c.normal));
-            let s = pass
-                .points
-                .last()
-                .map_or(0.0, |l| pass.s.last().copied().unwrap_or(0.0) + (q - l).norm());
+            let (q, n) =
+                match (&p.contact, with_contacts) {
+                    (Some(c), _) => (c.point, c.normal),
+                    (None, false) => (p.position, p.axis),
+                    (None, true) => {
+                        let Some(c) = ps.get(i + 1).filter(|_| i == first).and_then(|x| {
+                            x.contact.as_ref().map(|c| (c.point, c.normal, x.position))
+                        }) else {
+                            continue;
+                        };
+                        let q = p.position + (c.0 - c.2);
+                        let d = c.0 - q;
+                        if d.norm() == 0.0 || d.dot(&c.1).abs() > 0.5 * d.norm() {
+                            continue;
+                        }
+                        (q, c.1)
+                    }
+                };
+            let s = pass.points.last().map_or(0.0, |l| {
+                pass.s.last().copied().unwrap_or(0.0) + (q - l).norm()
+            });
             pass.points.push(q);
             pass.normals.push(n);
             pass.axes.push(p.axis);
@@ -324,7 +337,7 @@ pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
         .iter()
         .flat_map(|p| p.postures.iter())
         .any(|p| p.motion == MotionKind::Cut && p.contact.is_some());
-    if !has_contacts && sim.part.is_none() {
+    if !has_contacts {
         super::simulate::derive_contacts(&mut program, &cutter);
     }
     let sites = place(&program, &regions, d);
@@ -357,7 +370,8 @@ pub fn run_patch(
         sim.grid_um = Some(default_grid_um(placed.fz_mm, (length, width)));
     }
     let paths = [site.path - 1];
-    let is_cut = |pi: usize, i: usize| placed.program.paths[pi].postures[i].motion == MotionKind::Cut;
+    let is_cut =
+        |pi: usize, i: usize| placed.program.paths[pi].postures[i].motion == MotionKind::Cut;
     let r = placed.corner_radius_mm;
     let stepover = super::air::nearest(
         &placed.program,
@@ -383,8 +397,7 @@ pub fn run_patch(
         sz_um: None,
         scallop_um: None,
         feed_mark_um: None,
-        scallop_closed_um: stepover
-            .and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3)),
+        scallop_closed_um: stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3)),
         feed_mark_closed_um: closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3),
         stepover_mm: stepover,
         curvature_along_per_mm: site.curvature_along,

@@ -44,10 +44,15 @@ impl Draw for AtlasChart<'_> {
             .draw()?;
         let (lo, hi) = self.range;
         let h = 0.5 * self.mark;
-        chart.draw_series(self.pts.iter().filter(|p| p.2.is_finite()).map(|&(x, y, v)| {
-            let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-            Rectangle::new([(x - h, y - h), (x + h, y + h)], viridis(t).filled())
-        }))?;
+        chart.draw_series(
+            self.pts
+                .iter()
+                .filter(|p| p.2.is_finite())
+                .map(|&(x, y, v)| {
+                    let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+                    Rectangle::new([(x - h, y - h), (x + h, y + h)], viridis(t).filled())
+                }),
+        )?;
         chart.draw_series(
             self.pts
                 .iter()
@@ -105,7 +110,9 @@ pub fn atlas_map(
         .collect();
     let vals: Vec<f64> = pts.iter().map(|p| p.2).filter(|v| v.is_finite()).collect();
     if vals.is_empty() {
-        return Err(PlotError::Empty(format!("no patch has a value of {column}")));
+        return Err(PlotError::Empty(format!(
+            "no patch has a value of {column}"
+        )));
     }
     let lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);

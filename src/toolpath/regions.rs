@@ -131,7 +131,10 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 
 /// The finishing regions of `path` (its cut moves, `MotionKind::Cut`), in path order.
 pub fn regions(path: &Toolpath) -> Vec<Region> {
-    regions_with_passes(path).into_iter().map(|(r, _)| r).collect()
+    regions_with_passes(path)
+        .into_iter()
+        .map(|(r, _)| r)
+        .collect()
 }
 
 /// [`regions`], each with the indices of its passes among [`Toolpath::cutting_runs`]

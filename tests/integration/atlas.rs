@@ -4,7 +4,7 @@
 //! the numbers checked against closed forms; csv and ply agree; shards merge to the
 //! unsharded table; a patch in the air keeps its row with a warning.
 
-use crate::util::{crest, output_json, read, tempdir, write};
+use crate::util::{crest, json, output_json, read, tempdir, write};
 
 const PASSES: usize = 8;
 const STEP: f64 = 0.5;
@@ -83,7 +83,7 @@ fn atlas(dir: &std::path::Path, file: &std::path::Path, extra: &[&str]) -> std::
         .current_dir(dir)
         .arg("atlas")
         .arg(file)
-        .args(["--teeth", "2", "--rpm", "7500", "--grid-um", "5"])
+        .args(["--teeth", "2", "--rpm", "7500"])
         .args(extra)
         .output()
         .unwrap_or_else(|e| panic!("{e}"))
@@ -127,7 +127,17 @@ fn atlas_numbers_match_the_closed_forms_and_the_path() {
     let out = atlas(
         dir.path(),
         &file,
-        &["--every-mm", "4", "-o", "a.csv", "-o", "a.ply", "--json"],
+        &[
+            "--every-mm",
+            "4",
+            "--grid-um",
+            "5",
+            "-o",
+            "a.csv",
+            "-o",
+            "a.ply",
+            "--json",
+        ],
     );
     let v = output_json(&out);
     assert_eq!(out.status.code(), Some(0), "{v}");
@@ -140,7 +150,10 @@ fn atlas_numbers_match_the_closed_forms_and_the_path() {
     let marks = FZ * FZ / (8.0 * r) * 1e3;
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(field(&h, row, "pass"), 5.0);
-        assert!((field(&h, row, "x") - (2.0 + 4.0 * k as f64)).abs() < 0.02, "{row:?}");
+        assert!(
+            (field(&h, row, "x") - (2.0 + 4.0 * k as f64)).abs() < 0.02,
+            "{row:?}"
+        );
         assert!((field(&h, row, "y") - 2.0).abs() < 0.02, "{row:?}");
         // The scallop across the feed: a ball of R 3 over s = 0.5 mm leaves
         // R − √(R² − s²/4) = 10.435 µm. Tolerance 0.25 µm: the 5 µm grid samples the sharp
@@ -156,9 +169,18 @@ fn atlas_numbers_match_the_closed_forms_and_the_path() {
         assert!((field(&h, row, "feed_mark_closed_um") - marks).abs() < 1e-9);
         // The local stepover and the lead and tilt the path was made with (GOTOs printed
         // with 7 decimals in the axis: 1e-5° is far below the tolerance).
-        assert!((field(&h, row, "stepover_mm") - STEP).abs() < 1e-3, "{row:?}");
-        assert!((field(&h, row, "lead_deg") - LEAD_DEG).abs() < 0.01, "{row:?}");
-        assert!((field(&h, row, "tilt_deg") - TILT_DEG).abs() < 0.01, "{row:?}");
+        assert!(
+            (field(&h, row, "stepover_mm") - STEP).abs() < 1e-3,
+            "{row:?}"
+        );
+        assert!(
+            (field(&h, row, "lead_deg") - LEAD_DEG).abs() < 0.01,
+            "{row:?}"
+        );
+        assert!(
+            (field(&h, row, "tilt_deg") - TILT_DEG).abs() < 0.01,
+            "{row:?}"
+        );
         // A flat floor: no curvature.
         assert!(field(&h, row, "curvature_along_per_mm").abs() < 1e-3);
         assert!(field(&h, row, "curvature_across_per_mm").abs() < 1e-3);
@@ -176,11 +198,23 @@ fn atlas_numbers_match_the_closed_forms_and_the_path() {
         .lines()
         .skip_while(|l| *l != "end_header")
         .skip(1)
-        .map(|l| l.split(' ').map(|t| t.parse().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split(' ')
+                .map(|t| t.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     assert_eq!(body.len(), rows.len());
     for (p, row) in body.iter().zip(&rows) {
-        for name in ["x", "y", "z", "Sa_um", "scallop_um", "lead_deg", "stepover_mm"] {
+        for name in [
+            "x",
+            "y",
+            "z",
+            "Sa_um",
+            "scallop_um",
+            "lead_deg",
+            "stepover_mm",
+        ] {
             let i = props
                 .iter()
                 .position(|q| *q == name)
@@ -270,7 +304,7 @@ fn a_patch_in_the_air_keeps_its_row_with_the_reason() {
         &file,
         &[&args[..], &["--part", "half.stl", "-o", "a.csv", "--json"]].concat(),
     );
-    let v = output_json(&out);
+    let v = json(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{v}");
     assert_eq!(v["patches"], 20);
     assert_eq!(v["patches_with_numbers"], 10, "{v}");
@@ -279,7 +313,10 @@ fn a_patch_in_the_air_keeps_its_row_with_the_reason() {
         let y = field(&h, row, "y");
         let w = row.last().cloned().unwrap_or_default();
         if y < 2.0 {
-            assert!(field(&h, row, "Sa_um").is_finite() && w.is_empty(), "{row:?}");
+            assert!(
+                field(&h, row, "Sa_um").is_finite() && w.is_empty(),
+                "{row:?}"
+            );
         } else {
             assert!(field(&h, row, "Sa_um").is_nan(), "{row:?}");
             assert!(w.contains("in the air"), "{w}");

@@ -76,11 +76,8 @@ pub fn run_atlas_task_with(
             task.kind
         ));
     }
-    let atlas = crate::pipeline::atlas::run(
-        &task.request,
-        Some((task.shard, task.shards)),
-        progress,
-    )?;
+    let atlas =
+        crate::pipeline::atlas::run(&task.request, Some((task.shard, task.shards)), progress)?;
     Ok(AtlasResult {
         kind: ATLAS_PATCHES.to_string(),
         request: task.request.clone(),
