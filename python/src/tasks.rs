@@ -1,7 +1,6 @@
 //! Studies, run-out sweeps and part maps as picklable tasks: made, run anywhere, merged into
 //! the bytes of the command line.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use crest::pipeline::ToolSource;
