@@ -232,6 +232,34 @@ def map_tasks(
     ``tasks`` plain dicts, task k simulating cells k, k+tasks, … of the map. File paths are
     made absolute; every worker must see the files there."""
 
+def atlas_tasks(
+    file: StrPath,
+    *,
+    tasks: int,
+    every_mm: float,
+    patch_mm: Optional[Tuple[float, float]] = None,
+    part: Optional[StrPath] = None,
+    tool: Union[Cutter, StrPath, None] = None,
+    process: Optional[StrPath] = None,
+    rpm: Optional[float] = None,
+    feed_mm_min: Optional[float] = None,
+    fz_mm: Optional[float] = None,
+    model: str = "dome",
+    dtheta_deg: float = 1.0,
+    grid_um: Optional[float] = None,
+    chord_tol_um: Optional[float] = None,
+    band_um: Optional[float] = None,
+    ap_mm: Optional[float] = None,
+    path: Optional[int] = None,
+    teeth: Optional[int] = None,
+    helix_deg: Optional[float] = None,
+    absolute: bool = False,
+) -> List[Dict[str, Any]]:
+    """The patch tasks of a roughness atlas (the options of ``crest atlas``): ``tasks``
+    plain dicts, task k simulating patches k, k+tasks, … . :func:`merge` of their results
+    gives a dict with ``rows``, ``regions`` and ``files`` (``atlas.csv``, the bytes ``crest
+    atlas`` writes). File paths are made absolute; every worker must see the files there."""
+
 def runout_tasks(study: str, *, tasks: Optional[int] = None) -> List[Dict[str, Any]]:
     """The tasks of a run-out sweep (a ``crest runout`` study file path, or its TOML text
     with ``tool`` relative to the working directory): one plain dict per case of the sweep,

@@ -61,6 +61,7 @@ fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(path::resample, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::study_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::map_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::atlas_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::runout_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::run_task, m)?)?;
     m.add_function(wrap_pyfunction!(tasks::merge, m)?)?;

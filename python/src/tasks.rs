@@ -112,6 +112,77 @@ pub(crate) fn map_tasks<'py>(
     json_loads(py, &text)
 }
 
+/// The patch tasks of a roughness atlas (`crest atlas`, the same options): `tasks` plain
+/// dicts (picklable), task k simulating patches k, k+tasks, … of the atlas (a patch every
+/// `every_mm` over every finishing region; `patch_mm` = (L, W), default twice the local
+/// stepover). The file paths are made absolute; every worker must see the files there.
+#[pyfunction]
+#[pyo3(signature = (file, *, tasks, every_mm, patch_mm = None, part = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, model = "dome", dtheta_deg = 1.0, grid_um = None, chord_tol_um = None, band_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn atlas_tasks<'py>(
+    py: Python<'py>,
+    file: PathBuf,
+    tasks: usize,
+    every_mm: f64,
+    patch_mm: Option<[f64; 2]>,
+    part: Option<PathBuf>,
+    tool: Option<Bound<'py, PyAny>>,
+    process: Option<PathBuf>,
+    rpm: Option<f64>,
+    feed_mm_min: Option<f64>,
+    fz_mm: Option<f64>,
+    model: &str,
+    dtheta_deg: f64,
+    grid_um: Option<f64>,
+    chord_tol_um: Option<f64>,
+    band_um: Option<f64>,
+    ap_mm: Option<f64>,
+    path: Option<usize>,
+    teeth: Option<usize>,
+    helix_deg: Option<f64>,
+    absolute: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
+    let simulate = request_of(
+        abs(file),
+        tool_source(tool)?.map(|t| match t {
+            ToolSource::File(p) => ToolSource::File(abs(p)),
+            text => text,
+        }),
+        None,
+        None,
+        Some([0.0; 3]),
+        Some([1.0, 1.0]),
+        None,
+        None,
+        part.map(abs),
+        process.map(abs),
+        rpm,
+        feed_mm_min,
+        fz_mm,
+        None,
+        None,
+        model,
+        dtheta_deg,
+        grid_um,
+        chord_tol_um,
+        band_um,
+        ap_mm,
+        path,
+        teeth,
+        helix_deg,
+        absolute,
+    )?;
+    let req = crest::pipeline::atlas::AtlasRequest {
+        simulate,
+        every_mm,
+        patch_mm: patch_mm.map(|p| (p[0], p[1])),
+    };
+    let tasks = crest::pipeline::tasks::atlas::atlas_tasks(&req, tasks).map_err(err)?;
+    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    json_loads(py, &text)
+}
+
 /// The tasks of a run-out sweep (`crest runout` study): `study` is a path to the study TOML,
 /// or its text (its `tool` then relative to the working directory). With `tasks`, that many
 /// tasks (task k: cases k-1, k-1+tasks, … of the sweep, 0-based); by default one task per
@@ -138,7 +209,7 @@ pub(crate) fn runout_tasks<'py>(
     json_loads(py, &text)
 }
 
-/// Run one task of `study_tasks`, `runout_tasks` or `map_tasks` (a dict, or its JSON text);
+/// Run one task of `study_tasks`, `runout_tasks`, `map_tasks` or `atlas_tasks` (a dict, or its JSON text);
 /// returns the result as a dict (picklable). A study run that fails comes back with its
 /// `error`. Releases the GIL.
 #[pyfunction]
@@ -165,6 +236,9 @@ pub(crate) fn run_task<'py>(
 /// The results of every task of one run-out sweep (`runout_tasks`) give a dict with `rule`,
 /// `x`, `tool`, `rows` (as `crest runout --json`) and `files` (runout.csv and the charts,
 /// the bytes `crest runout` writes); with `output` they are written into that folder.
+/// The results of every task of one atlas (`atlas_tasks`) give a dict with `rows`,
+/// `regions` and `files` (atlas.csv, the bytes `crest atlas` writes); with `output` (.csv
+/// or .ply) the table or point cloud is written.
 #[pyfunction]
 #[pyo3(signature = (results, output = None))]
 pub(crate) fn merge<'py>(
@@ -201,6 +275,25 @@ pub(crate) fn merge<'py>(
                     }
                     Ok((Merged::Map(m), Vec::new()))
                 }
+                Merged::Atlas(a) => {
+                    let mut csv = Vec::new();
+                    crest::io::atlas::write_atlas_csv(&a.rows, &mut csv)
+                        .map_err(|e| miette::miette!("cannot write the atlas: {e}"))?;
+                    if let Some(path) = &output {
+                        let ply = path
+                            .extension()
+                            .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+                        crest::io::write_atomic(path, |w| {
+                            if ply {
+                                crest::io::atlas::write_atlas_ply(&a.rows, w)
+                            } else {
+                                w.write_all(&csv)
+                            }
+                        })
+                        .map_err(|e| miette::miette!("cannot write {}: {e}", path.display()))?;
+                    }
+                    Ok((Merged::Atlas(a), vec![("atlas.csv".to_string(), csv)]))
+                }
                 Merged::Runout(run) => {
                     let files = crest::pipeline::runout::render_outputs(&run)?;
                     if let Some(dir) = &output {
@@ -218,6 +311,19 @@ pub(crate) fn merge<'py>(
             return Ok(Py::new(py, part_map(py, &m)?)?.into_bound(py).into_any());
         }
         (Merged::Runout(run), files) => return runout_dict(py, &run, &files),
+        (Merged::Atlas(a), files) => {
+            let d = PyDict::new(py);
+            let rows =
+                serde_json::to_string(&a.rows).map_err(|e| CrestError::new_err(e.to_string()))?;
+            d.set_item("rows", json_loads(py, &rows)?)?;
+            d.set_item("regions", a.regions)?;
+            let f = PyDict::new(py);
+            for (name, bytes) in &files {
+                f.set_item(name, pyo3::types::PyBytes::new(py, bytes))?;
+            }
+            d.set_item("files", f)?;
+            return Ok(d.into_any());
+        }
         (Merged::Design(done), files) => (done, files),
     };
     let d = PyDict::new(py);

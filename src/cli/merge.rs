@@ -74,6 +74,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             super::runout::write_outputs(&run, &study_file, &args.output, args.json)
         }
         Merged::Map(m) => write_map(&m, &args, started),
+        Merged::Atlas(a) => {
+            let outputs = vec![args.output.clone()];
+            super::atlas::check_names(&outputs, None)?;
+            super::atlas::write_outputs(&a, &outputs, None, args.json, started)
+        }
     }
 }
 

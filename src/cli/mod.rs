@@ -13,6 +13,7 @@ macro_rules! outln {
     };
 }
 
+mod atlas;
 mod calibrate;
 mod contact;
 mod convert;
@@ -79,6 +80,8 @@ enum Command {
     Merge(merge::Args),
     /// Write a height map or part map as a self-contained 3-D viewer page (HTML).
     View(view::Args),
+    /// The roughness atlas of a part: a patch every D mm over every finishing region.
+    Atlas(Box<atlas::Args>),
     /// Print shell completions (bash, zsh, fish, PowerShell, elvish).
     Completions(shell::CompletionsArgs),
     /// Print the man page (roff), or write every page into a folder.
@@ -219,6 +222,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Study(a) => study::run(a),
         Command::Merge(a) => merge::run(a),
         Command::View(a) => view::run(a),
+        Command::Atlas(a) => atlas::run(*a),
         Command::Completions(a) => shell::completions(a),
         Command::Man(a) => shell::man(a),
     }

@@ -34,6 +34,10 @@ pub struct Args {
     /// Title of the page (default: the file's name).
     #[arg(long)]
     pub title: Option<String>,
+    /// For a point cloud (.ply): colour the points by this property instead of
+    /// `height_um`, e.g. `Sa_um`, `scallop_um` or `lead_deg` of `crest atlas`'s cloud.
+    #[arg(long, value_name = "COLUMN", alias = "color-by")]
+    pub colour_by: Option<String>,
 }
 
 /// Run `crest view`.
@@ -42,9 +46,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let file = args.file.display().to_string();
     let info = ViewInfo {
         title: args.title.clone().unwrap_or_else(|| {
-            args.file
+            let name = args
+                .file
                 .file_name()
-                .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned())
+                .map_or_else(|| file.clone(), |n| n.to_string_lossy().into_owned());
+            match &args.colour_by {
+                Some(c) => format!("{name}: {c}"),
+                None => name,
+            }
         }),
         source: file.clone(),
         file: Some(file.clone()),
@@ -53,10 +62,20 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .file
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    if args.colour_by.is_some() && !is_ply {
+        return Err(miette!(
+            "--colour-by picks a property of a point cloud (.ply); {file} is a height map"
+        ));
+    }
     let (html, what) = if is_ply {
-        let points = crest::io::mesh::read_map_ply(&args.file).map_err(|e| miette!("{e}"))?;
+        let column = args.colour_by.as_deref().unwrap_or("height_um");
+        let points =
+            crest::io::mesh::read_map_ply_column(&args.file, column).map_err(|e| miette!("{e}"))?;
         let html = view::part_map_page(&points, &info).map_err(|e| miette!("{file}: {e}"))?;
-        (html, format!("part map, {} points", points.len()))
+        (
+            html,
+            format!("point cloud, {} points, coloured by {column}", points.len()),
+        )
     } else {
         let opts = ReadOptions {
             dx_um: args.dx_um,

@@ -830,6 +830,12 @@ pub fn write_map_ply(points: &[MapPoint], out: &mut dyn Write) -> std::io::Resul
 /// Read a part map written by [`write_map_ply`] (or any PLY point cloud with x, y, z and
 /// `height_um`; normals optional).
 pub fn read_map_ply(path: &Path) -> Result<Vec<MapPoint>, MeshFileError> {
+    read_map_ply_column(path, "height_um")
+}
+
+/// [`read_map_ply`] with the value of each point taken from property `column` (any float
+/// property of the cloud, e.g. `Sa_um` of `crest atlas`'s cloud) instead of `height_um`.
+pub fn read_map_ply_column(path: &Path, column: &str) -> Result<Vec<MapPoint>, MeshFileError> {
     let file = path.display().to_string();
     let bytes = super::input::read_staged(path, "part map", |head| {
         super::input::text_stage(head, super::input::MESH)
@@ -871,11 +877,13 @@ pub fn read_map_ply(path: &Path) -> Result<Vec<MapPoint>, MeshFileError> {
         return Err(err(1, "only ASCII PLY part maps are read".into()));
     }
     let col = |n: &str| props.iter().position(|p| p == n);
-    let (Some(x), Some(y), Some(z), Some(h)) = (col("x"), col("y"), col("z"), col("height_um"))
-    else {
+    let (Some(x), Some(y), Some(z), Some(h)) = (col("x"), col("y"), col("z"), col(column)) else {
         return Err(err(
             1,
-            "a part map needs x, y, z and height_um properties".into(),
+            format!(
+                "a point cloud needs x, y, z and {column} properties (it has {})",
+                props.join(", ")
+            ),
         ));
     };
     let normal = (col("nx"), col("ny"), col("nz"));

@@ -21,6 +21,7 @@ mod sdf;
 mod x3p;
 mod xyz;
 
+pub mod atlas;
 pub mod input;
 pub mod measured;
 pub mod mesh;

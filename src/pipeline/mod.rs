@@ -10,6 +10,7 @@ pub use inputs::{
 };
 pub use progress::{Progress, Silent};
 pub mod air;
+pub mod atlas;
 pub mod contact;
 pub mod design;
 pub mod feed;

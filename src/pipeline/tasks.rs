@@ -13,6 +13,7 @@
 //! ([`runout`]); [`run_any`] and [`merge_any`] take a task or results of any kind by their
 //! `kind`.
 
+pub mod atlas;
 pub mod map;
 pub mod runout;
 
@@ -478,6 +479,8 @@ pub enum Merged {
     Map(crate::surface::PartMap),
     /// The run-out study (`crest runout`'s outputs).
     Runout(Box<super::runout::RunoutRun>),
+    /// The roughness atlas (`crest atlas`'s table or point cloud).
+    Atlas(Box<super::atlas::Atlas>),
 }
 
 fn kind_of(v: &serde_json::Value) -> &str {
@@ -495,6 +498,9 @@ pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
         runout::RUNOUT_CASES => serde_json::to_value(runout::run_runout_task(
             &serde_json::from_value(task).map_err(bad)?,
         )?),
+        atlas::ATLAS_PATCHES => serde_json::to_value(atlas::run_atlas_task(
+            &serde_json::from_value(task).map_err(bad)?,
+        )?),
         _ => serde_json::to_value(run_task(&serde_json::from_value(task).map_err(bad)?)?),
     };
     out.map_err(|e| miette!("cannot encode the task result: {e}"))
@@ -506,6 +512,7 @@ fn group_of(v: &serde_json::Value) -> &'static str {
     match kind_of(v) {
         map::MAP_TILES => map::MAP_TILES,
         runout::RUNOUT_CASES => runout::RUNOUT_CASES,
+        atlas::ATLAS_PATCHES => atlas::ATLAS_PATCHES,
         _ => DESIGN_RUN,
     }
 }
@@ -517,7 +524,7 @@ pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Me
     let group = results.first().map_or(DESIGN_RUN, |(_, v)| group_of(v));
     if let Some((at, v)) = results.iter().find(|(_, v)| group_of(v) != group) {
         return Err(miette!(
-            "{at}: a result of kind '{}' among results of kind '{group}': merge the results of one study, one run-out study or one part map",
+            "{at}: a result of kind '{}' among results of kind '{group}': merge the results of one study, one run-out study, one part map or one atlas",
             kind_of(v),
         ));
     }
@@ -534,6 +541,9 @@ pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Me
     match group {
         map::MAP_TILES => Ok(Merged::Map(map::merge_map(parse(results)?)?)),
         runout::RUNOUT_CASES => Ok(Merged::Runout(Box::new(runout::merge_runout(parse(
+            results,
+        )?)?))),
+        atlas::ATLAS_PATCHES => Ok(Merged::Atlas(Box::new(atlas::merge_atlas(parse(
             results,
         )?)?))),
         _ => Ok(Merged::Design(Box::new(merge(parse(results)?)?))),

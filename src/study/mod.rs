@@ -7,6 +7,7 @@
 //! [`crate::report`]'s. Runs and cases are evaluated in parallel with rayon, in a fixed
 //! order, so the results do not depend on the thread count.
 
+pub mod atlas;
 pub mod brammertz;
 pub mod calibrate;
 pub mod design;

@@ -131,6 +131,15 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
 
 /// The finishing regions of `path` (its cut moves, `MotionKind::Cut`), in path order.
 pub fn regions(path: &Toolpath) -> Vec<Region> {
+    regions_with_passes(path)
+        .into_iter()
+        .map(|(r, _)| r)
+        .collect()
+}
+
+/// [`regions`], each with the indices of its passes among [`Toolpath::cutting_runs`]
+/// (consecutive: a region is a range of passes).
+pub fn regions_with_passes(path: &Toolpath) -> Vec<(Region, std::ops::Range<usize>)> {
     let ps = &path.postures;
     let point = |i: usize| ps[i].contact.as_ref().map_or(ps[i].position, |c| c.point);
     let passes: Vec<Pass> = path
@@ -190,7 +199,7 @@ pub fn regions(path: &Toolpath) -> Vec<Region> {
     let mean = crate::math::normalize_or_none(&mean, 1e-12).unwrap_or_else(Vec3::z);
     groups
         .into_iter()
-        .map(|g| region(path, &passes, g, diameter, &mean))
+        .map(|g| (region(path, &passes, g.clone(), diameter, &mean), g))
         .collect()
 }
 

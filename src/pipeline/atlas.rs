@@ -1,0 +1,545 @@
+//! `crest atlas`: the roughness atlas of a part (issue 33). Patches are placed every D mm
+//! over every finishing region ([`crate::toolpath::regions`]) on the cut surface, and each
+//! is simulated by `crest simulate`'s own pipeline ([`super::simulate::simulate`] with
+//! `--patch-near`), then measured: Sa, Sq, Sz, the scallop across the feed and the feed
+//! marks along it ([`crate::study::atlas`]), their closed forms, the local stepover,
+//! curvature, lead and tilt. A patch that is refused (in the air, no cut near it) or that
+//! fails a sanity check keeps its row, with the reason in its warnings.
+//!
+//! Placement (closed form, so that a user can count the patches): in a region of P passes
+//! with median stepover s, every k-th pass with k = max(1, round(D / s)), starting at pass
+//! ⌊k/2⌋ (the middle pass when the region has fewer than ⌊k/2⌋ + 1); along a chosen pass of
+//! length L (of its contact points), n = ⌊L / D⌋ patches D apart, centred on the pass
+//! (the first at (L − (n − 1) D) / 2). Patch k of the atlas is row k in this order.
+
+use super::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
+use crate::math::{Point3, Vec3};
+use crate::study::atlas::{self, AtlasRow};
+use crate::toolpath::{MotionKind, Program};
+use miette::miette;
+use serde::{Deserialize, Serialize};
+
+/// Everything `crest atlas` is asked (serde data: an atlas task carries it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtlasRequest {
+    /// The simulation of one patch; its `grid` is replaced by each patch's, and a missing
+    /// `grid_um` by [`default_grid_um`].
+    pub simulate: SimulateRequest,
+    /// Spacing of the patches along and across the passes, mm.
+    pub every_mm: f64,
+    /// Patch size along and across the feed, mm (default: [`default_patch_mm`]).
+    pub patch_mm: Option<(f64, f64)>,
+}
+
+/// Where a patch goes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Site {
+    /// Tool path, 1-based.
+    pub path: usize,
+    /// Region, 1-based over the whole program (as `crest inspect --regions`).
+    pub region: usize,
+    /// Pass (cutting run) of the path, 1-based.
+    pub pass: usize,
+    /// Arc length along the pass, mm.
+    pub s_mm: f64,
+    /// The point on the cut surface, mm.
+    pub point: Point3,
+    /// The surface normal there (the tool axis where the posture has no contact).
+    pub normal: Vec3,
+    /// The tool axis.
+    pub axis: Vec3,
+    /// The pass's direction there.
+    pub feed: Vec3,
+    /// The region's median stepover, mm.
+    pub region_stepover_mm: Option<f64>,
+    /// The normal curvature along the feed, 1/mm.
+    pub curvature_along: Option<f64>,
+    /// The normal curvature across the feed (to the nearest neighbouring pass), 1/mm.
+    pub curvature_across: Option<f64>,
+}
+
+/// The default patch: square, twice the region's median stepover (one whole scallop in
+/// every profile across the feed wherever the local stepover is up to twice the median), at
+/// least 0.5 mm, rounded up to 0.1 mm; 2 mm without a stepover.
+pub fn default_patch_mm(stepover_mm: Option<f64>) -> (f64, f64) {
+    let l = stepover_mm.map_or(2.0, |s| ((2.0 * s).max(0.5) * 10.0).ceil() / 10.0);
+    (l, l)
+}
+
+/// The default grid spacing of a patch, µm: the simulation's default (a tenth of the feed
+/// per tooth), but no finer than 1/200 of the patch's larger side (at most 200 × 200 nodes
+/// a patch), on the 1-2-5 steps of [`super::simulate::default_grid_um`].
+pub fn default_grid_um(fz_mm: f64, patch_mm: (f64, f64)) -> f64 {
+    let fine = super::simulate::default_grid_um(fz_mm);
+    let coarse = patch_mm.0.max(patch_mm.1) * 1e3 / 200.0;
+    if fine >= coarse {
+        return fine;
+    }
+    let decade = 10f64.powf(coarse.log10().floor());
+    let m = coarse / decade;
+    let step = if m <= 1.0 {
+        1.0
+    } else if m <= 2.0 {
+        2.0
+    } else if m <= 5.0 {
+        5.0
+    } else {
+        10.0
+    };
+    step * decade
+}
+
+/// One pass's points on the cut surface, with normals, axes and arc length.
+struct Pass {
+    points: Vec<Point3>,
+    normals: Vec<Vec3>,
+    axes: Vec<Vec3>,
+    s: Vec<f64>,
+}
+
+impl Pass {
+    fn of(program: &Program, path: usize, run: std::ops::Range<usize>) -> Pass {
+        let ps = &program.paths[path].postures;
+        let mut pass = Pass {
+            points: Vec::new(),
+            normals: Vec::new(),
+            axes: Vec::new(),
+            s: Vec::new(),
+        };
+        // Where the pass has contact points, only those; the first posture of a run (where
+        // the first cut leaves, often the end of a lead-in arc, without a contact) is its CL
+        // point carried by the next posture's contact offset, kept when the first cut runs
+        // along the surface (within 30° of its tangent plane), not when it plunges.
+        let with_contacts = run.clone().any(|i| ps[i].contact.is_some());
+        let first = run.start;
+        for i in run {
+            let p = &ps[i];
+            let (q, n) =
+                match (&p.contact, with_contacts) {
+                    (Some(c), _) => (c.point, c.normal),
+                    (None, false) => (p.position, p.axis),
+                    (None, true) => {
+                        let Some(c) = ps.get(i + 1).filter(|_| i == first).and_then(|x| {
+                            x.contact.as_ref().map(|c| (c.point, c.normal, x.position))
+                        }) else {
+                            continue;
+                        };
+                        let q = p.position + (c.0 - c.2);
+                        let d = c.0 - q;
+                        if d.norm() == 0.0 || d.dot(&c.1).abs() > 0.5 * d.norm() {
+                            continue;
+                        }
+                        (q, c.1)
+                    }
+                };
+            let s = pass.points.last().map_or(0.0, |l| {
+                pass.s.last().copied().unwrap_or(0.0) + (q - l).norm()
+            });
+            pass.points.push(q);
+            pass.normals.push(n);
+            pass.axes.push(p.axis);
+            pass.s.push(s);
+        }
+        pass
+    }
+
+    fn length(&self) -> f64 {
+        self.s.last().copied().unwrap_or(0.0)
+    }
+
+    /// Point, normal, axis and direction at arc length `t`.
+    fn at(&self, t: f64) -> (Point3, Vec3, Vec3, Vec3) {
+        let n = self.points.len();
+        if n < 2 {
+            return (self.points[0], self.normals[0], self.axes[0], Vec3::x());
+        }
+        let k = self.s.partition_point(|v| *v < t).clamp(1, n - 1);
+        let l = self.s[k] - self.s[k - 1];
+        let u = if l > 0.0 {
+            ((t - self.s[k - 1]) / l).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let (a, b) = (self.points[k - 1], self.points[k]);
+        let dir = crate::math::normalize_or_none(&(b - a), 1e-12).unwrap_or_else(Vec3::x);
+        (
+            a + (b - a) * u,
+            crate::math::nlerp(&self.normals[k - 1], &self.normals[k], u),
+            crate::math::nlerp(&self.axes[k - 1], &self.axes[k], u),
+            dir,
+        )
+    }
+
+    /// The vertex nearest `q`, with its normal.
+    fn nearest(&self, q: &Point3) -> Option<(Point3, Vec3)> {
+        self.points
+            .iter()
+            .zip(&self.normals)
+            .min_by(|a, b| (a.0 - q).norm().total_cmp(&(b.0 - q).norm()))
+            .map(|(p, n)| (*p, *n))
+    }
+}
+
+/// The patch sites of `program` (contacts derived where it has none): every finishing
+/// region of every path in `paths` (all when empty), `every_mm` apart (see the module
+/// text). `regions` are the regions of each path as `crest inspect --regions` finds them,
+/// with their passes.
+pub fn place(
+    program: &Program,
+    regions: &[Vec<(crate::toolpath::regions::Region, std::ops::Range<usize>)>],
+    every_mm: f64,
+) -> Vec<Site> {
+    let mut sites = Vec::new();
+    let mut region_id = 0;
+    for (pi, path_regions) in regions.iter().enumerate() {
+        let runs = program.paths[pi].cutting_runs();
+        for (region, passes) in path_regions {
+            region_id += 1;
+            let k = region
+                .stepover_mm
+                .map_or(1, |s| ((every_mm / s).round() as usize).max(1));
+            let count = passes.len();
+            let first = if count > k / 2 { k / 2 } else { count / 2 };
+            let built: Vec<Pass> = passes
+                .clone()
+                .map(|r| Pass::of(program, pi, runs[r].clone()))
+                .collect();
+            for local in (first..count).step_by(k) {
+                let pass = &built[local];
+                let len = pass.length();
+                let n = (len / every_mm + 1e-9).floor() as usize;
+                let start = 0.5 * (len - (n.max(1) - 1) as f64 * every_mm);
+                for j in 0..n {
+                    let t = start + j as f64 * every_mm;
+                    let (point, normal, axis, feed) = pass.at(t);
+                    let h = (0.5 * every_mm).min(1.0).min(0.5 * len);
+                    let along = {
+                        let (pa, na, _, _) = pass.at((t - h).max(0.0));
+                        let (pb, nb, _, _) = pass.at((t + h).min(len));
+                        atlas::curvature(&pa, &na, &pb, &nb)
+                    };
+                    let neighbour = [local + 1, local.wrapping_sub(1)]
+                        .into_iter()
+                        .filter(|&o| o < count)
+                        .filter_map(|o| built[o].nearest(&point))
+                        .min_by(|a, b| (a.0 - point).norm().total_cmp(&(b.0 - point).norm()));
+                    let across = neighbour.and_then(|(pb, nb)| {
+                        // Only the component across the feed: the neighbour's nearest vertex
+                        // may lie a little ahead or behind.
+                        let d = pb - point;
+                        let pb = point + (d - feed * d.dot(&feed));
+                        atlas::curvature(&point, &normal, &pb, &nb)
+                    });
+                    sites.push(Site {
+                        path: pi + 1,
+                        region: region_id,
+                        pass: passes.start + local + 1,
+                        s_mm: t,
+                        point,
+                        normal,
+                        axis,
+                        feed,
+                        region_stepover_mm: region.stepover_mm,
+                        curvature_along: along,
+                        curvature_across: across,
+                    });
+                }
+            }
+        }
+    }
+    sites
+}
+
+/// The program of an atlas request read, its regions found (on the path as read, as
+/// `crest inspect --regions`) and its contacts derived where it has none, and the sites.
+pub struct Placement {
+    /// The program (cut moves as `--moves` says, contacts derived).
+    pub program: Program,
+    /// The patch sites in atlas order.
+    pub sites: Vec<Site>,
+    /// Finishing regions in the paths simulated.
+    pub regions: usize,
+    /// The feed per tooth the patches run at, mm.
+    pub fz_mm: f64,
+    /// The corner radius of the cutter (R for a ball), mm.
+    pub corner_radius_mm: f64,
+}
+
+/// Check the request and place its patches.
+pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
+    let d = req.every_mm;
+    if !(d.is_finite() && d > 0.0) {
+        return Err(miette!(
+            "--every-mm must be positive, got {}",
+            crate::math::limits::shown(d)
+        ));
+    }
+    if let Some((l, w)) = req.patch_mm
+        && !(l.is_finite() && l > 0.0 && w.is_finite() && w > 0.0)
+    {
+        return Err(miette!("--patch-mm must be positive, got {l},{w}"));
+    }
+    let sim = &req.simulate;
+    let lower = crate::toolpath::LowerOptions {
+        apply_msys: sim.absolute,
+        ..Default::default()
+    };
+    let read = crate::io::toolpath::ReadOptions {
+        lower,
+        machine: None,
+        rtcp: sim.rtcp,
+    };
+    let mut program = crate::io::toolpath::read_program_with(&sim.file, read)?;
+    sim.moves.apply(&mut program);
+    let (cutter, _, _) = super::inputs::resolve_cutter(
+        sim.tool.as_ref(),
+        &program,
+        &sim.file,
+        sim.teeth,
+        sim.helix_deg,
+    )?;
+    let process = match &sim.process {
+        Some(p) => super::load_process(p)?,
+        None => crate::config::ProcessConfig::default(),
+    };
+    let cutting = super::simulate::resolve_cutting(sim, &process, &program, cutter.teeth())?;
+    let mut regions: Vec<Vec<_>> = program
+        .paths
+        .iter()
+        .map(crate::toolpath::regions::regions_with_passes)
+        .collect();
+    let file = sim.file.display();
+    match sim.path {
+        Some(n) if n >= 1 && n <= program.paths.len() => {
+            for (i, r) in regions.iter_mut().enumerate() {
+                if i + 1 != n {
+                    r.clear();
+                }
+            }
+        }
+        Some(n) => {
+            return Err(miette!(
+                "--path {n}: {file} has {} tool path(s)",
+                program.paths.len()
+            ));
+        }
+        None => {}
+    }
+    let count = regions.iter().map(Vec::len).sum();
+    if count == 0 {
+        return Err(miette!(
+            "{file}: no finishing region (no cut moves) to place patches on"
+        ));
+    }
+    let has_contacts = program
+        .paths
+        .iter()
+        .flat_map(|p| p.postures.iter())
+        .any(|p| p.motion == MotionKind::Cut && p.contact.is_some());
+    if !has_contacts {
+        super::simulate::derive_contacts(&mut program, &cutter);
+    }
+    let sites = place(&program, &regions, d);
+    Ok(Placement {
+        program,
+        sites,
+        regions: count,
+        fz_mm: cutting.fz_mm,
+        corner_radius_mm: cutter.corner_radius_mm(),
+    })
+}
+
+/// Simulate and measure the patch at `site` (patch number `patch`, 1-based).
+pub fn run_patch(
+    req: &AtlasRequest,
+    placed: &Placement,
+    patch: usize,
+    site: &Site,
+) -> (AtlasRow, Option<SimulateRun>) {
+    let (length, width) = req
+        .patch_mm
+        .unwrap_or_else(|| default_patch_mm(site.region_stepover_mm));
+    let mut sim = req.simulate.clone();
+    sim.grid = GridRequest::PatchNear {
+        point: [site.point.x, site.point.y, site.point.z],
+        length_mm: length,
+        width_mm: width,
+    };
+    if sim.grid_um.is_none() {
+        sim.grid_um = Some(default_grid_um(placed.fz_mm, (length, width)));
+    }
+    let paths = [site.path - 1];
+    let is_cut =
+        |pi: usize, i: usize| placed.program.paths[pi].postures[i].motion == MotionKind::Cut;
+    let r = placed.corner_radius_mm;
+    let stepover = super::air::nearest(
+        &placed.program,
+        &paths,
+        &site.point,
+        2.0 * r.max(1.0),
+        true,
+        is_cut,
+    )
+    .and_then(|n| n.stepover_mm);
+    let lt = atlas::lead_tilt(&site.axis, &site.normal, &site.feed);
+    let closed = |v: f64| (r > 0.0).then_some(v);
+    let mut row = AtlasRow {
+        patch,
+        path: site.path,
+        region: site.region,
+        pass: site.pass,
+        s_mm: site.s_mm,
+        point: [site.point.x, site.point.y, site.point.z],
+        normal: [site.normal.x, site.normal.y, site.normal.z],
+        sa_um: None,
+        sq_um: None,
+        sz_um: None,
+        scallop_um: None,
+        feed_mark_um: None,
+        scallop_closed_um: stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3)),
+        feed_mark_closed_um: closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3),
+        stepover_mm: stepover,
+        curvature_along_per_mm: site.curvature_along,
+        curvature_across_per_mm: site.curvature_across,
+        lead_deg: lt.map(|v| v.0.to_degrees()),
+        tilt_deg: lt.map(|v| v.1.to_degrees()),
+        nodes: 0,
+        nodes_cut: 0,
+        warnings: Vec::new(),
+    };
+    match super::simulate::simulate(&sim, &super::Silent) {
+        Err(e) => {
+            row.warnings.push(e.to_string());
+            (row, None)
+        }
+        Ok(run) => {
+            if let Output::Grid(g) = &run.output {
+                let (c, n) = g.node_point(g.map.nx / 2, g.map.ny / 2);
+                row.point = [c.x, c.y, c.z];
+                row.normal = [n.x, n.y, n.z];
+                if let Some(st) = crate::metrics::height_stats(&g.map.z_um) {
+                    row.sa_um = Some(st.sa);
+                    row.sq_um = Some(st.sq);
+                    row.sz_um = Some(st.sz());
+                }
+                let (s, m) = atlas::scallop_and_feed_marks(&g.map);
+                row.scallop_um = s;
+                row.feed_mark_um = m;
+            }
+            row.nodes = run.nodes;
+            row.nodes_cut = run.nodes_cut;
+            row.warnings.extend(run.failed_checks.iter().cloned());
+            if row.sa_um.is_none() {
+                row.warnings
+                    .push("no node of the patch was reached by the tool".to_string());
+            }
+            (row, Some(run))
+        }
+    }
+}
+
+/// A finished atlas (or one shard of it).
+#[derive(Debug, Clone)]
+pub struct Atlas {
+    /// The tool-path file, as given.
+    pub file: String,
+    /// Spacing of the patches, mm.
+    pub every_mm: f64,
+    /// Rows in patch order.
+    pub rows: Vec<AtlasRow>,
+    /// Patches of the whole atlas.
+    pub patches_total: usize,
+    /// Finishing regions.
+    pub regions: usize,
+    /// Warnings common to the run (the tool from TLDATA, …), once each.
+    pub warnings: Vec<String>,
+}
+
+/// Run the atlas, or shard `k` of `n` of its patches (patches k, k + n, …), reporting
+/// each patch to `progress`. Fails only when the request is wrong; patches that are
+/// refused keep their rows (see [`check_numbers`]).
+pub fn run(
+    req: &AtlasRequest,
+    shard: Option<(usize, usize)>,
+    progress: &dyn super::Progress,
+) -> miette::Result<Atlas> {
+    progress.phase(&format!("reading {}", req.simulate.file.display()), "");
+    let placed = placement(req)?;
+    let total = placed.sites.len();
+    if total == 0 {
+        return Err(miette!(
+            "{}: no pass of any finishing region is {} mm long: no patch placed; give a smaller --every-mm",
+            req.simulate.file.display(),
+            req.every_mm
+        ));
+    }
+    let (k, n) = shard.unwrap_or((1, 1));
+    if k == 0 || k > n {
+        return Err(miette!("shard {k} of {n}: not a shard K/N with 1 ≤ K ≤ N"));
+    }
+    let mine: Vec<usize> = (k - 1..total).step_by(n).collect();
+    progress.phase("simulating patches", "patches");
+    let mut rows = Vec::with_capacity(mine.len());
+    let mut warnings: Vec<String> = Vec::new();
+    for (done, &i) in mine.iter().enumerate() {
+        let (row, run) = run_patch(req, &placed, i + 1, &placed.sites[i]);
+        if let Some(run) = run {
+            for w in run.warnings {
+                if !run.failed_checks.contains(&w) && !warnings.contains(&w) {
+                    warnings.push(w);
+                }
+            }
+        }
+        rows.push(row);
+        progress.advance(done as u64 + 1, mine.len() as u64);
+    }
+    Ok(Atlas {
+        file: req.simulate.file.display().to_string(),
+        every_mm: req.every_mm,
+        rows,
+        patches_total: total,
+        regions: placed.regions,
+        warnings,
+    })
+}
+
+/// An error when no row of a whole atlas has numbers, naming the first reasons.
+pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> miette::Result<()> {
+    if rows.iter().any(AtlasRow::has_numbers) {
+        return Ok(());
+    }
+    let mut why: Vec<&str> = Vec::new();
+    for r in rows {
+        for w in &r.warnings {
+            if !why.contains(&w.as_str()) && why.len() < 3 {
+                why.push(w);
+            }
+        }
+    }
+    Err(miette!(
+        "{file}: none of the {} patches produced numbers; {}",
+        rows.len(),
+        if why.is_empty() {
+            "no reason given".to_string()
+        } else {
+            format!("first reasons: {}", why.join(" | "))
+        }
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_patch_and_grid() {
+        assert_eq!(default_patch_mm(Some(0.5)), (1.0, 1.0));
+        assert_eq!(default_patch_mm(Some(1.98)), (4.0, 4.0));
+        assert_eq!(default_patch_mm(None), (2.0, 2.0));
+        // fz 0.1 mm → 10 µm; a 4 mm patch → 20 µm.
+        assert_eq!(default_grid_um(0.1, (1.0, 1.0)), 10.0);
+        assert_eq!(default_grid_um(0.015625, (4.0, 4.0)), 20.0);
+        assert_eq!(default_grid_um(0.015625, (1.0, 1.0)), 5.0);
+    }
+}

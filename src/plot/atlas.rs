@@ -1,0 +1,146 @@
+//! The roughness atlas as a map: one square per patch at its x, y on the part, coloured
+//! (viridis, with a scale bar) by one of its number columns; patches without a number are
+//! drawn as grey crosses, so refused patches show where they are.
+
+use super::chart::{label_font, tick_decimals, tick_font, tick_label, title_font};
+use super::heightmap::viridis;
+use super::{Draw, DrawResult, PlotError};
+use crate::study::atlas::{AtlasRow, NUMBER_COLUMNS};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+struct AtlasChart<'a> {
+    title: &'a str,
+    label: &'a str,
+    pts: Vec<(f64, f64, f64)>,
+    range: (f64, f64),
+    bounds: (f64, f64, f64, f64),
+    mark: f64,
+}
+
+impl Draw for AtlasChart<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let root = root.titled(self.title, title_font())?;
+        let (w, _) = root.dim_in_pixel();
+        let (main, bar) = root.split_horizontally(w.saturating_sub(150));
+        let (x0, y0, x1, y1) = self.bounds;
+        let mut chart = ChartBuilder::on(&main)
+            .margin(14)
+            .x_label_area_size(55)
+            .y_label_area_size(75)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        let (dx, dy) = (tick_decimals(x1 - x0), tick_decimals(y1 - y0));
+        let fx = move |v: &f64| tick_label(*v, dx);
+        let fy = move |v: &f64| tick_label(*v, dy);
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .x_desc("x [mm]")
+            .y_desc("y [mm]")
+            .axis_desc_style(label_font())
+            .label_style(tick_font())
+            .draw()?;
+        let (lo, hi) = self.range;
+        let h = 0.5 * self.mark;
+        chart.draw_series(
+            self.pts
+                .iter()
+                .filter(|p| p.2.is_finite())
+                .map(|&(x, y, v)| {
+                    let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+                    Rectangle::new([(x - h, y - h), (x + h, y + h)], viridis(t).filled())
+                }),
+        )?;
+        chart.draw_series(
+            self.pts
+                .iter()
+                .filter(|p| !p.2.is_finite())
+                .map(|&(x, y, _)| Cross::new((x, y), 4, RGBColor(150, 150, 150).stroke_width(1))),
+        )?;
+        let mut scale = ChartBuilder::on(&bar)
+            .margin_top(14)
+            .margin_bottom(69)
+            .margin_right(10)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..1.0, lo..hi.max(lo + 1e-9))?;
+        let dz = tick_decimals(hi - lo);
+        let fz = move |v: &f64| tick_label(*v, dz);
+        scale
+            .configure_mesh()
+            .disable_mesh()
+            .disable_x_axis()
+            .y_label_formatter(&fz)
+            .y_desc(self.label)
+            .axis_desc_style(label_font())
+            .label_style(tick_font())
+            .draw()?;
+        let n = 128;
+        scale.draw_series((0..n).map(|i| {
+            let a = lo + (hi - lo) * i as f64 / n as f64;
+            let b = lo + (hi - lo) * (i + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                viridis((i as f64 + 0.5) / n as f64).filled(),
+            )
+        }))?;
+        Ok(())
+    }
+}
+
+/// The atlas `rows` coloured by `column` (one of [`NUMBER_COLUMNS`]) over the part's x, y,
+/// as SVG or PNG bytes (`png`); patches are squares `every_mm` wide.
+pub fn atlas_map(
+    rows: &[AtlasRow],
+    column: &str,
+    title: &str,
+    every_mm: f64,
+    png: bool,
+) -> Result<Vec<u8>, PlotError> {
+    let Some(c) = NUMBER_COLUMNS.iter().position(|n| *n == column) else {
+        return Err(PlotError::Invalid(format!(
+            "no atlas column '{column}' (one of {})",
+            NUMBER_COLUMNS.join(", ")
+        )));
+    };
+    let pts: Vec<(f64, f64, f64)> = rows
+        .iter()
+        .map(|r| (r.point[0], r.point[1], r.numbers()[c]))
+        .collect();
+    let vals: Vec<f64> = pts.iter().map(|p| p.2).filter(|v| v.is_finite()).collect();
+    if vals.is_empty() {
+        return Err(PlotError::Empty(format!(
+            "no patch has a value of {column}"
+        )));
+    }
+    let lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let m = 0.5 * every_mm;
+    let x0 = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min) - m;
+    let x1 = pts.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max) + m;
+    let y0 = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min) - m;
+    let y1 = pts.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max) + m;
+    let (wx, wy) = (x1 - x0, y1 - y0);
+    let (pw, ph) = if wx >= wy {
+        (800.0, (800.0 * wy / wx).max(260.0))
+    } else {
+        ((800.0 * wx / wy).max(260.0), 800.0)
+    };
+    let size = ((pw + 89.0 + 150.0) as u32, (ph + 69.0 + 14.0 + 40.0) as u32);
+    let label = format!("{column} (grey ×: no number)");
+    let chart = AtlasChart {
+        title,
+        label: &label,
+        pts,
+        range: (lo, hi),
+        bounds: (x0, y0, x1, y1),
+        mark: every_mm,
+    };
+    let format = if png {
+        super::Format::Png
+    } else {
+        super::Format::Svg
+    };
+    super::render_bytes(format, size, &chart)
+}
