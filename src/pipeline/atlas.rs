@@ -338,7 +338,7 @@ pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
         .flat_map(|p| p.postures.iter())
         .any(|p| p.motion == MotionKind::Cut && p.contact.is_some());
     if !has_contacts {
-        super::simulate::derive_contacts(&mut program, &cutter);
+        super::contact::derive_contacts(&mut program, &cutter);
     }
     let sites = place(&program, &regions, d);
     Ok(Placement {

@@ -1,6 +1,9 @@
 //! The roughness atlas as a map: one square per patch at its x, y on the part, coloured
 //! (viridis, with a scale bar) by one of its number columns; patches without a number are
-//! drawn as grey crosses, so refused patches show where they are.
+//! drawn as grey crosses, so refused patches show where they are, and patches whose checks
+//! failed (a warning) as red crosses: their numbers are not on the colour scale, so one
+//! wrong patch cannot flatten the others. A square is as wide as the spacing to the nearest
+//! other patch (at most the atlas spacing), so squares do not overlap.
 
 use super::chart::{label_font, tick_decimals, tick_font, tick_label, title_font};
 use super::heightmap::viridis;
@@ -12,7 +15,8 @@ use plotters::prelude::*;
 struct AtlasChart<'a> {
     title: &'a str,
     label: &'a str,
-    pts: Vec<(f64, f64, f64)>,
+    /// x, y, the value (NaN: none), whether a check failed.
+    pts: Vec<(f64, f64, f64, bool)>,
     range: (f64, f64),
     bounds: (f64, f64, f64, f64),
     mark: f64,
@@ -44,21 +48,22 @@ impl Draw for AtlasChart<'_> {
             .draw()?;
         let (lo, hi) = self.range;
         let h = 0.5 * self.mark;
-        chart.draw_series(
-            self.pts
-                .iter()
-                .filter(|p| p.2.is_finite())
-                .map(|&(x, y, v)| {
-                    let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
-                    Rectangle::new([(x - h, y - h), (x + h, y + h)], viridis(t).filled())
-                }),
-        )?;
-        chart.draw_series(
-            self.pts
-                .iter()
-                .filter(|p| !p.2.is_finite())
-                .map(|&(x, y, _)| Cross::new((x, y), 4, RGBColor(150, 150, 150).stroke_width(1))),
-        )?;
+        chart.draw_series(self.pts.iter().filter(|p| p.2.is_finite() && !p.3).map(
+            |&(x, y, v, _)| {
+                let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+                Rectangle::new([(x - h, y - h), (x + h, y + h)], viridis(t).filled())
+            },
+        ))?;
+        chart.draw_series(self.pts.iter().filter(|p| !p.2.is_finite() || p.3).map(
+            |&(x, y, v, warned)| {
+                let colour = if warned && v.is_finite() {
+                    RGBColor(200, 30, 30)
+                } else {
+                    RGBColor(150, 150, 150)
+                };
+                Cross::new((x, y), 4, colour.stroke_width(1))
+            },
+        ))?;
         let mut scale = ChartBuilder::on(&bar)
             .margin_top(14)
             .margin_bottom(69)
@@ -104,15 +109,43 @@ pub fn atlas_map(
             NUMBER_COLUMNS.join(", ")
         )));
     };
-    let pts: Vec<(f64, f64, f64)> = rows
+    let pts: Vec<(f64, f64, f64, bool)> = rows
         .iter()
-        .map(|r| (r.point[0], r.point[1], r.numbers()[c]))
+        .map(|r| {
+            (
+                r.point[0],
+                r.point[1],
+                r.numbers()[c],
+                !r.warnings.is_empty(),
+            )
+        })
         .collect();
-    let vals: Vec<f64> = pts.iter().map(|p| p.2).filter(|v| v.is_finite()).collect();
+    // The colour scale spans the patches whose checks passed (all of them if none did).
+    let trusted: Vec<f64> = pts
+        .iter()
+        .filter(|p| !p.3)
+        .map(|p| p.2)
+        .filter(|v| v.is_finite())
+        .collect();
+    let vals: Vec<f64> = if trusted.is_empty() {
+        pts.iter().map(|p| p.2).filter(|v| v.is_finite()).collect()
+    } else {
+        trusted
+    };
     if vals.is_empty() {
         return Err(PlotError::Empty(format!(
             "no patch has a value of {column}"
         )));
+    }
+    // Squares as wide as the nearest other patch is far (in x or y), at most `every_mm`.
+    let mut mark = every_mm;
+    for (i, a) in pts.iter().enumerate() {
+        for b in &pts[i + 1..] {
+            let d = (a.0 - b.0).abs().max((a.1 - b.1).abs());
+            if d > 1e-9 {
+                mark = mark.min(d);
+            }
+        }
     }
     let lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -128,14 +161,14 @@ pub fn atlas_map(
         ((800.0 * wx / wy).max(260.0), 800.0)
     };
     let size = ((pw + 89.0 + 150.0) as u32, (ph + 69.0 + 14.0 + 40.0) as u32);
-    let label = format!("{column} (grey ×: no number)");
+    let label = format!("{column} (× grey: no number, red: check failed)");
     let chart = AtlasChart {
         title,
         label: &label,
         pts,
         range: (lo, hi),
         bounds: (x0, y0, x1, y1),
-        mark: every_mm,
+        mark,
     };
     let format = if png {
         super::Format::Png
