@@ -18,7 +18,10 @@
 //!   across and not tens of millimetres along one;
 //! * a neighbour whose axis differs from the posture's by more than [`AXIS_SPREAD_DEG`] is
 //!   left out of its fit (a wall's passes do not define the floor beside it);
-//! * the fit of each round starts from the normals of the last.
+//! * the fit of each round starts from the normals of the last;
+//! * where the normal is so nearly along the axis that the flat end lies on the surface
+//!   (within [`FLAT_END_MM`] across it), the contact is the centre of the end, not a point
+//!   of the corner circle picked by a few µrad of noise.
 //!
 //! A derived contact is then checked: its normal must face the tool (n·a > 0), it must not
 //! lie inside a neighbouring posture's cutter by more than [`GOUGE_TOL_MM`] (the surface a
@@ -95,6 +98,22 @@ pub fn radial(n: &Vec3, a: &Vec3) -> Vec3 {
     normalize_or_none(&(-(n - a * n.dot(a))), 1e-9).unwrap_or_else(Vec3::zeros)
 }
 
+/// Where the normal is so nearly along the axis that the whole flat end lies on the surface
+/// (the heights across it differ by less than this), the contact is the centre of the end,
+/// mm: the radial of a normal a few µrad off the axis would pick any point of the corner
+/// circle, jumping across the cutter between neighbouring postures.
+pub const FLAT_END_MM: f64 = 0.5e-3;
+
+/// [`radial`], or zero where the end of radius `rd` lies flat on the surface (see
+/// [`FLAT_END_MM`]).
+fn flat_radial(n: &Vec3, a: &Vec3, rd: f64) -> Vec3 {
+    if (n - a * n.dot(a)).norm() * rd < FLAT_END_MM {
+        Vec3::zeros()
+    } else {
+        radial(n, a)
+    }
+}
+
 /// Two unit vectors perpendicular to `a` and each other.
 fn basis(a: &Vec3) -> (Vec3, Vec3) {
     let e1 = any_perpendicular(a);
@@ -131,7 +150,7 @@ pub fn derive(cutter: &Cutter, poses: &[(Point3, Vec3)], joined: &[bool], cell_m
                 let pt = m.support(m_r, m_a);
                 p.tip + a * pt[1] + w * pt[0]
             }
-            None => p.tip + a * rc + radial(n, a) * rd,
+            None => p.tip + a * rc + flat_radial(n, a, rd) * rd,
         }
     };
     let mut normals: Vec<Option<Vec3>> = poses.iter().map(|(_, a)| Some(*a)).collect();
