@@ -13,7 +13,7 @@
 use super::grid::{GridFrame, Nominal, grid_contacts};
 use super::process::{TextureField, apply_pass};
 use super::profile::Profile;
-use super::raster::{Tile, cover};
+use super::raster::{Tile, cover, grow};
 use super::{GridSpec, HeightMap, Model, Options, Reference, Simulation, SurfaceError};
 use crate::math::{Frame, Point3, Vec3, nlerp};
 use crate::resample::Sample;
@@ -1102,7 +1102,8 @@ impl Setup<'_> {
     }
 
     fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Scratch) {
-        self.strip_triangles(s, cols, |a, b, c| tile.triangle(a, b, c, cull));
+        let (ncols, nl) = self.strip_points(s, cols);
+        tile.quads(&cols.pts, ncols, nl, cull);
     }
 
     /// The triangles of strip `s`, in order (`scratch`: space for the points and the last
@@ -1113,6 +1114,21 @@ impl Setup<'_> {
         scratch: &mut Scratch,
         mut tri: impl FnMut([f64; 3], [f64; 3], [f64; 3]),
     ) {
+        let (ncols, nl) = self.strip_points(s, scratch);
+        let cols = &scratch.pts;
+        for c in 0..ncols - 1 {
+            let a = &cols[c * nl..(c + 1) * nl];
+            let b = &cols[(c + 1) * nl..(c + 2) * nl];
+            for i in 0..nl - 1 {
+                tri(a[i], a[i + 1], b[i + 1]);
+                tri(a[i], b[i + 1], b[i]);
+            }
+        }
+    }
+
+    /// The points of strip `s` into `scratch.pts`, column by column (a pose or angle per
+    /// column, `nl` levels each); returns (columns, levels).
+    fn strip_points(&self, s: &Strip, scratch: &mut Scratch) -> (usize, usize) {
         let k = s.k as usize;
         let (lo, hi) = (s.lo as usize, s.hi as usize);
         let j = s.tooth as usize;
@@ -1149,15 +1165,7 @@ impl Setup<'_> {
             }
             Model::Swept => unreachable!("the swept model has no triangles"),
         };
-        let nl = hi - lo + 1;
-        for c in 0..ncols - 1 {
-            let a = &cols[c * nl..(c + 1) * nl];
-            let b = &cols[(c + 1) * nl..(c + 2) * nl];
-            for i in 0..nl - 1 {
-                tri(a[i], a[i + 1], b[i + 1]);
-                tri(a[i], b[i + 1], b[i]);
-            }
-        }
+        (ncols, hi - lo + 1)
     }
 }
 
@@ -1187,11 +1195,4 @@ fn scan_candidates(f: &dyn Fn(usize) -> f64, n: usize, lim: f64) -> Option<(usiz
     let lo = (0..n).find(|&i| f(i) <= lim)?;
     let hi = (0..n).rev().find(|&i| f(i) <= lim)?;
     Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
-}
-
-fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
-    bb[0] = bb[0].min(p[0]);
-    bb[1] = bb[1].min(p[1]);
-    bb[2] = bb[2].max(p[0]);
-    bb[3] = bb[3].max(p[1]);
 }

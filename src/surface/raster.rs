@@ -53,6 +53,10 @@ impl Tile {
     #[inline]
     pub fn triangle(&mut self, a: [f64; 3], b: [f64; 3], c: [f64; 3], cull_w: f64) {
         let rect = (self.i0, self.j0, self.w, self.h);
+        // What `cover` would return at once on, decided before the bounds below are.
+        if misses(rect, &[a, b, c], cull_w) {
+            return;
+        }
         let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
         let w = self.w;
         let mut occluded =
@@ -82,8 +86,8 @@ impl Tile {
                 }
                 true
             };
-        if let (Some((cols, rows)), Some(low)) =
-            (reach(rect, &a, &b, &c, cull_w), lower_bound(&a, &b, &c))
+        if let Some((cols, rows)) = reach(rect, &a, &b, &c, cull_w)
+            && let Some(low) = lower_bound(&a, &b, &c)
         {
             // Columns one node wider than the box: the edge crossings are rounded.
             let lc = (
@@ -108,6 +112,81 @@ impl Tile {
             }
         });
     }
+}
+
+impl Tile {
+    /// Rasterise the quads of a grid of points ([`Tile::triangle`] with `cull_w`): `ncols`
+    /// columns of `nl` points each, column after column; quad (c, i) is the triangles
+    /// (a_i, a_i+1, b_i+1) and (a_i, b_i+1, b_i) of columns a = c, b = c + 1. Quads are
+    /// taken in groups of [`GROUP`] × [`GROUP`]; a group whose points all lie above `cull_w`
+    /// or beyond one side of the tile is skipped whole, since [`cover`] would return at once
+    /// on each of its triangles (the same tests, on the group's bounds). The order of the
+    /// triangles changes, not the minimum each node keeps.
+    pub fn quads(&mut self, pts: &[[f64; 3]], ncols: usize, nl: usize, cull_w: f64) {
+        let rect = (self.i0, self.j0, self.w, self.h);
+        for c0 in (0..ncols.saturating_sub(1)).step_by(GROUP) {
+            let c1 = (c0 + GROUP).min(ncols - 1);
+            for i0 in (0..nl.saturating_sub(1)).step_by(GROUP) {
+                let i1 = (i0 + GROUP).min(nl - 1);
+                let group = (c0..=c1).flat_map(|c| pts[c * nl + i0..=c * nl + i1].iter().copied());
+                if misses_all(rect, group, cull_w) {
+                    continue;
+                }
+                for c in c0..c1 {
+                    let a = &pts[c * nl..(c + 1) * nl];
+                    let b = &pts[(c + 1) * nl..(c + 2) * nl];
+                    for i in i0..i1 {
+                        self.triangle(a[i], a[i + 1], b[i + 1], cull_w);
+                        self.triangle(a[i], b[i + 1], b[i], cull_w);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Quads per side of the groups of [`Tile::quads`].
+const GROUP: usize = 4;
+
+/// Whether [`cover`] returns at once for a triangle with these vertices: all above
+/// `cull_w`, or its box beyond one side of the tile `rect` (the tests `cover` begins with).
+#[inline]
+fn misses(rect: (usize, usize, usize, usize), v: &[[f64; 3]; 3], cull_w: f64) -> bool {
+    misses_all(rect, v.iter().copied(), cull_w)
+}
+
+/// [`misses`] for every triangle whose vertices are among `pts` (their bounds are within
+/// the bounds of all of them).
+#[inline]
+fn misses_all(
+    rect: (usize, usize, usize, usize),
+    pts: impl Iterator<Item = [f64; 3]>,
+    cull_w: f64,
+) -> bool {
+    let (i0, j0, w, h) = rect;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in pts {
+        lo = [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])];
+        hi = [hi[0].max(p[0]), hi[1].max(p[1])];
+    }
+    let tx0 = i0 as f64;
+    let ty0 = j0 as f64;
+    let tx1 = (i0 + w) as f64 - 1.0;
+    let ty1 = (j0 + h) as f64 - 1.0;
+    lo[2] > cull_w
+        || hi[0] < tx0 - EPS
+        || lo[0] > tx1 + EPS
+        || hi[1] < ty0 - EPS
+        || lo[1] > ty1 + EPS
+}
+
+/// Widen the node-space box `bb` (X0, Y0, X1, Y1) to hold `p`.
+pub(crate) fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
+    bb[0] = bb[0].min(p[0]);
+    bb[1] = bb[1].min(p[1]);
+    bb[2] = bb[2].max(p[0]);
+    bb[3] = bb[3].max(p[1]);
 }
 
 /// The largest height of block (bx, by) of a tile `w` nodes wide.
