@@ -23,6 +23,8 @@ pub(crate) struct Tile {
     dirty: Vec<bool>,
     /// Blocks per row.
     bw: usize,
+    /// The blocks the triangle being drawn has written (marked dirty when it is done).
+    written: Vec<usize>,
 }
 
 /// Side of the blocks of [`Tile`]'s occlusion bounds, nodes.
@@ -43,6 +45,7 @@ impl Tile {
             bmax: vec![f64::INFINITY; nb],
             dirty: vec![false; nb],
             bw,
+            written: Vec::new(),
         }
     }
 
@@ -100,17 +103,56 @@ impl Tile {
             if occluded(lc, lr, low, &z[..], big) {
                 return;
             }
-            for by in lr.0 / BLOCK..=lr.1 / BLOCK {
-                for bx in lc.0 / BLOCK..=lc.1 / BLOCK {
-                    dirty[by * bw + bx] = true;
-                }
-            }
         }
-        cover(rect, a, b, c, cull_w, |i, wv| {
-            if wv < z[i] {
-                z[i] = wv;
+        self.lower(a, b, c, cull_w);
+    }
+
+    /// Lower the nodes the triangle covers to its height, row by row in pieces of one
+    /// block: a piece whose lowest height (at one of its ends: the height is monotonic
+    /// along a row, rounding included) is not below its block's bound lowers no node and
+    /// is skipped. The bounds of the blocks written before this triangle are refreshed
+    /// when it first meets them; those it writes are marked afterwards.
+    fn lower(&mut self, a: [f64; 3], b: [f64; 3], c: [f64; 3], cull_w: f64) {
+        let rect = (self.i0, self.j0, self.w, self.h);
+        let (i0, j0, w) = (self.i0, self.j0, self.w);
+        let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
+        let written = &mut self.written;
+        written.clear();
+        spans(rect, a, b, c, cull_w, |row, c0, c1, base, gx| {
+            let r = row - j0;
+            let off = r * w;
+            let by = r / BLOCK;
+            let mut p0 = c0 - i0;
+            let last = c1 - i0;
+            while p0 <= last {
+                let blk = by * bw + p0 / BLOCK;
+                let p1 = ((p0 / BLOCK + 1) * BLOCK - 1).min(last);
+                let (w0, w1) = (base + gx * (i0 + p0) as f64, base + gx * (i0 + p1) as f64);
+                if dirty[blk] {
+                    bmax[blk] = block_max(z, w, blk % bw, blk / bw);
+                    dirty[blk] = false;
+                }
+                if w0.min(w1) < bmax[blk] {
+                    let mut x = (i0 + p0) as f64;
+                    let mut any = false;
+                    for i in off + p0..=off + p1 {
+                        let wv = base + gx * x;
+                        if wv < z[i] {
+                            z[i] = wv;
+                            any = true;
+                        }
+                        x += 1.0;
+                    }
+                    if any && !written.contains(&blk) {
+                        written.push(blk);
+                    }
+                }
+                p0 = p1 + 1;
             }
         });
+        for &blk in written.iter() {
+            dirty[blk] = true;
+        }
     }
 }
 
@@ -179,6 +221,19 @@ fn misses_all(
         || lo[0] > tx1 + EPS
         || hi[1] < ty0 - EPS
         || lo[1] > ty1 + EPS
+}
+
+/// Node rectangle (i0, j0, width, height) of tile `tid`.
+pub(crate) fn tile_rect(
+    tid: usize,
+    t: usize,
+    ntx: usize,
+    nx: usize,
+    ny: usize,
+) -> (usize, usize, usize, usize) {
+    let i0 = (tid % ntx) * t;
+    let j0 = (tid / ntx) * t;
+    (i0, j0, t.min(nx - i0), t.min(ny - j0))
 }
 
 /// Widen the node-space box `bb` (X0, Y0, X1, Y1) to hold `p`.
@@ -269,6 +324,29 @@ pub(crate) fn cover(
     cull_w: f64,
     mut f: impl FnMut(usize, f64),
 ) {
+    let (i0, j0, w, _) = rect;
+    spans(rect, a, b, c, cull_w, |row, c0, c1, base, gx| {
+        let off = (row - j0) * w;
+        let mut x = c0 as f64;
+        for i in off + c0 - i0..=off + c1 - i0 {
+            f(i, base + gx * x);
+            x += 1.0;
+        }
+    });
+}
+
+/// The rows of the tile that the triangle covers, each as `f(row, first column, last
+/// column, base, gx)`: the triangle's height at node (column X, row) is `base + gx · X`
+/// (X as `f64`), rows in order. Nothing when its lowest vertex is above `cull_w`.
+#[inline]
+fn spans(
+    rect: (usize, usize, usize, usize),
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+    cull_w: f64,
+    mut f: impl FnMut(usize, usize, usize, f64, f64),
+) {
     let (i0, j0, w, h) = rect;
     {
         if a[2].min(b[2]).min(c[2]) > cull_w {
@@ -342,12 +420,7 @@ pub(crate) fn cover(
             }
             let (c0, c1) = (c0 as usize, c1 as usize);
             let base = a[2] + gy * (y - a[1]) - gx * a[0];
-            let off = (row - j0) * w;
-            let mut x = c0 as f64;
-            for i in off + c0 - i0..=off + c1 - i0 {
-                f(i, base + gx * x);
-                x += 1.0;
-            }
+            f(row, c0, c1, base, gx);
         }
     }
 }
