@@ -909,13 +909,15 @@ impl Setup<'_> {
             self.plough_tile(&mut tile, strips, list, cull, &mut cols);
             self.opts.process.min_chip_mm
         } else {
-            // Nearest first, so that later strips meet low bounds (the minimum is the same).
-            let (cx, cy) = ((i0 + w / 2) as f64, (j0 + h / 2) as f64);
-            let mut order: Vec<(f64, u32)> = (list.iter())
-                .map(|&si| (self.strip_key(&strips[si as usize], cx, cy), si))
-                .collect();
-            order.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-            for (_, si) in order {
+            // Dome strips nearest first, so that later ones meet low bounds (same minimum).
+            let mut order = list.to_vec();
+            if self.opts.model == Model::Dome {
+                let (cx, cy) = ((i0 + w / 2) as f64, (j0 + h / 2) as f64);
+                let key = |si: &u32| self.strip_key(&strips[*si as usize], cx, cy);
+                // (A distance ≥ 0: its bits order as its value.)
+                order.sort_by_cached_key(|si| (key(si).to_bits(), *si));
+            }
+            for si in order {
                 self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
             }
             0.0
