@@ -4,7 +4,7 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// Off a terminal, nothing is printed before a run has lasted this long (short commands
@@ -20,7 +20,9 @@ const LINE_EVERY: Duration = Duration::from_secs(5);
 /// `study` run by run).
 pub struct Phases {
     bar: Option<ProgressBar>,
-    lines: Option<Mutex<Lines>>,
+    /// The plain lines, shared with a thread that prints a due line while a long step of
+    /// the work reports nothing.
+    lines: Option<Arc<Mutex<Lines>>>,
 }
 
 /// The state of the plain lines.
@@ -31,6 +33,11 @@ struct Lines {
     phase_start: Instant,
     /// When a line was last printed (`None`: none yet in this phase).
     last: Option<Instant>,
+    /// The last count reported in this phase (`total` 0: none).
+    done: u64,
+    total: u64,
+    /// Finished: the thread stops.
+    stopped: bool,
 }
 
 impl Lines {
@@ -87,18 +94,41 @@ impl Phases {
     pub fn new() -> Self {
         if !std::io::stderr().is_terminal() {
             let off = std::env::var("CREST_PROGRESS").is_ok_and(|v| v == "off" || v == "0");
+            if off {
+                return Self {
+                    bar: None,
+                    lines: None,
+                };
+            }
             let now = Instant::now();
+            let lines = Arc::new(Mutex::new(Lines {
+                start: now,
+                phase: String::new(),
+                unit: String::new(),
+                phase_start: now,
+                last: None,
+                done: 0,
+                total: 0,
+                stopped: false,
+            }));
+            let shared = Arc::clone(&lines);
+            // Wakes every second; a due line is printed even while no step finishes.
+            std::thread::spawn(move || {
+                loop {
+                    std::thread::sleep(Duration::from_secs(1));
+                    let mut l = shared.lock().unwrap_or_else(|e| e.into_inner());
+                    if l.stopped {
+                        break;
+                    }
+                    let (done, total) = (l.done, l.total);
+                    if let Some(text) = l.due(done, total, Instant::now()) {
+                        eprintln!("{text}");
+                    }
+                }
+            });
             return Self {
                 bar: None,
-                lines: (!off).then(|| {
-                    Mutex::new(Lines {
-                        start: now,
-                        phase: String::new(),
-                        unit: String::new(),
-                        phase_start: now,
-                        last: None,
-                    })
-                }),
+                lines: Some(lines),
             };
         }
         let b = ProgressBar::new_spinner();
@@ -123,11 +153,15 @@ impl Phases {
         }
     }
 
-    /// Remove the bar.
+    /// Remove the bar; stop the lines.
     pub fn finish(&self) {
         if let Some(b) = &self.bar {
             b.finish_and_clear();
         }
+        self.line(|l| {
+            l.stopped = true;
+            None
+        });
     }
 
     fn line(&self, f: impl FnOnce(&mut Lines) -> Option<String>) {
@@ -147,6 +181,7 @@ impl crest::pipeline::Progress for Phases {
             l.unit = unit.to_string();
             l.phase_start = now;
             l.last = None;
+            (l.done, l.total) = (0, 0);
             l.due(0, 0, now)
         });
         let Some(b) = &self.bar else { return };
@@ -163,7 +198,10 @@ impl crest::pipeline::Progress for Phases {
     }
 
     fn advance(&self, done: u64, total: u64) {
-        self.line(|l| l.due(done, total, Instant::now()));
+        self.line(|l| {
+            (l.done, l.total) = (done, total);
+            l.due(done, total, Instant::now())
+        });
         let Some(b) = &self.bar else { return };
         if total > 0 && b.length() != Some(total) {
             if b.length().unwrap_or(0) == 0 {
@@ -191,6 +229,9 @@ mod tests {
             unit: "tiles".into(),
             phase_start: at,
             last: None,
+            done: 0,
+            total: 0,
+            stopped: false,
         }
     }
 
