@@ -135,10 +135,10 @@ impl Tile {
                 if w0.min(w1) < bmax[blk] {
                     let mut x = (i0 + p0) as f64;
                     let mut any = false;
-                    for i in off + p0..=off + p1 {
+                    for zi in &mut z[off + p0..=off + p1] {
                         let wv = base + gx * x;
-                        if wv < z[i] {
-                            z[i] = wv;
+                        if wv < *zi {
+                            *zi = wv;
                             any = true;
                         }
                         x += 1.0;
