@@ -10,7 +10,8 @@
 //!
 //! The spindle speed and feed come from the options, else from `process.toml`, else from
 //! the file's SPINDL/FEDRAT. The feed per tooth is `--fz-mm` (or `fz_mm`), else
-//! feed / (Z · rpm). A progress bar is drawn on stderr when it is a terminal.
+//! feed / (Z · rpm). Progress goes to stderr (`cli::progress::Phases`: a bar on a terminal,
+//! plain lines elsewhere once the run is long).
 
 use super::Outcome;
 use clap::ValueEnum;

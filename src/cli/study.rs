@@ -11,8 +11,8 @@
 //! created if needed and `runs.csv`, `effects.csv`, `effects.svg` (001 Fig 11) and, for each
 //! factor with more than two levels, `effects-<factor>.svg` (001 Fig 12) are written, all
 //! or none (`crest::io::output::Outputs`); a blocked name (a folder in its place) is refused
-//! before the first run. A progress bar is drawn on stderr when it is a
-//! terminal.
+//! before the first run. Progress goes to stderr (a bar on a terminal, plain lines
+//! elsewhere once the run is long).
 //!
 //! With `--shard K/N` only runs K, K+N, … are simulated and their results written as JSON
 //! lines (`crest::pipeline::tasks::TaskResult`) to `DIR/shard-K-of-N.jsonl`; `crest merge`

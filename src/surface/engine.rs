@@ -13,7 +13,8 @@
 use super::grid::{GridFrame, Nominal, grid_contacts};
 use super::process::{TextureField, apply_pass};
 use super::profile::Profile;
-use super::raster::{Tile, cover};
+use super::profile::scan_candidates;
+use super::raster::{Tile, cover, grow, tile_rect};
 use super::{GridSpec, HeightMap, Model, Options, Reference, Simulation, SurfaceError};
 use crate::math::{Frame, Point3, Vec3, nlerp};
 use crate::resample::Sample;
@@ -475,19 +476,6 @@ fn patch_frame(samples: &[Sample], s_mm: f64) -> Result<GridFrame, SurfaceError>
     })
 }
 
-/// Node rectangle (i0, j0, width, height) of tile `tid`.
-fn tile_rect(
-    tid: usize,
-    t: usize,
-    ntx: usize,
-    nx: usize,
-    ny: usize,
-) -> (usize, usize, usize, usize) {
-    let i0 = (tid % ntx) * t;
-    let j0 = (tid / ntx) * t;
-    (i0, j0, t.min(nx - i0), t.min(ny - j0))
-}
-
 impl Setup<'_> {
     /// The pose at fraction `u` from sample `k` towards `k + 1` (angle included for ICE).
     fn pose(&self, k: usize, u: f64, with_angle: bool) -> Pose {
@@ -737,7 +725,6 @@ impl Setup<'_> {
         let m22 = base.m[(2, 2)];
         // W(φ) = c + r (a sin φ + b cos φ) is lowest at φ* (where it equals c − r amp).
         let phi_star = -0.5 * PI - b.atan2(a);
-        let mut pts: Vec<[f64; 3]> = Vec::new();
         for j in 0..self.cutter_teeth {
             if self.dome_repeat[j] {
                 continue;
@@ -788,20 +775,8 @@ impl Setup<'_> {
             let mut c0 = m0;
             while c0 < m1 {
                 let c1 = (c0 + DOME_CHUNK).min(m1);
-                let mut bb = [
-                    f64::INFINITY,
-                    f64::INFINITY,
-                    f64::NEG_INFINITY,
-                    f64::NEG_INFINITY,
-                ];
-                for m in c0..=c1 {
-                    let p = base.rotated(m as f64 * step);
-                    pts.clear();
-                    pts.extend(body[lo..=hi].iter().map(|e| p.apply(e)));
-                    for q in &pts {
-                        grow(&mut bb, q);
-                    }
-                }
+                let (t0, t1) = (c0 as f64 * step, c1 as f64 * step);
+                let bb = super::envelope::dome_box(&base.m, &base.b, &body[lo..=hi], t0, t1);
                 strips.push(Strip {
                     k: k as u32,
                     a: c0,
@@ -934,7 +909,15 @@ impl Setup<'_> {
             self.plough_tile(&mut tile, strips, list, cull, &mut cols);
             self.opts.process.min_chip_mm
         } else {
-            for &si in list {
+            // Dome strips nearest first, so that later ones meet low bounds (same minimum).
+            let mut order = list.to_vec();
+            if self.opts.model == Model::Dome {
+                let (cx, cy) = ((i0 + w / 2) as f64, (j0 + h / 2) as f64);
+                let key = |si: &u32| self.strip_key(&strips[*si as usize], cx, cy);
+                // (A distance ≥ 0: its bits order as its value.)
+                order.sort_by_cached_key(|si| (key(si).to_bits(), *si));
+            }
+            for si in order {
                 self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
             }
             0.0
@@ -1101,8 +1084,29 @@ impl Setup<'_> {
         out
     }
 
+    /// How far (squared, nodes) the lowest point of strip `s`'s body or edge lies from (cx, cy).
+    fn strip_key(&self, s: &Strip, cx: f64, cy: f64) -> f64 {
+        let p = self.pose(s.k as usize, 0.0, false);
+        let body = self.profile.body[s.tooth as usize].get(s.lo as usize..=s.hi as usize);
+        let [x, y] = super::envelope::lowest_xy(&p.m, &p.b, body.unwrap_or_default());
+        (x - cx).powi(2) + (y - cy).powi(2)
+    }
+
     fn raster_strip(&self, s: &Strip, tile: &mut Tile, cull: f64, cols: &mut Scratch) {
-        self.strip_triangles(s, cols, |a, b, c| tile.triangle(a, b, c, cull));
+        let mut s = *s;
+        if self.opts.model == Model::Dome {
+            // Only the angles and levels with a corner below the tile's cull.
+            let base = self.pose(s.k as usize, 0.0, false);
+            let body = &self.profile.body[s.tooth as usize][s.lo as usize..=s.hi as usize];
+            let step = TAU / f64::from(s.n);
+            let low = super::envelope::dome_low(&base.m, base.b.z, body, (s.a, s.b), step, cull);
+            let Some(((a, b), (l0, l1))) = low else {
+                return;
+            };
+            (s.a, s.b, s.hi, s.lo) = (a, b, s.lo + l1 as u16, s.lo + l0 as u16);
+        }
+        let (ncols, nl) = self.strip_points(&s, cols);
+        tile.quads(&cols.pts, ncols, nl, cull);
     }
 
     /// The triangles of strip `s`, in order (`scratch`: space for the points and the last
@@ -1113,6 +1117,21 @@ impl Setup<'_> {
         scratch: &mut Scratch,
         mut tri: impl FnMut([f64; 3], [f64; 3], [f64; 3]),
     ) {
+        let (ncols, nl) = self.strip_points(s, scratch);
+        let cols = &scratch.pts;
+        for c in 0..ncols - 1 {
+            let a = &cols[c * nl..(c + 1) * nl];
+            let b = &cols[(c + 1) * nl..(c + 2) * nl];
+            for i in 0..nl - 1 {
+                tri(a[i], a[i + 1], b[i + 1]);
+                tri(a[i], b[i + 1], b[i]);
+            }
+        }
+    }
+
+    /// The points of strip `s` into `scratch.pts`, column by column (a pose or angle per
+    /// column, `nl` levels each); returns (columns, levels).
+    fn strip_points(&self, s: &Strip, scratch: &mut Scratch) -> (usize, usize) {
         let k = s.k as usize;
         let (lo, hi) = (s.lo as usize, s.hi as usize);
         let j = s.tooth as usize;
@@ -1149,15 +1168,7 @@ impl Setup<'_> {
             }
             Model::Swept => unreachable!("the swept model has no triangles"),
         };
-        let nl = hi - lo + 1;
-        for c in 0..ncols - 1 {
-            let a = &cols[c * nl..(c + 1) * nl];
-            let b = &cols[(c + 1) * nl..(c + 2) * nl];
-            for i in 0..nl - 1 {
-                tri(a[i], a[i + 1], b[i + 1]);
-                tri(a[i], b[i + 1], b[i]);
-            }
-        }
+        (ncols, hi - lo + 1)
     }
 }
 
@@ -1179,19 +1190,4 @@ impl Default for Scratch {
             poses: [((u32::MAX, 0, 0, false), none); 2],
         }
     }
-}
-
-/// [`Setup::candidates`] for levels along a meridian that is not convex: every level is
-/// tested, the range runs from the first to the last within `lim` (one more each side).
-fn scan_candidates(f: &dyn Fn(usize) -> f64, n: usize, lim: f64) -> Option<(usize, usize)> {
-    let lo = (0..n).find(|&i| f(i) <= lim)?;
-    let hi = (0..n).rev().find(|&i| f(i) <= lim)?;
-    Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
-}
-
-fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
-    bb[0] = bb[0].min(p[0]);
-    bb[1] = bb[1].min(p[1]);
-    bb[2] = bb[2].max(p[0]);
-    bb[3] = bb[3].max(p[1]);
 }

@@ -25,6 +25,7 @@
 
 pub mod cull;
 mod engine;
+mod envelope;
 pub(crate) mod grid;
 mod heightmap;
 pub mod map;

@@ -194,6 +194,18 @@ impl Profile {
     }
 }
 
+/// The engine's candidate levels for levels along a meridian that is not convex: every level is
+/// tested, the range runs from the first to the last within `lim` (one more each side).
+pub(crate) fn scan_candidates(
+    f: &dyn Fn(usize) -> f64,
+    n: usize,
+    lim: f64,
+) -> Option<(usize, usize)> {
+    let lo = (0..n).find(|&i| f(i) <= lim)?;
+    let hi = (0..n).rev().find(|&i| f(i) <= lim)?;
+    Some((lo.saturating_sub(1), (hi + 1).min(n - 1)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
