@@ -83,14 +83,14 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
     let mesh = stl.then(|| crest::pipeline::contact::contact_mesh(&run.program));
-    if let Some(m) = &mesh {
-        if m.mesh.triangles.is_empty() {
-            return Err(miette::miette!(
-                "{}: the contacts make no triangle (one pass, or no neighbouring passes): no surface to write to {}",
-                args.file.display(),
-                args.output.display()
-            ));
-        }
+    if let Some(m) = &mesh
+        && m.mesh.triangles.is_empty()
+    {
+        return Err(miette::miette!(
+            "{}: the contacts make no triangle (one pass, or no neighbouring passes): no surface to write to {}",
+            args.file.display(),
+            args.output.display()
+        ));
     }
     crest::io::write_atomic(&args.output, |w| {
         if let Some(m) = &mesh {

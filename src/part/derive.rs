@@ -73,12 +73,15 @@ impl Inconsistency {
     }
 }
 
+/// A derived contact: the point and the unit normal, `None` where there is none.
+pub type Contact = Option<(Point3, Vec3)>;
+
 /// Contacts derived from a path.
 #[derive(Debug, Clone, Default)]
 pub struct Derived {
     /// Per pose: contact point and unit normal; `None` where the neighbourhood does not
     /// span a surface or the contact is inconsistent.
-    pub contacts: Vec<Option<(Point3, Vec3)>>,
+    pub contacts: Vec<Contact>,
     /// Per pose: why its contact was left out, when it was inconsistent.
     pub flags: Vec<Option<Inconsistency>>,
 }
@@ -198,7 +201,7 @@ pub fn derive(cutter: &Cutter, poses: &[(Point3, Vec3)], joined: &[bool], cell_m
     let Some(cloud) = last_tree else {
         return out;
     };
-    let checked: Vec<(Option<(Point3, Vec3)>, Option<Inconsistency>)> = (0..poses.len())
+    let checked: Vec<(Contact, Option<Inconsistency>)> = (0..poses.len())
         .into_par_iter()
         .map(|i| {
             let Some(n) = normals[i] else {

@@ -146,7 +146,7 @@ fn rounded(tip: V, axis: V) -> Pose {
 /// The cut postures of pass `k` in cutting order, and its feed direction (±x).
 fn pass(tool: &Tool, k: usize) -> (Vec<Pose>, f64) {
     let y = Y0 + k as f64 * tool.stepover;
-    let dir = if k % 2 == 0 { 1.0 } else { -1.0 };
+    let dir = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     let n_pts = (X_END / DX).round() as usize;
     let mut out = Vec::with_capacity(n_pts + 1);
     for i in 0..=n_pts {
@@ -434,7 +434,7 @@ fn reference_um(tool: &Tool, poses: &[Pose], p: V, w: V) -> Option<f64> {
             best = best.min(t);
         }
     }
-    best.is_finite().then(|| (best - ts) * 1e3)
+    best.is_finite().then_some((best - ts) * 1e3)
 }
 
 /// A seeded generator (SplitMix64) for the points: the same points on every run.
