@@ -79,10 +79,7 @@ pub(crate) fn map_tasks<'py>(
     let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
     let req = request_of(
         abs(file),
-        tool_source(tool)?.map(|t| match t {
-            ToolSource::File(p) => ToolSource::File(abs(p)),
-            text => text,
-        }),
+        absolute_tool(tool_source(tool)?),
         None,
         None,
         None,
@@ -110,6 +107,14 @@ pub(crate) fn map_tasks<'py>(
     let tasks = crest::pipeline::tasks::map::map_tasks(&req, tasks).map_err(err)?;
     let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
     json_loads(py, &text)
+}
+
+/// A tool file made absolute (tasks run in other processes, maybe elsewhere).
+fn absolute_tool(tool: Option<ToolSource>) -> Option<ToolSource> {
+    tool.map(|t| match t {
+        ToolSource::File(p) => ToolSource::File(std::path::absolute(&p).unwrap_or(p)),
+        text => text,
+    })
 }
 
 /// The patch tasks of a roughness atlas (`crest atlas`, the same options): `tasks` plain
@@ -145,10 +150,7 @@ pub(crate) fn atlas_tasks<'py>(
     let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
     let simulate = request_of(
         abs(file),
-        tool_source(tool)?.map(|t| match t {
-            ToolSource::File(p) => ToolSource::File(abs(p)),
-            text => text,
-        }),
+        absolute_tool(tool_source(tool)?),
         None,
         None,
         Some([0.0; 3]),

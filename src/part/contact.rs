@@ -13,6 +13,7 @@
 //! profile [`touch_supported`] says no and the caller must not ask.
 
 use super::Part;
+use super::derive::basis;
 use crate::math::{Point3, Vec3};
 use crate::tool::Cutter;
 
@@ -26,12 +27,6 @@ pub struct Touch {
     /// Distance from the cutter body to the part, mm: positive = clearance (air), negative =
     /// penetration (gouge).
     pub clearance_mm: f64,
-}
-
-/// Two unit vectors perpendicular to `a` and each other.
-fn basis(a: &Vec3) -> (Vec3, Vec3) {
-    let e1 = crate::math::any_perpendicular(a);
-    (e1, a.cross(&e1))
 }
 
 /// Whether [`touch`] knows the cutter's core (every shape but a profile).

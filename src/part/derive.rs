@@ -118,7 +118,7 @@ fn flat_radial(n: &Vec3, a: &Vec3, rd: f64) -> Vec3 {
 }
 
 /// Two unit vectors perpendicular to `a` and each other.
-fn basis(a: &Vec3) -> (Vec3, Vec3) {
+pub(super) fn basis(a: &Vec3) -> (Vec3, Vec3) {
     let e1 = any_perpendicular(a);
     (e1, a.cross(&e1))
 }

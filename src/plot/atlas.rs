@@ -64,32 +64,7 @@ impl Draw for AtlasChart<'_> {
                 Cross::new((x, y), 4, colour.stroke_width(1))
             },
         ))?;
-        let mut scale = ChartBuilder::on(&bar)
-            .margin_top(14)
-            .margin_bottom(69)
-            .margin_right(10)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..1.0, lo..hi.max(lo + 1e-9))?;
-        let dz = tick_decimals(hi - lo);
-        let fz = move |v: &f64| tick_label(*v, dz);
-        scale
-            .configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .y_label_formatter(&fz)
-            .y_desc(self.label)
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .draw()?;
-        let n = 128;
-        scale.draw_series((0..n).map(|i| {
-            let a = lo + (hi - lo) * i as f64 / n as f64;
-            let b = lo + (hi - lo) * (i + 1) as f64 / n as f64;
-            Rectangle::new(
-                [(0.0, a), (1.0, b)],
-                viridis((i as f64 + 0.5) / n as f64).filled(),
-            )
-        }))?;
+        super::heightmap::colour_bar(&bar, lo, hi.max(lo + 1e-9), self.label)?;
         Ok(())
     }
 }

@@ -130,33 +130,44 @@ impl Draw for MapChart<'_> {
             })
         }))?;
 
-        // Colour scale bar.
-        let mut scale = ChartBuilder::on(&bar)
-            .margin_top(14)
-            .margin_bottom(69)
-            .margin_right(10)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..1.0, lo..hi)?;
-        let dz = tick_decimals(hi - lo);
-        let fz = move |v: &f64| tick_label(*v, dz);
-        scale
-            .configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .y_label_formatter(&fz)
-            .y_desc("height [µm], 0 = reference surface")
-            .axis_desc_style(label_font())
-            .label_style(tick_font())
-            .draw()?;
-        let n = 128;
-        scale.draw_series((0..n).map(|i| {
-            let a = lo + (hi - lo) * i as f64 / n as f64;
-            let b = lo + (hi - lo) * (i + 1) as f64 / n as f64;
-            let color = viridis((i as f64 + 0.5) / n as f64);
-            Rectangle::new([(0.0, a), (1.0, b)], color.filled())
-        }))?;
+        colour_bar(&bar, lo, hi, "height [µm], 0 = reference surface")?;
         Ok(())
     }
+}
+
+/// The viridis scale bar of a colour map, from `lo` to `hi`, labelled `label`, drawn in
+/// `bar` (the strip beside the map).
+pub(super) fn colour_bar<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    lo: f64,
+    hi: f64,
+    label: &str,
+) -> DrawResult<DB> {
+    let mut scale = ChartBuilder::on(bar)
+        .margin_top(14)
+        .margin_bottom(69)
+        .margin_right(10)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..1.0, lo..hi)?;
+    let dz = tick_decimals(hi - lo);
+    let fz = move |v: &f64| tick_label(*v, dz);
+    scale
+        .configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_label_formatter(&fz)
+        .y_desc(label)
+        .axis_desc_style(label_font())
+        .label_style(tick_font())
+        .draw()?;
+    let n = 128;
+    scale.draw_series((0..n).map(|i| {
+        let a = lo + (hi - lo) * i as f64 / n as f64;
+        let b = lo + (hi - lo) * (i + 1) as f64 / n as f64;
+        let color = viridis((i as f64 + 0.5) / n as f64);
+        Rectangle::new([(0.0, a), (1.0, b)], color.filled())
+    }))?;
+    Ok(())
 }
 
 /// Draw `map` as a colour map to `path` (SVG or PNG). The picture keeps the map's aspect
