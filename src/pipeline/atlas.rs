@@ -12,6 +12,7 @@
 //! length L (of its contact points), n = ⌊L / D⌋ patches D apart, centred on the pass
 //! (the first at (L − (n − 1) D) / 2). Patch k of the atlas is row k in this order.
 
+use super::prepare::Prepared;
 use super::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crate::math::{Point3, Vec3};
 use crate::study::atlas::{self, AtlasRow};
@@ -266,8 +267,20 @@ pub struct Placement {
     pub corner_radius_mm: f64,
 }
 
-/// Check the request and place its patches.
-pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
+/// The request of the simulation every patch shares (its grid a patch at the origin).
+fn shared_request(req: &AtlasRequest) -> SimulateRequest {
+    let (length_mm, width_mm) = req.patch_mm.unwrap_or((1.0, 1.0));
+    let mut sim = req.simulate.clone();
+    sim.grid = GridRequest::PatchNear {
+        point: [0.0; 3],
+        length_mm,
+        width_mm,
+    };
+    sim
+}
+
+/// Check the request and place its patches on the path `prep` read.
+pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placement> {
     let d = req.every_mm;
     if !(d.is_finite() && d > 0.0) {
         return Err(miette!(
@@ -281,29 +294,11 @@ pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
         return Err(miette!("--patch-mm must be positive, got {l},{w}"));
     }
     let sim = &req.simulate;
-    let lower = crate::toolpath::LowerOptions {
-        apply_msys: sim.absolute,
-        ..Default::default()
-    };
-    let read = crate::io::toolpath::ReadOptions {
-        lower,
-        machine: None,
-        rtcp: sim.rtcp,
-    };
-    let mut program = crate::io::toolpath::read_program_with(&sim.file, read)?;
-    sim.moves.apply(&mut program);
-    let (cutter, _, _) = super::inputs::resolve_cutter(
-        sim.tool.as_ref(),
-        &program,
-        &sim.file,
-        sim.teeth,
-        sim.helix_deg,
-    )?;
-    let process = match &sim.process {
-        Some(p) => super::load_process(p)?,
-        None => crate::config::ProcessConfig::default(),
-    };
-    let cutting = super::simulate::resolve_cutting(sim, &process, &program, cutter.teeth())?;
+    // Regions from the path as read (contacts derived for the simulation taken off again).
+    let mut program = prep.program.clone();
+    for &(pi, i) in prep.derived.iter().flat_map(|d| &d.given) {
+        program.paths[pi].postures[i].contact = None;
+    }
     let mut regions: Vec<Vec<_>> = program
         .paths
         .iter()
@@ -338,21 +333,26 @@ pub fn placement(req: &AtlasRequest) -> miette::Result<Placement> {
         .flat_map(|p| p.postures.iter())
         .any(|p| p.motion == MotionKind::Cut && p.contact.is_some());
     if !has_contacts {
-        super::contact::derive_contacts(&mut program, &cutter);
+        if prep.derived.is_some() {
+            program = prep.program.clone();
+        } else {
+            super::contact::derive_contacts(&mut program, &prep.cutter);
+        }
     }
     let sites = place(&program, &regions, d);
     Ok(Placement {
         program,
         sites,
         regions: count,
-        fz_mm: cutting.fz_mm,
-        corner_radius_mm: cutter.corner_radius_mm(),
+        fz_mm: prep.cutting.fz_mm,
+        corner_radius_mm: prep.cutter.corner_radius_mm(),
     })
 }
 
 /// Simulate and measure the patch at `site` (patch number `patch`, 1-based).
 pub fn run_patch(
     req: &AtlasRequest,
+    prep: &Prepared,
     placed: &Placement,
     patch: usize,
     site: &Site,
@@ -408,7 +408,7 @@ pub fn run_patch(
         nodes_cut: 0,
         warnings: Vec::new(),
     };
-    match super::simulate::simulate(&sim, &super::Silent) {
+    match super::simulate::simulate_prepared(&sim, prep, None, &super::Silent) {
         Err(e) => {
             row.warnings.push(e.to_string());
             (row, None)
@@ -464,8 +464,8 @@ pub fn run(
     shard: Option<(usize, usize)>,
     progress: &dyn super::Progress,
 ) -> miette::Result<Atlas> {
-    progress.phase(&format!("reading {}", req.simulate.file.display()), "");
-    let placed = placement(req)?;
+    let prep = super::prepare::prepare(&shared_request(req), progress)?;
+    let placed = placement(req, &prep)?;
     let total = placed.sites.len();
     if total == 0 {
         return Err(miette!(
@@ -482,17 +482,23 @@ pub fn run(
     progress.phase("simulating patches", "patches");
     let mut rows = Vec::with_capacity(mine.len());
     let mut warnings: Vec<String> = Vec::new();
-    for (done, &i) in mine.iter().enumerate() {
-        let (row, run) = run_patch(req, &placed, i + 1, &placed.sites[i]);
-        if let Some(run) = run {
-            for w in run.warnings {
-                if !run.failed_checks.contains(&w) && !warnings.contains(&w) {
+    let done = std::sync::atomic::AtomicU64::new(0);
+    // Patches side by side (a small patch has too few tiles to keep the cores busy).
+    let runs = atlas::each_patch(&mine, |i| {
+        let (row, run) = run_patch(req, &prep, &placed, i + 1, &placed.sites[i]);
+        let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress.advance(n, mine.len() as u64);
+        (row, run.map(|r| (r.warnings, r.failed_checks)))
+    });
+    for (row, run) in runs {
+        if let Some((run_warnings, failed)) = run {
+            for w in run_warnings {
+                if !failed.contains(&w) && !warnings.contains(&w) {
                     warnings.push(w);
                 }
             }
         }
         rows.push(row);
-        progress.advance(done as u64 + 1, mine.len() as u64);
     }
     Ok(Atlas {
         file: req.simulate.file.display().to_string(),

@@ -219,6 +219,8 @@ pub const DERIVE_CELL_MM: f64 = 0.1;
 pub struct DerivedContacts {
     /// Cutting postures that got a contact.
     pub with_contact: usize,
+    /// The postures that got a contact: (path, posture).
+    pub given: Vec<(usize, usize)>,
     /// Cutting postures whose derived contact is inconsistent with the cutter and was left
     /// out: (path, posture, why).
     pub inconsistent: Vec<(usize, usize, Inconsistency)>,
@@ -243,6 +245,49 @@ impl DerivedContacts {
             self.inconsistent.len(),
             self.with_contact + self.inconsistent.len(),
             reasons.join("; ")
+        ))
+    }
+
+    /// A failed check when postures left out as inconsistent reach the grid of `sim`: the
+    /// reference surface there is not the one the cutter touched. A posture reaches it
+    /// when its lowest point along the grid's normal (its contact, were the surface level
+    /// there) lies over the grid and within `TOUCH_MM` of its plane.
+    pub fn reaching(
+        &self,
+        sim: &crate::surface::Simulation,
+        program: &Program,
+        paths: &[usize],
+        cutter: &crate::tool::Cutter,
+    ) -> Option<String> {
+        const TOUCH_MM: f64 = 0.5;
+        let (centre, w) = sim.node_point(sim.map.nx / 2, sim.map.ny / 2);
+        let half =
+            0.5e-3 * (sim.map.nx as f64 * sim.map.dx_um).hypot(sim.map.ny as f64 * sim.map.dy_um);
+        let rc = cutter.corner_radius_mm();
+        let rd = cutter.radius_mm - rc;
+        let reaching: Vec<_> = self
+            .inconsistent
+            .iter()
+            .filter(|(pi, _, _)| paths.contains(pi))
+            .filter(|(pi, i, _)| {
+                let p = &program.paths[*pi].postures[*i];
+                let a = p.axis.normalize();
+                let lowest =
+                    p.position + a * rc + crate::part::derive::radial(&w, &a) * rd - w * rc;
+                let d = lowest - centre;
+                let up = d.dot(&w);
+                up.abs() <= TOUCH_MM && (d - w * up).norm() <= half + TOUCH_MM
+            })
+            .collect();
+        let (pi, i, why) = reaching.first()?;
+        let p = &program.paths[*pi].postures[*i];
+        Some(format!(
+            "{} postures whose derived contact is inconsistent reach the grid (the first at {:.4},{:.4},{:.4}: {}): the reference surface there is not the one the cutter touched; give the part (--part PART.stl)",
+            reaching.len(),
+            p.position.x,
+            p.position.y,
+            p.position.z,
+            why.describe()
         ))
     }
 }
@@ -277,6 +322,7 @@ pub fn derive_contacts(program: &mut Program, cutter: &crate::tool::Cutter) -> D
                     normal_derived: true,
                 });
                 out.with_contact += 1;
+                out.given.push((pi, i));
             }
             if let Some(why) = got.flags[k] {
                 out.inconsistent.push((pi, i, why));

@@ -161,6 +161,45 @@ impl Curve {
         }
     }
 
+    /// A box that holds every point of the curve (lower, upper corner): the ends of a
+    /// line, the cylinder of an arc or helix, the control points of a Hermite curve
+    /// (its Bézier form lies in their convex hull).
+    pub(crate) fn bounds(&self) -> (Point3, Point3) {
+        let hull = |pts: &[Point3]| {
+            let mut lo = pts[0];
+            let mut hi = pts[0];
+            for p in &pts[1..] {
+                lo = lo.inf(p);
+                hi = hi.sup(p);
+            }
+            (lo, hi)
+        };
+        match *self {
+            Curve::Line { p0, dir, len } => hull(&[p0, p0 + dir * len]),
+            Curve::Arc {
+                centre,
+                r0,
+                dr,
+                h0,
+                dh,
+                sweep,
+                ..
+            } => {
+                let reach =
+                    r0.abs().max((r0 + dr * sweep).abs()) + h0.abs().max((h0 + dh * sweep).abs());
+                let r = Vec3::repeat(reach);
+                (centre - r, centre + r)
+            }
+            Curve::Hermite { p0, p1, m0, m1, .. } => hull(&[p0, p0 + m0 / 3.0, p1 - m1 / 3.0, p1]),
+        }
+    }
+
+    /// Whether the curve may come into the box `lo`…`hi` (false only when it cannot).
+    pub(crate) fn may_meet(&self, lo: &Point3, hi: &Point3) -> bool {
+        let (a, b) = self.bounds();
+        (0..3).all(|k| a[k] <= hi[k] && b[k] >= lo[k])
+    }
+
     /// The curve parameter u ∈ [0, 1] at arc length σ (clamped).
     pub(crate) fn param(&self, sigma: f64) -> f64 {
         match self {

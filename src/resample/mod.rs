@@ -67,7 +67,7 @@ mod walker;
 
 pub use estimate::{PathExtent, estimate_samples};
 pub use spindle::{SpindleScan, SpindleSource};
-pub use stream::{Resampler, resample, resample_with};
+pub use stream::{Resampler, resample, resample_streamed, resample_with};
 
 use crate::math::{Point3, Vec3};
 use thiserror::Error;
@@ -97,6 +97,58 @@ pub struct Sample {
     pub feed_dir: Vec3,
     /// Local feed, mm/min.
     pub feed_mm_min: f64,
+}
+
+/// A sample of a move that cannot come near [`Options::near`]: its clock only (the
+/// values a built [`Sample`] would carry).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Far {
+    /// Index of the cutting run.
+    pub run: usize,
+    /// Arc length, mm.
+    pub s_mm: f64,
+    /// Time, s.
+    pub t_s: f64,
+    /// Spindle angle θ, rad.
+    pub theta_rad: f64,
+    /// Local feed, mm/min.
+    pub feed_mm_min: f64,
+}
+
+/// What a resampling hands on: a built sample, or the clock of one far from
+/// [`Options::near`].
+#[derive(Debug, Clone, Copy)]
+pub enum Streamed<'a> {
+    /// A sample with its pose.
+    Sample(&'a Sample),
+    /// A sample of a move that cannot come near the box.
+    Far(&'a Far),
+}
+
+impl Streamed<'_> {
+    /// Index of the cutting run.
+    pub fn run(&self) -> usize {
+        match self {
+            Streamed::Sample(s) => s.run,
+            Streamed::Far(f) => f.run,
+        }
+    }
+
+    /// Time, s.
+    pub fn t_s(&self) -> f64 {
+        match self {
+            Streamed::Sample(s) => s.t_s,
+            Streamed::Far(f) => f.t_s,
+        }
+    }
+
+    /// Local feed, mm/min.
+    pub fn feed_mm_min(&self) -> f64 {
+        match self {
+            Streamed::Sample(s) => s.feed_mm_min,
+            Streamed::Far(f) => f.feed_mm_min,
+        }
+    }
 }
 
 /// How samples are spaced.
@@ -144,6 +196,11 @@ pub struct Options {
     /// Take the spindle speed from the path's SPINDL (after [`Options::rpm`]) and never
     /// derive it from the feed: for a Δθ resampling whose feed per tooth is not known.
     pub spindle_from_path: bool,
+    /// Build only the samples of moves that may come into this box (lower, upper corner):
+    /// the others stream as [`Far`] (their clock only), so that a patch costs the moves
+    /// near it; [`Stats`] then counts degenerate feed directions of built samples only.
+    /// `None`: build every sample.
+    pub near: Option<(Point3, Point3)>,
 }
 
 impl Default for Options {
@@ -160,6 +217,7 @@ impl Default for Options {
             axis_interpolation: AxisInterpolation::Slerp,
             spline: false,
             spindle_from_path: false,
+            near: None,
         }
     }
 }
@@ -191,6 +249,13 @@ impl Options {
     /// Set one feed per posture, mm/min (same length as the path's postures).
     pub fn with_posture_feed_mm_min(mut self, feeds: Vec<f64>) -> Options {
         self.posture_feed_mm_min = Some(feeds);
+        self
+    }
+
+    /// Build only the samples of moves that may come into the box `lo`…`hi`
+    /// ([`Options::near`]).
+    pub fn with_near(mut self, lo: Point3, hi: Point3) -> Options {
+        self.near = Some((lo, hi));
         self
     }
 

@@ -7,7 +7,7 @@
 //! degenerate). [`resample_with`] is its in-memory form.
 use super::spindle::{SpindleScan, SpindleSource};
 use super::walker::{Clock, Entry, Params, RunWalker};
-use super::{Mode, Options, ResampleError, Sample, Stats};
+use super::{Mode, Options, ResampleError, Sample, Stats, Streamed};
 use crate::toolpath::{MotionKind, Posture, Toolpath};
 use std::f64::consts::TAU;
 
@@ -28,6 +28,20 @@ pub fn resample_with(
     path: &Toolpath,
     opts: &Options,
     mut sink: impl FnMut(&Sample),
+) -> Result<Stats, ResampleError> {
+    resample_streamed(path, opts, |s| {
+        if let Streamed::Sample(s) = s {
+            sink(s);
+        }
+    })
+}
+
+/// [`resample_with`], handing on the clock of every sample of a move far from
+/// [`Options::near`] as [`Streamed::Far`] instead of building it.
+pub fn resample_streamed(
+    path: &Toolpath,
+    opts: &Options,
+    mut sink: impl FnMut(Streamed<'_>),
 ) -> Result<Stats, ResampleError> {
     validate(opts)?;
     let feeds = opts.posture_feed_mm_min.as_deref();
@@ -50,7 +64,7 @@ pub fn resample_with(
     for (i, p) in path.postures.iter().enumerate() {
         r.push_entry(p, feeds.map(|f| f[i]), &mut sink)?;
     }
-    r.finish(&mut sink)
+    r.finish_streamed(&mut sink)
 }
 
 fn validate(opts: &Options) -> Result<(), ResampleError> {
@@ -152,6 +166,7 @@ impl Resampler {
                 axis_interpolation: opts.axis_interpolation,
                 spline: opts.spline,
                 posture_feeds: opts.posture_feed_mm_min.is_some(),
+                near: opts.near,
             },
             opts_rpm: opts.rpm,
             spindle_from_path: opts.spindle_from_path,
@@ -207,7 +222,7 @@ impl Resampler {
 
     /// The next posture of the path; samples that are complete go to `sink`.
     pub fn push(&mut self, p: &Posture, sink: impl FnMut(&Sample)) -> Result<(), ResampleError> {
-        self.push_entry(p, None, sink)
+        self.push_entry(p, None, built(sink))
     }
 
     /// [`Resampler::push`] with the posture's own feed, mm/min (per-posture feeds,
@@ -218,14 +233,14 @@ impl Resampler {
         feed_mm_min: f64,
         sink: impl FnMut(&Sample),
     ) -> Result<(), ResampleError> {
-        self.push_entry(p, Some(feed_mm_min), sink)
+        self.push_entry(p, Some(feed_mm_min), built(sink))
     }
 
     fn push_entry(
         &mut self,
         p: &Posture,
         feed: Option<f64>,
-        mut sink: impl FnMut(&Sample),
+        mut sink: impl FnMut(Streamed<'_>),
     ) -> Result<(), ResampleError> {
         let first = self.index == 0;
         self.index += 1;
@@ -322,7 +337,7 @@ impl Resampler {
         Ok(clock)
     }
 
-    fn close_run(&mut self, sink: &mut impl FnMut(&Sample)) -> Result<(), ResampleError> {
+    fn close_run(&mut self, sink: &mut impl FnMut(Streamed<'_>)) -> Result<(), ResampleError> {
         let Some(mut run) = self.run.take() else {
             return Ok(());
         };
@@ -352,7 +367,14 @@ impl Resampler {
     }
 
     /// Finish the path: emit the end of the open run and return the counts.
-    pub fn finish(mut self, mut sink: impl FnMut(&Sample)) -> Result<Stats, ResampleError> {
+    pub fn finish(self, sink: impl FnMut(&Sample)) -> Result<Stats, ResampleError> {
+        self.finish_streamed(built(sink))
+    }
+
+    fn finish_streamed(
+        mut self,
+        mut sink: impl FnMut(Streamed<'_>),
+    ) -> Result<Stats, ResampleError> {
         self.close_run(&mut sink)?;
         let mut stats = self.stats;
         if self.runs_seen == 0 {
@@ -370,21 +392,26 @@ impl Resampler {
     }
 }
 
+/// A sink of built samples as a sink of streamed ones (there are no far ones without
+/// [`Options::near`]).
+fn built(mut sink: impl FnMut(&Sample)) -> impl FnMut(Streamed<'_>) {
+    move |s| {
+        if let Streamed::Sample(s) = s {
+            sink(s);
+        }
+    }
+}
+
 /// The sample sink with the per-sample counts (feed and feed-per-tooth range).
-fn emitter<'s>(sink: &'s mut impl FnMut(&Sample)) -> impl FnMut(&Sample, &Clock, &mut Stats) + 's {
-    move |s: &Sample, clock: &Clock, stats: &mut Stats| {
+fn emitter<'s>(
+    sink: &'s mut impl FnMut(Streamed<'_>),
+) -> impl FnMut(Streamed<'_>, &Clock, &mut Stats) + 's {
+    move |s: Streamed<'_>, clock: &Clock, stats: &mut Stats| {
         stats.samples += 1;
-        let fz = s.feed_mm_min / (clock.teeth * clock.rpm);
-        stats.feed_min_mm_min = Some(
-            stats
-                .feed_min_mm_min
-                .map_or(s.feed_mm_min, |m| m.min(s.feed_mm_min)),
-        );
-        stats.feed_max_mm_min = Some(
-            stats
-                .feed_max_mm_min
-                .map_or(s.feed_mm_min, |m| m.max(s.feed_mm_min)),
-        );
+        let feed = s.feed_mm_min();
+        let fz = feed / (clock.teeth * clock.rpm);
+        stats.feed_min_mm_min = Some(stats.feed_min_mm_min.map_or(feed, |m| m.min(feed)));
+        stats.feed_max_mm_min = Some(stats.feed_max_mm_min.map_or(feed, |m| m.max(feed)));
         stats.fz_min_mm = Some(stats.fz_min_mm.map_or(fz, |m| m.min(fz)));
         stats.fz_max_mm = Some(stats.fz_max_mm.map_or(fz, |m| m.max(fz)));
         sink(s);
@@ -396,6 +423,7 @@ mod tests {
     use super::*;
     use crate::math::{Point3, Vec3};
     use crate::resample::AxisInterpolation;
+    use crate::resample::Streamed;
     use crate::toolpath::{ArcMove, Contact};
     use approx::assert_relative_eq;
     use std::f64::consts::PI;
@@ -861,6 +889,131 @@ mod tests {
                 .map(|s| (s.position - p).norm())
                 .fold(f64::MAX, f64::min);
             assert!(d < 0.006, "{d}");
+        }
+    }
+
+    /// A zig-zag of straight passes joined by half circles, its feed changing from posture
+    /// to posture, the axis tilting, contacts on every posture, a rapid halfway.
+    fn zigzag() -> Toolpath {
+        use MotionKind::*;
+        let mut ps = vec![posture(0.0, 0.0, 5.0, Rapid)];
+        ps.push(posture(0.0, 0.0, 0.0, Cut));
+        for pass in 0..6 {
+            let y = pass as f64;
+            let (x0, x1) = if pass % 2 == 0 {
+                (0.0, 10.0)
+            } else {
+                (10.0, 0.0)
+            };
+            for k in 1..=8 {
+                let x = x0 + (x1 - x0) * k as f64 / 8.0;
+                let mut p = posture(x, y, 0.1 * (x * 0.7).sin(), Cut);
+                p.feed_mm_min = Some(800.0 + 300.0 * (k as f64 * 1.3 + y).sin());
+                let t = 0.3 * (x / 10.0 - 0.5);
+                p.axis = Vec3::new(t.sin(), 0.0, t.cos());
+                p.contact = Some(Contact {
+                    point: p.position - p.axis * 0.5,
+                    normal: Vec3::new(0.1 * t, 0.05, 1.0),
+                    normal_derived: false,
+                });
+                ps.push(p);
+            }
+            if pass == 2 {
+                ps.push(posture(x1, y, 5.0, Rapid));
+                ps.push(posture(x1, y + 1.0, 5.0, Rapid));
+                ps.push(posture(x1, y + 1.0, 0.0, Rapid));
+            } else {
+                // Half a circle to the next pass (clockwise about ±z).
+                let mut p = posture(x1, y + 1.0, 0.0, Cut);
+                p.arc = Some(ArcMove {
+                    centre: Point3::new(x1, y + 0.5, 0.0),
+                    axis: if pass % 2 == 0 { -Vec3::z() } else { Vec3::z() },
+                    radius_mm: 0.5,
+                    extra_turns: 0,
+                });
+                ps.push(p);
+            }
+        }
+        Toolpath {
+            postures: ps,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn far_moves_stream_their_clock_and_near_ones_the_same_samples() {
+        let path = zigzag();
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for (mode, spline) in [
+            (Mode::FeedPerTooth, false),
+            (dtheta(7.0), false),
+            (Mode::FeedPerTooth, true),
+        ] {
+            let opts = Options::new(mode, 0.05, 2)
+                .with_rpm(6000.0)
+                .with_spline(spline);
+            let mut full = Vec::new();
+            let full_stats = resample_with(&path, &opts, |s| full.push(s.clone())).unwrap();
+            for _ in 0..12 {
+                let c = Point3::new(12.0 * next() - 1.0, 7.0 * next() - 1.0, 0.0);
+                let h = Vec3::new(0.1 + 2.0 * next(), 0.1 + 2.0 * next(), 0.2);
+                let (lo, hi) = (c - h, c + h);
+                let inside = |p: &Point3| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+                let near = opts.clone().with_near(lo, hi);
+                let (mut built, mut far) = (0, 0);
+                let mut i = 0;
+                let stats = resample_streamed(&path, &near, |s| {
+                    let f = &full[i];
+                    match s {
+                        Streamed::Sample(s) => {
+                            assert_eq!(s, f, "sample {i}");
+                            built += 1;
+                        }
+                        Streamed::Far(x) => {
+                            assert!(!inside(&f.position), "sample {i} in the box left unbuilt");
+                            assert_eq!(
+                                (x.run, x.s_mm, x.theta_rad),
+                                (f.run, f.s_mm, f.theta_rad),
+                                "sample {i}"
+                            );
+                            assert_eq!(x.t_s.to_bits(), f.t_s.to_bits());
+                            assert_eq!(x.feed_mm_min.to_bits(), f.feed_mm_min.to_bits());
+                            far += 1;
+                        }
+                    }
+                    i += 1;
+                })
+                .unwrap();
+                assert_eq!(i, full.len());
+                // The same counts, but for the feed directions of unbuilt samples.
+                let directions = |s: &Stats| {
+                    let mut s = s.clone();
+                    s.normal_parallel_to_feed = 0;
+                    s.feed_parallel_to_axis = 0;
+                    s
+                };
+                assert_eq!(directions(&stats), directions(&full_stats));
+                // Every sample in the box was built, and boxes away from the path skip most.
+                let wanted = full.iter().filter(|s| inside(&s.position)).count();
+                assert!(built >= wanted, "{built} < {wanted}");
+                assert_eq!(built + far, full.len());
+            }
+            // A box beside the path builds nothing but the ends of the runs.
+            let near = opts
+                .clone()
+                .with_near(Point3::new(20.0, 20.0, -1.0), Point3::new(21.0, 21.0, 1.0));
+            let mut built = 0;
+            resample_streamed(&path, &near, |s| {
+                built += usize::from(matches!(s, Streamed::Sample(_)))
+            })
+            .unwrap();
+            assert_eq!(built, 2, "{mode:?}");
         }
     }
 }

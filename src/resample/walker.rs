@@ -3,7 +3,7 @@
 
 use super::curve::{Curve, above};
 use super::sphere::SphereInterp;
-use super::{AxisInterpolation, Mode, ResampleError, Sample, Stats};
+use super::{AxisInterpolation, Far, Mode, ResampleError, Sample, Stats, Streamed};
 use crate::math::{Point3, Vec3, any_perpendicular, normalize_or_none};
 use crate::toolpath::Posture;
 
@@ -16,6 +16,38 @@ pub(super) struct Params {
     pub(super) axis_interpolation: AxisInterpolation,
     pub(super) spline: bool,
     pub(super) posture_feeds: bool,
+    /// Build only the samples of moves that may come into this box (lower, upper).
+    pub(super) near: Option<(Point3, Point3)>,
+}
+
+/// The sample held back until the next one is placed.
+#[derive(Debug, Clone)]
+enum Pending {
+    Built(Sample),
+    Far(Far),
+}
+
+impl Pending {
+    fn s_mm(&self) -> f64 {
+        match self {
+            Pending::Built(s) => s.s_mm,
+            Pending::Far(f) => f.s_mm,
+        }
+    }
+
+    fn theta_rad(&self) -> f64 {
+        match self {
+            Pending::Built(s) => s.theta_rad,
+            Pending::Far(f) => f.theta_rad,
+        }
+    }
+
+    fn streamed(&self) -> Streamed<'_> {
+        match self {
+            Pending::Built(s) => Streamed::Sample(s),
+            Pending::Far(f) => Streamed::Far(f),
+        }
+    }
 }
 
 /// A posture held by the resampler, with its per-posture feed.
@@ -101,7 +133,7 @@ pub(super) struct RunWalker {
     pub(super) t_end: f64,
     theta_end: f64,
     last: Option<Move>,
-    pending: Option<Sample>,
+    pending: Option<Pending>,
     pending_is_first: bool,
     prev_feed_dir: Option<Vec3>,
 }
@@ -233,7 +265,7 @@ impl RunWalker {
         eb: &Entry,
         next: Option<&Entry>,
         stats: &mut Stats,
-        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
+        emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
     ) -> Result<(), ResampleError> {
         let (a, b) = (&ea.p, &eb.p);
         let axis_a = checked_axis(a)?;
@@ -291,6 +323,12 @@ impl RunWalker {
         };
         let s_end = mv.s0 + len;
         let theta_end = mv.theta0 + self.clock.omega * dt;
+        // A move that cannot come near the box gets its samples' clock only (the same
+        // arc length, time, θ and feed as built ones), not their poses.
+        let far = self
+            .params
+            .near
+            .is_some_and(|(lo, hi)| !mv.curve.may_meet(&lo, &hi));
         match self.params.mode {
             Mode::FeedPerTooth => {
                 let step = self.params.fz_mm;
@@ -302,7 +340,7 @@ impl RunWalker {
                     let sigma = (s - mv.s0).max(0.0);
                     let tau = mv.tau_at(sigma);
                     let theta = mv.theta0 + self.clock.omega * tau;
-                    self.push(&mv, s, sigma, tau, theta, stats, emit);
+                    self.push(&mv, s, sigma, tau, theta, far, stats, emit);
                 }
             }
             Mode::SpindleStep { dtheta_rad } => loop {
@@ -312,7 +350,7 @@ impl RunWalker {
                 }
                 let tau = ((theta - mv.theta0) / self.clock.omega).max(0.0);
                 let sigma = mv.sigma_at(tau);
-                self.push(&mv, mv.s0 + sigma, sigma, tau, theta, stats, emit);
+                self.push(&mv, mv.s0 + sigma, sigma, tau, theta, far, stats, emit);
             },
         }
         self.s_end = s_end;
@@ -323,7 +361,8 @@ impl RunWalker {
     }
 
     /// Build the sample at run-relative arc length `s` (σ into the move, τ after its
-    /// start, spindle angle θ), emit the previous one and hold this one back.
+    /// start, spindle angle θ), or only its clock when the move is `far`, emit the
+    /// previous one and hold this one back.
     #[allow(clippy::too_many_arguments)]
     fn push(
         &mut self,
@@ -332,12 +371,28 @@ impl RunWalker {
         sigma: f64,
         tau: f64,
         theta: f64,
+        far: bool,
         stats: &mut Stats,
-        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
+        emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
     ) {
-        let sample = self.sample(mv, s, sigma, tau, theta, stats);
+        let sample = if far {
+            let timeless = self.clock.timeless;
+            Pending::Far(Far {
+                run: self.run_idx,
+                s_mm: self.s_offset + s,
+                t_s: if timeless { f64::NAN } else { mv.t0 + tau },
+                theta_rad: theta,
+                feed_mm_min: if timeless {
+                    f64::NAN
+                } else {
+                    mv.feed_at(tau) * 60.0
+                },
+            })
+        } else {
+            Pending::Built(self.sample(mv, s, sigma, tau, theta, stats))
+        };
         if let Some(p) = self.pending.take() {
-            emit(&p, &self.clock, stats);
+            emit(p.streamed(), &self.clock, stats);
         }
         self.pending_is_first = self.k == 0;
         self.pending = Some(sample);
@@ -419,7 +474,7 @@ impl RunWalker {
     pub(super) fn finish(
         &mut self,
         stats: &mut Stats,
-        emit: &mut impl FnMut(&Sample, &Clock, &mut Stats),
+        emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
     ) -> bool {
         let Some(mv) = self.last else {
             return false;
@@ -428,16 +483,16 @@ impl RunWalker {
         if let Some(p) = self.pending.take() {
             // A grid sample within 1e-6 step of the end is the end itself.
             let at_end = match self.params.mode {
-                Mode::FeedPerTooth => p.s_mm >= end.s_mm - 1e-6 * self.params.fz_mm,
+                Mode::FeedPerTooth => p.s_mm() >= end.s_mm - 1e-6 * self.params.fz_mm,
                 Mode::SpindleStep { dtheta_rad } => {
-                    p.theta_rad >= end.theta_rad - 1e-6 * dtheta_rad
+                    p.theta_rad() >= end.theta_rad - 1e-6 * dtheta_rad
                 }
             };
             if !at_end || self.pending_is_first {
-                emit(&p, &self.clock, stats);
+                emit(p.streamed(), &self.clock, stats);
             }
         }
-        emit(&end, &self.clock, stats);
+        emit(Streamed::Sample(&end), &self.clock, stats);
         true
     }
 }

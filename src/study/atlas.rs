@@ -1,7 +1,8 @@
 //! One row of a roughness atlas (`crest atlas`, issue 33): a patch's place on the part and
 //! its numbers (Sa, Sq, Sz, the scallop across the feed and the feed marks along it, their
 //! closed forms, the local stepover and curvature, lead and tilt, warnings), and the
-//! measures taken from a patch's height map and from the path at the patch. Plain data:
+//! measures taken from a patch's height map and from the path at the patch, and the
+//! patches run side by side ([`each_patch`]). Plain data otherwise:
 //! `pipeline::atlas` places and simulates the patches, `io::atlas` writes the rows.
 
 use crate::math::{Point3, Vec3};
@@ -150,6 +151,13 @@ fn detrended_peak_to_valley(v: &[f64]) -> Option<f64> {
     let sxz: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - mz)).sum();
     let b = if sxx > 0.0 { sxz / sxx } else { 0.0 };
     peak_to_valley(pts.iter().map(|p| p.1 - mz - b * (p.0 - mx)))
+}
+
+/// `f` of every patch in `patches`, on the current rayon pool, in the order given (each
+/// patch is independent of the others: the results do not depend on the thread count).
+pub fn each_patch<T: Send>(patches: &[usize], f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    use rayon::prelude::*;
+    patches.par_iter().with_max_len(1).map(|&i| f(i)).collect()
 }
 
 /// The scallop across the feed and the feed-mark height along it of a patch's height map

@@ -18,6 +18,12 @@ pub struct Subset {
 }
 
 impl Subset {
+    /// Count a sample of the stream that was not built (it cannot reach the grid).
+    pub fn skip(&mut self) {
+        self.seen += 1;
+        self.dropped_since = true;
+    }
+
     /// Take one sample of the stream (in order); `keep` says whether it can reach the grid.
     pub fn push(&mut self, s: &Sample, keep: bool) {
         self.seen += 1;
