@@ -318,3 +318,90 @@ fn every_input_is_read_through_io_input() {
     }
     assert!(bad.is_empty(), "inputs read outside io::input: {bad:?}");
 }
+
+/// The lines of every function of `text` (non-test code, comments dropped): name and length
+/// from its `fn` line to its closing brace (braces in string and char literals skipped).
+fn function_lengths(text: &str) -> Vec<(String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let braces = |l: &str| -> i64 {
+        let (mut depth, mut in_str, mut esc) = (0i64, false, false);
+        let b = l.as_bytes();
+        let mut k = 0;
+        while k < b.len() {
+            let c = b[k];
+            if in_str {
+                if esc {
+                    esc = false;
+                } else if c == b'\\' {
+                    esc = true;
+                } else if c == b'"' {
+                    in_str = false;
+                }
+            } else if c == b'"' {
+                in_str = true;
+            } else if c == b'\'' && k + 2 < b.len() && b[k + 2] == b'\'' {
+                k += 2;
+            } else if c == b'{' {
+                depth += 1;
+            } else if c == b'}' {
+                depth -= 1;
+            }
+            k += 1;
+        }
+        depth
+    };
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let t = l.trim_start();
+        let t = t
+            .strip_prefix("pub ")
+            .or_else(|| t.strip_prefix("pub(crate) "))
+            .or_else(|| t.strip_prefix("pub(super) "))
+            .unwrap_or(t);
+        let Some(rest) = t.strip_prefix("fn ") else {
+            continue;
+        };
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let (mut depth, mut opened) = (0i64, false);
+        for (j, m) in lines[i..].iter().enumerate() {
+            depth += braces(m);
+            opened |= m.contains('{');
+            if opened && depth <= 0 {
+                out.push((name.clone(), j + 1));
+                break;
+            }
+            if !opened && m.trim_end().ends_with(';') {
+                break;
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_function_in_the_pipeline_is_over_150_lines() {
+    // The counter itself, on a function of three lines and one of a string with braces.
+    let sample = "fn a() {\n    let s = \"{}}}\";\n}\nfn b(x: u8) -> u8 {\n    x\n}\n";
+    assert_eq!(
+        function_lengths(sample),
+        vec![("a".to_string(), 3), ("b".to_string(), 3)]
+    );
+    let mut long = Vec::new();
+    for (p, stage) in library_files() {
+        if stage != "pipeline" {
+            continue;
+        }
+        for (name, n) in function_lengths(&code(&p)) {
+            if n > 150 {
+                long.push(format!("{}: {name} ({n} lines)", p.display()));
+            }
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over 150 lines in pipeline/: {long:?}"
+    );
+}
