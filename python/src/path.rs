@@ -94,7 +94,7 @@ pub(crate) fn resample<'py>(
     spline: bool,
     path: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    use crest::resample::{AxisInterpolation, Mode, Options};
+    use crest::resample::{AxisInterpolation, Mode};
     let bad = |m: String| CrestError::new_err(m);
     let mode = match mode {
         "fz" => Mode::FeedPerTooth,
@@ -108,72 +108,54 @@ pub(crate) fn resample<'py>(
         "nlerp" => AxisInterpolation::Nlerp,
         a => return Err(bad(format!("axis must be 'slerp' or 'nlerp', got '{a}'"))),
     };
-    let mut opts = Options::new(mode, fz_mm, teeth)
-        .with_axis_interpolation(axis)
-        .with_spline(spline);
-    opts.rpm = rpm;
-    opts.feed_mm_min = feed_mm_min;
+    let req = crest::pipeline::resample::ResampleRequest {
+        file,
+        mode,
+        fz_mm: Some(fz_mm),
+        teeth: Some(teeth),
+        rpm,
+        feed_mm_min,
+        feed: None,
+        machine: None,
+        rtcp: crest::nc::Rtcp::Auto,
+        axis,
+        spline,
+        path,
+        moves: crest::toolpath::Moves::Cut,
+    };
     let cols = py
         .allow_threads(|| -> miette::Result<Vec<Vec<f64>>> {
-            crest::resample::Resampler::new(&opts)
-                .map_err(|e| miette::miette!("{}: {e}", file.display()))?;
-            let program = crest::io::toolpath::read_program(&file)?;
-            let selected: Vec<usize> = match path {
-                Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
-                Some(n) => {
-                    return Err(miette::miette!(
-                        "{}: --path {n} is out of range: the file has {} tool path(s)",
-                        file.display(),
-                        program.paths.len()
-                    ));
-                }
-                None => (0..program.paths.len()).collect(),
-            };
             let mut cols = vec![Vec::new(); 20];
-            for idx in selected {
-                let p = &program.paths[idx];
-                crest::resample::resample_with(p, &opts, |s| {
-                    let nan3 = [f64::NAN; 3];
-                    let c = s.contact.map_or(nan3, |c| [c.x, c.y, c.z]);
-                    let n = s.normal.map_or(nan3, |n| [n.x, n.y, n.z]);
-                    let row = [
-                        s.s_mm,
-                        s.t_s,
-                        s.theta_rad.to_degrees(),
-                        s.position.x,
-                        s.position.y,
-                        s.position.z,
-                        s.axis.x,
-                        s.axis.y,
-                        s.axis.z,
-                        c[0],
-                        c[1],
-                        c[2],
-                        n[0],
-                        n[1],
-                        n[2],
-                        s.feed_dir.x,
-                        s.feed_dir.y,
-                        s.feed_dir.z,
-                        s.feed_mm_min,
-                        idx as f64,
-                    ];
-                    for (col, v) in cols.iter_mut().zip(row) {
-                        col.push(v);
-                    }
-                })
-                .map_err(|e| {
-                    miette::miette!(
-                        "{}: tool path {}: {e}",
-                        file.display(),
-                        if p.name.is_empty() {
-                            "(unnamed)"
-                        } else {
-                            &p.name
-                        }
-                    )
-                })?;
-            }
+            crest::pipeline::resample::resample_each(&req, |idx, s| {
+                let nan3 = [f64::NAN; 3];
+                let c = s.contact.map_or(nan3, |c| [c.x, c.y, c.z]);
+                let n = s.normal.map_or(nan3, |n| [n.x, n.y, n.z]);
+                let row = [
+                    s.s_mm,
+                    s.t_s,
+                    s.theta_rad.to_degrees(),
+                    s.position.x,
+                    s.position.y,
+                    s.position.z,
+                    s.axis.x,
+                    s.axis.y,
+                    s.axis.z,
+                    c[0],
+                    c[1],
+                    c[2],
+                    n[0],
+                    n[1],
+                    n[2],
+                    s.feed_dir.x,
+                    s.feed_dir.y,
+                    s.feed_dir.z,
+                    s.feed_mm_min,
+                    idx as f64,
+                ];
+                for (col, v) in cols.iter_mut().zip(row) {
+                    col.push(v);
+                }
+            })?;
             Ok(cols)
         })
         .map_err(err)?;

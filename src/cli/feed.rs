@@ -6,10 +6,10 @@
 //! 1 when a path fails the §7 self-check (an interpolator fallback was needed).
 
 use super::Outcome;
-use crest::kinematics::{FeedPlan, Level, Machine};
+use crest::kinematics::{FeedPlan, Level};
 use crest::pipeline::feed::PlannedPath;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Options of `crest feed`.
 #[derive(Debug, clap::Args)]
@@ -68,15 +68,6 @@ impl From<FeedSource> for crest::pipeline::simulate::FeedSource {
             FeedSource::Predicted => crest::pipeline::simulate::FeedSource::Predicted,
         }
     }
-}
-
-/// Resolve `--feed` and `--machine` of `resample` / `simulate` (see
-/// [`crest::pipeline::simulate::resolve_feed_source`]).
-pub fn resolve_feed_source(
-    feed: Option<FeedSource>,
-    machine: Option<&Path>,
-) -> miette::Result<Option<Machine>> {
-    crest::pipeline::simulate::resolve_feed_source(feed.map(Into::into), machine)
 }
 
 /// Run `crest feed`.

@@ -2,7 +2,6 @@
 //! (read through the machine's kinematics), and how they combine with `--feed predicted`.
 
 use crest::io::toolpath::{InputKind, ReadOptions};
-use crest::kinematics::Machine;
 use crest::toolpath::LowerOptions;
 use std::path::Path;
 
@@ -86,23 +85,4 @@ pub fn read_options(
         machine,
         rtcp: rtcp.into(),
     })
-}
-
-/// The machine to predict the feed on, for `resample` and `simulate`: for G-code the
-/// machine reads the file, and plans the feed only with `--feed predicted`; for CLSF and
-/// contact12 `--machine` means `--feed predicted` (see
-/// [`crest::pipeline::simulate::resolve_feed_source`]).
-pub fn feed_machine(
-    kind: InputKind,
-    read: &ReadOptions,
-    feed: Option<super::feed::FeedSource>,
-    machine: Option<&Path>,
-) -> miette::Result<Option<Machine>> {
-    if kind == InputKind::Gcode {
-        return Ok(match feed {
-            Some(super::feed::FeedSource::Predicted) => read.machine.clone(),
-            _ => None,
-        });
-    }
-    super::feed::resolve_feed_source(feed, machine)
 }

@@ -27,6 +27,7 @@ pub mod measured;
 pub mod mesh;
 pub mod output;
 pub mod profile_csv;
+pub mod samples;
 pub mod series;
 pub mod tables;
 pub mod text;
