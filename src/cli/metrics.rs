@@ -35,7 +35,8 @@ some direction (any 1-D lay). Sbi, Sci and Svi are not computed."
 )]
 pub struct Args {
     /// Height map: `.csv` grid (rows = y ascending, µm; needs --dx-um), `.xyz`/`.txt` or a
-    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`, ISO 25178-72 `.x3p` (OpenGPS).
+    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`, ISO 25178-72 `.x3p` (OpenGPS),
+    /// or an instrument's own file: `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`.
     pub file: PathBuf,
     /// Spacing along x, µm (needed for grid CSV; checked against the other formats).
     #[arg(long, value_name = "D")]
@@ -43,6 +44,10 @@ pub struct Args {
     /// Spacing along y, µm (grid CSV: defaults to --dx-um).
     #[arg(long, value_name = "D")]
     pub dy_um: Option<f64>,
+    /// The channel of a Gwyddion `.gwy` to read, by its title (default: the first channel
+    /// with heights in a length unit).
+    #[arg(long, value_name = "NAME")]
+    pub channel: Option<String>,
     /// Form removal before the parameters: `none`, `plane` or `poly:N` (least-squares
     /// polynomial of total degree N; Marin et al. 2023 use poly:5). Default `none`: heights
     /// are only referred to their mean plane, nothing is re-levelled silently.
@@ -148,6 +153,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let opts = ReadOptions {
         dx_um: args.dx_um,
         dy_um: args.dy_um,
+        channel: args.channel.clone(),
     };
     let pp = Preprocess {
         level: args.level,

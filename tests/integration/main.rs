@@ -16,6 +16,7 @@ mod hostile; // hostile input and lost data (issue 18): each reproduction, -o li
 mod hostile2; // hostile input, second round (issue 37): limits on every route, CR line ends, located messages, escaped text
 mod hostile3; // hostile input, third round (issue 37): failed commands change nothing, designs refused before their runs, no control characters on a terminal
 mod install; // the version, completions, man pages and plain error lines of an installed crest
+mod instruments; // the instruments' own height maps (issue 34): .sur, .al3d, .gwy, .plu, .plux, .opd, .vk4 written by hand, read exactly; truncations; exit 2; .datx refused
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod moves; // move kinds (issue 33): NX colours and feed changes, inspect counts and regions, patches in the air refused
