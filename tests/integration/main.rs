@@ -23,6 +23,7 @@ mod moves; // move kinds (issue 33): NX colours and feed changes, inspect counts
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
 mod plot; // `crest plot`: every plot kind, titles and axis labels
 mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo
+mod profile_metrics; // `crest metrics PROFILE.csv` (issue 34): a measured x_mm,z_um profile against the closed forms of a sine
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
