@@ -24,9 +24,11 @@
 //! | `.vk4` | Keyence VK-X, read: the 16/32-bit height layer | `x_/y_length_per_pixel`, pm | value·`z_length_per_digit`, pm | none |
 //! | `.datx` | Zygo (HDF5): **refused**, crest has no HDF5 reader; export `.x3p` or `.sdf` from Mx | | | |
 //!
-//! A format is told by its content where it has a magic (`.plu` has none; a zip archive is a
-//! `.plux` when it names `index.xml` or `LAYER_0` and an `.x3p` otherwise), else by its
-//! extension; a path with an extension no format has is refused.
+//! A format is told by its extension, and by its content where it has a magic (`.plu` has
+//! none; a zip archive is a `.plux` when it names `index.xml` or `LAYER_0` and an `.x3p`
+//! otherwise): a path without an extension is read as its content says, and so is a binary
+//! map whose content carries another format's magic than its extension names (as surfalize
+//! does); a path with an extension no format has is refused.
 
 mod al3d;
 mod binary;
@@ -119,6 +121,34 @@ impl HeightMapFormat {
             "datx" => Some(HeightMapFormat::Datx),
             _ => None,
         }
+    }
+
+    /// The format's extension, for messages: `.csv`, `.sur`, ….
+    pub fn extension(self) -> &'static str {
+        match self {
+            HeightMapFormat::Csv => ".csv",
+            HeightMapFormat::Xyz => ".xyz",
+            HeightMapFormat::Gsf => ".gsf",
+            HeightMapFormat::Sdf => ".sdf",
+            HeightMapFormat::X3p => ".x3p",
+            HeightMapFormat::Sur => ".sur",
+            HeightMapFormat::Al3d => ".al3d",
+            HeightMapFormat::Gwy => ".gwy",
+            HeightMapFormat::Plu => ".plu",
+            HeightMapFormat::Plux => ".plux",
+            HeightMapFormat::Opd => ".opd",
+            HeightMapFormat::Vk4 => ".vk4",
+            HeightMapFormat::Datx => ".datx",
+        }
+    }
+
+    /// Whether the format has a magic of its own that [`HeightMapFormat::sniff`] tells
+    /// (not text, not `.plu`).
+    fn has_magic(self) -> bool {
+        !matches!(
+            self,
+            HeightMapFormat::Csv | HeightMapFormat::Xyz | HeightMapFormat::Plu
+        )
     }
 
     /// Whether crest writes this format (the instruments' own formats are only read).
@@ -268,12 +298,30 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
         budget_of(format, head)
     })
     .map_err(|e| HeightMapError::Input(Box::new(e)))?;
-    let format = by_name
+    let mut format = by_name
         .or(sniffed)
         .unwrap_or_else(|| HeightMapFormat::sniff(&bytes));
-    parse_heightmap(&bytes, format, opts).map_err(|error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
+    // A binary map whose content is plainly another format than its extension says (the
+    // other format's magic) is read as what it is, that format named in any error.
+    let seen = HeightMapFormat::sniff(&bytes);
+    let renamed = seen != format
+        && seen.has_magic()
+        && !matches!(format, HeightMapFormat::Csv | HeightMapFormat::Xyz);
+    if renamed {
+        format = seen;
+    }
+    parse_heightmap(&bytes, format, opts).map_err(|mut error| {
+        if renamed {
+            error.message = format!(
+                "{} (the content is a {} file, whatever the extension says)",
+                error.message,
+                format.extension()
+            );
+        }
+        HeightMapError::Format {
+            path: path.to_path_buf(),
+            error,
+        }
     })
 }
 
@@ -430,7 +478,8 @@ pub fn parse_heightmap(
 ) -> Result<HeightMap, FormatError> {
     if let (Some(name), false) = (&opts.channel, format == HeightMapFormat::Gwy) {
         return Err(FormatError::file(format!(
-            "--channel {name:?} names a channel of a Gwyddion .gwy file; this is a {format:?} file, which has one height layer"
+            "--channel {name:?} names a channel of a Gwyddion .gwy file; this is a {} file, which has one height layer",
+            format.extension()
         )));
     }
     let map = match format {
@@ -569,7 +618,8 @@ pub fn write_heightmap_to(
         f => Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             format!(
-                "crest reads {f:?} files but does not write them (write .x3p, .sdf, .gsf, .csv or .xyz)"
+                "crest reads {} files but does not write them (write .x3p, .sdf, .gsf, .csv or .xyz)",
+                f.extension()
             ),
         )),
     }

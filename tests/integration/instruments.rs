@@ -545,11 +545,25 @@ fn formats_are_told_by_content() {
             assert_eq!(HeightMapFormat::sniff(&b), f, "{ext}");
         }
     }
-    // A file without extension is read by its content.
+    // A file without extension is read by its content, and so is a file whose extension
+    // names another format than its content (its errors say what the content is).
     let dir = tempdir();
     let p = write(dir.path(), "measured", sur_simple(false, 32));
     let m = read_heightmap(&p, &ReadOptions::default()).unwrap();
     assert_eq!((m.nx, m.ny), (3, 2));
+    let p = write(dir.path(), "misnamed.sur", gwy());
+    let m = read_heightmap(&p, &ReadOptions::default()).unwrap();
+    assert_eq!((m.nx, m.ny, m.dx_um), (3, 2, 2.0));
+    let mut bad = al3d(2, 2, &[1e-6, 2e-6, 3e-6, 4e-6], None);
+    bad.truncate(bad.len() - 3);
+    let p = write(dir.path(), "misnamed.opd", bad);
+    let e = read_heightmap(&p, &ReadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("misnamed.opd") && e.contains("content is a .al3d"),
+        "{e}"
+    );
 }
 
 /// Every cut of every file is an error (never a panic), and so is or reads every file with
