@@ -41,15 +41,23 @@ pub fn heightmap(data: &[u8]) {
     let Some((&pick, rest)) = data.split_first() else {
         return;
     };
-    let format = match pick % 4 {
+    let format = match pick % 12 {
         0 => HeightMapFormat::Csv,
         1 => HeightMapFormat::Xyz,
         2 => HeightMapFormat::Gsf,
-        _ => HeightMapFormat::Sdf,
+        3 => HeightMapFormat::Sdf,
+        4 => HeightMapFormat::X3p,
+        5 => HeightMapFormat::Sur,
+        6 => HeightMapFormat::Al3d,
+        7 => HeightMapFormat::Gwy,
+        8 => HeightMapFormat::Plu,
+        9 => HeightMapFormat::Plux,
+        10 => HeightMapFormat::Opd,
+        _ => HeightMapFormat::Vk4,
     };
     let opts = ReadOptions {
-        dx_um: Some(1.0),
-        dy_um: None,
+        dx_um: if pick % 12 < 4 { Some(1.0) } else { None },
+        ..Default::default()
     };
     if let Ok(map) = parse_heightmap(rest, format, &opts) {
         let set = crest::metrics::ParamSet::all(false);

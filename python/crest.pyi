@@ -45,6 +45,15 @@ class Cutter:
         """The tool analysis of ``crest tool --json`` (same keys, same values): effective
         radius, crest height, participating teeth (``rule`` "exact" or "paper")."""
 
+def read_map(
+    path: StrPath,
+    dx_um: Optional[float] = None,
+    dy_um: Optional[float] = None,
+    channel: Optional[str] = None,
+) -> "HeightMap":
+    """Read a measured or written height map, as ``HeightMap.read`` does (the same object):
+    .csv, .xyz/.txt, .gsf, .sdf, .x3p, .sur, .al3d, .gwy, .plu, .plux, .opd, .vk4."""
+
 class HeightMap:
     """Heights in µm on a regular grid: ``z_um[row, col]``, rows along y ascending, NaN where
     no tooth reached; node (0, 0) at ``origin_mm`` in the grid's frame. Picklable (exact
@@ -59,8 +68,15 @@ class HeightMap:
         y0_mm: float = 0.0,
     ) -> None: ...
     @staticmethod
-    def read(path: StrPath, dx_um: Optional[float] = None, dy_um: Optional[float] = None) -> "HeightMap":
-        """Read a .csv, .xyz/.txt, .gsf or .sdf height map."""
+    def read(
+        path: StrPath,
+        dx_um: Optional[float] = None,
+        dy_um: Optional[float] = None,
+        channel: Optional[str] = None,
+    ) -> "HeightMap":
+        """Read a height map: .csv, .xyz/.txt, .gsf, .sdf, .x3p, or an instrument's own
+        .sur, .al3d, .gwy, .plu, .plux, .opd, .vk4 (told by content where it has a magic);
+        ``channel`` names a .gwy channel by its title."""
     z_um: npt.NDArray[np.float64]
     """Heights, µm, shape (ny, nx) (a copy)."""
     nx: int

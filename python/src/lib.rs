@@ -54,6 +54,7 @@ fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<cutter::Cutter>()?;
     m.add_class::<maps::HeightMap>()?;
     m.add_class::<maps::PartMap>()?;
+    m.add_function(wrap_pyfunction!(maps::read_map, m)?)?;
     m.add_function(wrap_pyfunction!(path::read_path, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::metrics, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;

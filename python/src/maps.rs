@@ -20,6 +20,20 @@ pub(crate) struct HeightMap {
     pub(crate) inner: crest::surface::HeightMap,
 }
 
+/// Read a height map, as `HeightMap.read` does (the same object): `.csv`, `.xyz`/`.txt`,
+/// `.gsf`, `.sdf`, `.x3p`, or an instrument's `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`,
+/// `.opd`, `.vk4`; `channel` names a `.gwy` channel by its title.
+#[pyfunction]
+#[pyo3(signature = (path, dx_um = None, dy_um = None, channel = None))]
+pub(crate) fn read_map(
+    path: PathBuf,
+    dx_um: Option<f64>,
+    dy_um: Option<f64>,
+    channel: Option<String>,
+) -> PyResult<HeightMap> {
+    HeightMap::read(path, dx_um, dy_um, channel)
+}
+
 #[pymethods]
 impl HeightMap {
     /// A height map from a 2-D array of heights in µm (rows along y).
@@ -47,15 +61,21 @@ impl HeightMap {
         }
     }
 
-    /// Read a height map (.csv, .xyz/.txt, .gsf, .sdf).
+    /// Read a height map (.csv, .xyz/.txt, .gsf, .sdf, .x3p, or an instrument's .sur,
+    /// .al3d, .gwy, .plu, .plux, .opd, .vk4; `channel`: a .gwy channel's title).
     #[staticmethod]
-    #[pyo3(signature = (path, dx_um = None, dy_um = None))]
+    #[pyo3(signature = (path, dx_um = None, dy_um = None, channel = None))]
     pub(crate) fn read(
         path: PathBuf,
         dx_um: Option<f64>,
         dy_um: Option<f64>,
+        channel: Option<String>,
     ) -> PyResult<HeightMap> {
-        let opts = crest::io::ReadOptions { dx_um, dy_um };
+        let opts = crest::io::ReadOptions {
+            dx_um,
+            dy_um,
+            channel,
+        };
         crest::io::read_heightmap(&path, &opts)
             .map(|inner| HeightMap { inner })
             .map_err(|e| CrestError::new_err(e.to_string()))

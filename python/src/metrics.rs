@@ -99,7 +99,7 @@ pub(crate) fn metrics<'py>(
         (h.borrow().inner.clone(), "height map".to_string())
     } else {
         let path: PathBuf = map.extract()?;
-        let h = HeightMap::read(path.clone(), dx_um, dy_um)?;
+        let h = HeightMap::read(path.clone(), dx_um, dy_um, None)?;
         (h.inner, path.display().to_string())
     };
     metrics_of(

@@ -2,8 +2,10 @@
 //! them (G-code included) → G-code through a machine's inverse kinematics; and height maps
 //! between their formats (`crest convert MAP -o MAP.x3p|.gsf|.sdf|.csv|.xyz`).
 //!
-//! A height-map conversion is chosen when the input is a `.gsf`, `.sdf` or `.x3p` or the
-//! output is a `.gsf`, `.sdf`, `.x3p` or `.xyz` (a grid `.csv` input needs `--dx-um`).
+//! A height-map conversion is chosen when the input is a height map other than `.csv` or
+//! `.xyz` (`.gsf`, `.sdf`, `.x3p` and the instruments' `.sur`, `.al3d`, `.gwy`, `.plu`,
+//! `.plux`, `.opd`, `.vk4`) or the output is a `.gsf`, `.sdf`, `.x3p` or `.xyz` (a grid
+//! `.csv` input needs `--dx-um`).
 //!
 //! The input kind is detected by content; the output kind by the extension of `-o`
 //! (`.cls`, `.clsf`, `.cl`, `.apt` = CLSF; `.nc`, `.mpf`, `.spf`, `.tap`, `.gcode`, `.ngc`,
@@ -54,6 +56,10 @@ pub struct Args {
     /// Height-map input as a grid `.csv`: its y spacing, µm (default: --dx-um).
     #[arg(long, value_name = "UM")]
     pub dy_um: Option<f64>,
+    /// The channel of a Gwyddion `.gwy` to read, by its title (default: the first channel
+    /// with heights in a length unit).
+    #[arg(long, value_name = "NAME")]
+    pub channel: Option<String>,
 }
 
 /// True when `args` converts a height map (see the module docs).
@@ -66,7 +72,7 @@ fn is_map_conversion(args: &Args) -> bool {
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("xyz"));
-    matches!(input, Some(F::Gsf | F::Sdf | F::X3p))
+    matches!(input, Some(f) if !matches!(f, F::Csv | F::Xyz))
         || matches!(output, Some(F::Gsf | F::Sdf | F::X3p))
         || xyz
 }
@@ -74,7 +80,9 @@ fn is_map_conversion(args: &Args) -> bool {
 /// `crest convert MAP -o MAP2`: read a height map and write it in the output's format.
 fn convert_map(args: &Args) -> miette::Result<Outcome> {
     use miette::IntoDiagnostic;
-    let Some(format) = crest::io::HeightMapFormat::from_path(&args.output) else {
+    let Some(format) =
+        crest::io::HeightMapFormat::from_path(&args.output).filter(|f| f.is_written())
+    else {
         return Err(miette::miette!(
             "{}: a height map converts to .csv, .xyz, .txt, .gsf, .sdf or .x3p",
             args.output.display()
@@ -92,6 +100,7 @@ fn convert_map(args: &Args) -> miette::Result<Outcome> {
     let opts = crest::io::ReadOptions {
         dx_um: args.dx_um,
         dy_um: args.dy_um,
+        channel: args.channel.clone(),
     };
     let map = crest::io::read_heightmap(&args.file, &opts).map_err(|e| miette::miette!("{e}"))?;
     crest::io::write_heightmap(&args.output, &map).into_diagnostic()?;
@@ -268,9 +277,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if is_map_conversion(&args) {
         return convert_map(&args);
     }
-    if args.dx_um.is_some() || args.dy_um.is_some() {
+    if args.dx_um.is_some() || args.dy_um.is_some() || args.channel.is_some() {
         return Err(miette::miette!(
-            "--dx-um and --dy-um are for height maps; {} converts a tool path",
+            "--dx-um, --dy-um and --channel are for height maps; {} converts a tool path",
             args.file.display()
         ));
     }

@@ -1,5 +1,6 @@
 //! `crest metrics`: profile and ISO 25178 areal parameters of a height map, after optional
-//! form removal and Gaussian S-/L-filtering.
+//! form removal and Gaussian S-/L-filtering; ISO 21920-2 profile parameters of a measured
+//! profile (a `.csv` with the header `x_mm,z_um`, as `runout identify` reads it).
 
 use std::path::PathBuf;
 
@@ -9,7 +10,7 @@ use super::Outcome;
 use crest::io::{GsfRows, HeightMapFormat, ReadOptions, open_gsf_rows, read_heightmap};
 use crest::metrics::{
     EndEffects, Level, ParamSet, Preprocess, ProfileSpec, RowStream, areal_parameters,
-    extract_profile, preprocess_map, preprocess_profile, profile_parameters,
+    extract_profile, preprocess_map, preprocess_profile, profile_from_points, profile_parameters,
 };
 use crest::surface::HeightMap;
 
@@ -35,7 +36,10 @@ some direction (any 1-D lay). Sbi, Sci and Svi are not computed."
 )]
 pub struct Args {
     /// Height map: `.csv` grid (rows = y ascending, µm; needs --dx-um), `.xyz`/`.txt` or a
-    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`, ISO 25178-72 `.x3p` (OpenGPS).
+    /// `.csv` with an `x,y,z` header (point list, µm), Gwyddion `.gsf`, ISO 25178-71 `.sdf`, ISO 25178-72 `.x3p` (OpenGPS),
+    /// or an instrument's own file: `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`;
+    /// or a measured profile, a `.csv` whose header is `x_mm,z_um` (its profile parameters;
+    /// unevenly spaced points are resampled at the median step).
     pub file: PathBuf,
     /// Spacing along x, µm (needed for grid CSV; checked against the other formats).
     #[arg(long, value_name = "D")]
@@ -43,6 +47,10 @@ pub struct Args {
     /// Spacing along y, µm (grid CSV: defaults to --dx-um).
     #[arg(long, value_name = "D")]
     pub dy_um: Option<f64>,
+    /// The channel of a Gwyddion `.gwy` to read, by its title (default: the first channel
+    /// with heights in a length unit).
+    #[arg(long, value_name = "NAME")]
+    pub channel: Option<String>,
     /// Form removal before the parameters: `none`, `plane` or `poly:N` (least-squares
     /// polynomial of total degree N; Marin et al. 2023 use poly:5). Default `none`: heights
     /// are only referred to their mean plane, nothing is re-levelled silently.
@@ -142,14 +150,8 @@ fn num(v: f64) -> serde_json::Value {
     serde_json::Value::from(v)
 }
 
-/// Run `crest metrics`.
-pub fn run(args: Args) -> miette::Result<Outcome> {
-    let file = args.file.display().to_string();
-    let opts = ReadOptions {
-        dx_um: args.dx_um,
-        dy_um: args.dy_um,
-    };
-    let pp = Preprocess {
+fn preprocess(args: &Args) -> Preprocess {
+    Preprocess {
         level: args.level,
         lambda_s_um: args.lambda_s_um,
         lambda_c_um: args.lambda_c_um,
@@ -157,7 +159,110 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             Ends::Reflect => EndEffects::Reflect,
             Ends::Trim => EndEffects::Trim,
         },
+    }
+}
+
+/// `crest metrics PROFILE.csv`: the profile parameters of a measured `x_mm,z_um` profile,
+/// evenly sampled ([`profile_from_points`]), through the same form removal and filters as
+/// a profile taken from a map.
+fn run_profile(args: &Args, xs: &[f64], zs: &[f64]) -> miette::Result<Outcome> {
+    let file = args.file.display().to_string();
+    for (given, flag) in [
+        (args.profile.is_some(), "--profile"),
+        (args.channel.is_some(), "--channel"),
+        (
+            args.dx_um.is_some() || args.dy_um.is_some(),
+            "--dx-um/--dy-um",
+        ),
+    ] {
+        if given {
+            return Err(miette!(
+                "{file}: {flag} is for height maps; this is a measured profile (x_mm,z_um), whose spacing comes from its x"
+            ));
+        }
+    }
+    let set = match &args.params {
+        Some(list) => ParamSet::parse(list, true),
+        None => Ok(ParamSet::all(true)),
+    }
+    .map_err(|e| miette!("{e}"))?;
+    if set.params().is_empty() {
+        return Err(miette!("--params lists no parameter"));
+    }
+    let pp = preprocess(args);
+    let (raw, resampled) = profile_from_points(xs, zs).map_err(|e| miette!("{file}: {e}"))?;
+    let prof = preprocess_profile(&raw, &pp).map_err(|e| miette!("{file}: {e}"))?;
+    let values =
+        profile_parameters(&prof, &set, args.sections).map_err(|e| miette!("{file}: {e}"))?;
+    if args.json {
+        let mut info = serde_json::Map::new();
+        info.insert("file".into(), file.clone().into());
+        info.insert("format".into(), "profile".into());
+        info.insert("points".into(), xs.len().into());
+        info.insert(
+            "profile".into(),
+            serde_json::json!({
+                "samples": prof.z.len(),
+                "step_um": prof.step_um,
+                "evaluation_length_um": prof.z.len() as f64 * prof.step_um,
+                "sections": args.sections,
+                "resampled": resampled,
+            }),
+        );
+        info.insert("level".into(), pp.level.label().into());
+        info.insert(
+            "lambda_s_um".into(),
+            pp.lambda_s_um.map_or(serde_json::Value::Null, num),
+        );
+        info.insert(
+            "lambda_c_um".into(),
+            pp.lambda_c_um.map_or(serde_json::Value::Null, num),
+        );
+        let mut units = serde_json::Map::new();
+        for (p, v) in &values {
+            info.insert(p.symbol().into(), num(*v));
+            units.insert(p.symbol().into(), p.unit().into());
+        }
+        info.insert("units".into(), units.into());
+        outln!("{}", serde_json::Value::Object(info));
+    } else {
+        outln!(
+            "{file}: measured profile, {} points, {} samples every {} µm{}, level {}, {} sampling lengths",
+            xs.len(),
+            prof.z.len(),
+            prof.step_um,
+            if resampled {
+                " (resampled: the points are not evenly spaced)"
+            } else {
+                ""
+            },
+            pp.level.label(),
+            args.sections
+        );
+        for (p, v) in &values {
+            let shown = if v.is_finite() {
+                format!("{v:.6}")
+            } else {
+                "undefined".into()
+            };
+            outln!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
+        }
+    }
+    Ok(Outcome::Ok)
+}
+
+/// Run `crest metrics`.
+pub fn run(args: Args) -> miette::Result<Outcome> {
+    if let Some((xs, zs)) = crest::io::profile_csv::read_if_profile(&args.file)? {
+        return run_profile(&args, &xs, &zs);
+    }
+    let file = args.file.display().to_string();
+    let opts = ReadOptions {
+        dx_um: args.dx_um,
+        dy_um: args.dy_um,
+        channel: args.channel.clone(),
     };
+    let pp = preprocess(&args);
     let profile_mode = args.profile.is_some();
     let set = match &args.params {
         Some(list) => ParamSet::parse(list, profile_mode),

@@ -122,7 +122,8 @@ pub struct RunoutArgs {
 /// Options of height-map input.
 #[derive(Debug, clap::Args)]
 pub struct MapInput {
-    /// Height map: `.csv` (grid, µm; needs --dx-um), `.xyz`/`.txt`, `.gsf`, `.sdf` or `.x3p`.
+    /// Height map: `.csv` (grid, µm; needs --dx-um), `.xyz`/`.txt`, `.gsf`, `.sdf`, `.x3p`,
+    /// or an instrument's `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`.
     pub map: PathBuf,
     /// Grid spacing along x, µm (grid CSV).
     #[arg(long)]
@@ -130,6 +131,10 @@ pub struct MapInput {
     /// Grid spacing along y, µm (default: --dx-um).
     #[arg(long)]
     pub dy_um: Option<f64>,
+    /// The channel of a Gwyddion `.gwy` to read, by its title (default: the first channel
+    /// with heights in a length unit).
+    #[arg(long, value_name = "NAME")]
+    pub channel: Option<String>,
 }
 
 /// Options of `crest plot heightmap`.
@@ -446,6 +451,7 @@ fn read_map(input: &MapInput) -> miette::Result<crest::surface::HeightMap> {
     let opts = crest::io::ReadOptions {
         dx_um: input.dx_um,
         dy_um: input.dy_um,
+        channel: input.channel.clone(),
     };
     crest::io::read_heightmap(&input.map, &opts).map_err(|e| miette!("{e}"))
 }

@@ -19,7 +19,8 @@ profile between them: its Rz is the one `crest metrics MAP --profile line:X0,Y0,
 --params Rz` prints (taken from the full map when it has at most 1 048 576 nodes, from the \
 displayed block means otherwise; the page says which).")]
 pub struct Args {
-    /// Height map (`.csv` grid with --dx-um, `.csv`/`.xyz` point list, `.gsf`, `.sdf`, `.x3p`) or a
+    /// Height map (`.csv` grid with --dx-um, `.csv`/`.xyz` point list, `.gsf`, `.sdf`, `.x3p`,
+    /// an instrument's `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`) or a
     /// part map (`.ply` from `crest simulate --map-mm`).
     pub file: PathBuf,
     /// The page to write (HTML).
@@ -31,6 +32,10 @@ pub struct Args {
     /// Spacing along y, µm (grid CSV: defaults to --dx-um).
     #[arg(long, value_name = "D")]
     pub dy_um: Option<f64>,
+    /// The channel of a Gwyddion `.gwy` to read, by its title (default: the first channel
+    /// with heights in a length unit).
+    #[arg(long, value_name = "NAME")]
+    pub channel: Option<String>,
     /// Title of the page (default: the file's name).
     #[arg(long)]
     pub title: Option<String>,
@@ -80,6 +85,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         let opts = ReadOptions {
             dx_um: args.dx_um,
             dy_um: args.dy_um,
+            channel: args.channel.clone(),
         };
         let map = read_heightmap(&args.file, &opts).map_err(|e| miette!("{e}"))?;
         let html = view::heightmap_page(&map, &info).map_err(|e| miette!("{file}: {e}"))?;

@@ -78,6 +78,14 @@ pub const X3P: Budget = Budget {
     line: None,
     why: "400 million nodes × 8 bytes, their validity bits and 16 MiB of XML",
 };
+/// An instrument's binary height map (`.sur`, `.al3d`, `.gwy`, `.plu`, `.opd`, `.vk4`):
+/// the node limit in float64 and 64 MiB of headers and other layers (each reader checks
+/// its sizes against the bytes it has before it allocates).
+pub const INSTRUMENT_MAP: Budget = Budget {
+    bytes: NODES * 8 + 64 * MIB,
+    line: None,
+    why: "400 million nodes × 8 bytes + 64 MiB of headers and layers",
+};
 /// A text height map (grid CSV, text `.sdf`): the node limit at 26 bytes per height.
 pub const MAP_TEXT: Budget = Budget {
     bytes: NODES * 26 + MIB,

@@ -1,6 +1,7 @@
 //! File formats and safe writing: height-map readers and writers (CSV grid, x,y,z point
-//! lists, Gwyddion `.gsf`, ISO 25178-71 / BCR `.sdf`, ISO 25178-72 `.x3p`), and [`write_atomic`], which never
-//! leaves a partial file.
+//! lists, Gwyddion `.gsf`, ISO 25178-71 / BCR `.sdf`, ISO 25178-72 `.x3p`), readers of the
+//! instruments' own files (`.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`), and
+//! [`write_atomic`], which never leaves a partial file.
 //!
 //! Every format maps onto [`HeightMap`]: row `i` is `y = y0 + i·dy` (ascending), column `j`
 //! is `x = x0 + j·dx`, heights in µm, `NaN` for a node that was not measured or not reached.
@@ -14,10 +15,32 @@
 //! | `.gsf` | Gwyddion Simple Field 1.0, float32 LE | `XReal`/`YReal` (pixels), metres | metres (`ZUnits`) | NaN |
 //! | `.sdf` | ISO 25178-71 / BCR, text (`aBCR`/`aISO`) and binary reading; text writing | `Xscale`/`Yscale`, metres | value·`Zscale`, metres | `NaN` (text) |
 //! | `.x3p` | ISO 25178-72 (OpenGPS) zip: `main.xml` + binary or listed heights, I/L/F/D read, D written, checksums verified | `CX`/`CY` `Increment`, `Offset`, metres | value·`CZ/Increment` + `Offset`, metres | validity mask, NaN or infinite |
+//! | `.sur` | Digital Surf (MountainsMap), read: plain or zlib-compressed, 16/32-bit integer points, the first height layer of a multilayer file | `spacing_x`/`spacing_y`, `offset_x`/`offset_y` in `unit_step_x`/`_y` | (value·`spacing_z` + `offset_z`) in `unit_step_z` (m, mm, µm, nm) | `min_point − 2` when `non_measured_points` = 1 |
+//! | `.al3d` | Alicona (focus variation), read: the float32 depth image | `PixelSizeXMeter`/`YMeter`, metres | metres | ≥ `InvalidPixelValue`, NaN, unrepeatable depths |
+//! | `.gwy` | Gwyddion native (`GWYP`), read: the first channel with a length z unit, or `--channel TITLE` | `xreal/xres`, `xoff`, in `si_unit_xy` | `si_unit_z` | `/N/mask` non-zero |
+//! | `.plu` | Sensofar binary, read: float32 heights at byte 500 (told by its extension only) | `mppx`/`mppy`, µm | µm | 1000001 |
+//! | `.plux` | Sensofar zip, read: `index.xml` + `LAYER_0.raw` float32 | `FOV_X`/`FOV_Y`, µm | µm | NaN, 1000001 |
+//! | `.opd` | Bruker/Veeco Vision, read: `RAW_DATA` (uint8, int16, float32) | `Pixel_size` mm, × `Aspect` along y | value·`Wavelength` nm / `Mult` | int16 32767, float32 ≥ 1e38 |
+//! | `.vk4` | Keyence VK-X, read: the 16/32-bit height layer | `x_/y_length_per_pixel`, pm | value·`z_length_per_digit`, pm | none |
+//! | `.datx` | Zygo (HDF5): **refused**, crest has no HDF5 reader; export `.x3p` or `.sdf` from Mx | | | |
+//!
+//! A format is told by its extension, and by its content where it has a magic (`.plu` has
+//! none; a zip archive is a `.plux` when it names `index.xml` or `LAYER_0` and an `.x3p`
+//! otherwise): a path without an extension is read as its content says, and so is a binary
+//! map whose content carries another format's magic than its extension names (as surfalize
+//! does); a path with an extension no format has is refused.
 
+mod al3d;
+mod binary;
 mod csv_grid;
 mod gsf;
+mod gwy;
+mod opd;
+mod plu;
+mod plux;
 mod sdf;
+mod sur;
+mod vk4;
 mod x3p;
 mod xyz;
 
@@ -59,11 +82,28 @@ pub enum HeightMapFormat {
     Sdf,
     /// ISO 25178-72 XML surface file (`.x3p`, OpenGPS).
     X3p,
+    /// Digital Surf (MountainsMap) `.sur`, read only.
+    Sur,
+    /// Alicona `.al3d`, read only.
+    Al3d,
+    /// Gwyddion native `.gwy`, read only.
+    Gwy,
+    /// Sensofar binary `.plu`, read only.
+    Plu,
+    /// Sensofar zip `.plux`, read only.
+    Plux,
+    /// Bruker/Veeco Vision `.opd`, read only.
+    Opd,
+    /// Keyence `.vk4`, read only.
+    Vk4,
+    /// Zygo `.datx` (HDF5): recognised only to be refused with a clear message.
+    Datx,
 }
 
 impl HeightMapFormat {
     /// The format named by a path's extension (case-insensitive): `.csv`, `.xyz`/`.txt`,
-    /// `.gsf`, `.sdf`, `.x3p`.
+    /// `.gsf`, `.sdf`, `.x3p`, `.sur`, `.al3d`, `.gwy`, `.plu`, `.plux`, `.opd`, `.vk4`,
+    /// `.datx`.
     pub fn from_path(path: &Path) -> Option<HeightMapFormat> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         match ext.as_str() {
@@ -72,8 +112,56 @@ impl HeightMapFormat {
             "gsf" => Some(HeightMapFormat::Gsf),
             "sdf" => Some(HeightMapFormat::Sdf),
             "x3p" => Some(HeightMapFormat::X3p),
+            "sur" => Some(HeightMapFormat::Sur),
+            "al3d" => Some(HeightMapFormat::Al3d),
+            "gwy" => Some(HeightMapFormat::Gwy),
+            "plu" => Some(HeightMapFormat::Plu),
+            "plux" => Some(HeightMapFormat::Plux),
+            "opd" => Some(HeightMapFormat::Opd),
+            "vk4" => Some(HeightMapFormat::Vk4),
+            "datx" => Some(HeightMapFormat::Datx),
             _ => None,
         }
+    }
+
+    /// The format's extension, for messages: `.csv`, `.sur`, ….
+    pub fn extension(self) -> &'static str {
+        match self {
+            HeightMapFormat::Csv => ".csv",
+            HeightMapFormat::Xyz => ".xyz",
+            HeightMapFormat::Gsf => ".gsf",
+            HeightMapFormat::Sdf => ".sdf",
+            HeightMapFormat::X3p => ".x3p",
+            HeightMapFormat::Sur => ".sur",
+            HeightMapFormat::Al3d => ".al3d",
+            HeightMapFormat::Gwy => ".gwy",
+            HeightMapFormat::Plu => ".plu",
+            HeightMapFormat::Plux => ".plux",
+            HeightMapFormat::Opd => ".opd",
+            HeightMapFormat::Vk4 => ".vk4",
+            HeightMapFormat::Datx => ".datx",
+        }
+    }
+
+    /// Whether the format has a magic of its own that [`HeightMapFormat::sniff`] tells
+    /// (not text, not `.plu`).
+    fn has_magic(self) -> bool {
+        !matches!(
+            self,
+            HeightMapFormat::Csv | HeightMapFormat::Xyz | HeightMapFormat::Plu
+        )
+    }
+
+    /// Whether crest writes this format (the instruments' own formats are only read).
+    pub fn is_written(self) -> bool {
+        matches!(
+            self,
+            HeightMapFormat::Csv
+                | HeightMapFormat::Xyz
+                | HeightMapFormat::Gsf
+                | HeightMapFormat::Sdf
+                | HeightMapFormat::X3p
+        )
     }
 }
 
@@ -156,7 +244,7 @@ pub enum HeightMapError {
     #[error("{0}")]
     Input(Box<input::InputError>),
     /// The extension names no known format.
-    #[error("{path}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf, .sdf or .x3p)")]
+    #[error("{path}: unknown height-map extension (expected {})", READ_EXTENSIONS)]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -171,13 +259,20 @@ pub enum HeightMapError {
     },
 }
 
+/// The extensions of the height maps crest reads, for messages.
+pub const READ_EXTENSIONS: &str =
+    ".csv, .xyz, .txt, .gsf, .sdf, .x3p, .sur, .al3d, .gwy, .plu, .plux, .opd or .vk4";
+
 /// Options for reading height maps.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ReadOptions {
     /// x spacing in µm; needed for grid CSV, checked against the file otherwise.
     pub dx_um: Option<f64>,
     /// y spacing in µm; defaults to `dx_um` for grid CSV.
     pub dy_um: Option<f64>,
+    /// The channel of a `.gwy` to read, by its title (`--channel`); the first channel
+    /// with heights in a length unit when `None`. Refused for other formats.
+    pub channel: Option<String>,
 }
 
 /// Read a height map, the format chosen by the extension (see the module table).
@@ -204,12 +299,30 @@ pub fn read_heightmap(path: &Path, opts: &ReadOptions) -> Result<HeightMap, Heig
         budget_of(format, head)
     })
     .map_err(|e| HeightMapError::Input(Box::new(e)))?;
-    let format = by_name
+    let mut format = by_name
         .or(sniffed)
         .unwrap_or_else(|| HeightMapFormat::sniff(&bytes));
-    parse_heightmap(&bytes, format, opts).map_err(|error| HeightMapError::Format {
-        path: path.to_path_buf(),
-        error,
+    // A binary map whose content is plainly another format than its extension says (the
+    // other format's magic) is read as what it is, that format named in any error.
+    let seen = HeightMapFormat::sniff(&bytes);
+    let renamed = seen != format
+        && seen.has_magic()
+        && !matches!(format, HeightMapFormat::Csv | HeightMapFormat::Xyz);
+    if renamed {
+        format = seen;
+    }
+    parse_heightmap(&bytes, format, opts).map_err(|mut error| {
+        if renamed {
+            error.message = format!(
+                "{} (the content is a {} file, whatever the extension says)",
+                error.message,
+                format.extension()
+            );
+        }
+        HeightMapError::Format {
+            path: path.to_path_buf(),
+            error,
+        }
     })
 }
 
@@ -233,7 +346,15 @@ fn budget_of(format: HeightMapFormat, head: &[u8]) -> input::Stage {
             Some(b'b') => Stage::Budget(input::SDF_BINARY),
             _ => Stage::Stop,
         },
-        HeightMapFormat::X3p => Stage::Budget(input::X3P),
+        HeightMapFormat::X3p | HeightMapFormat::Plux => Stage::Budget(input::X3P),
+        HeightMapFormat::Sur
+        | HeightMapFormat::Al3d
+        | HeightMapFormat::Gwy
+        | HeightMapFormat::Plu
+        | HeightMapFormat::Opd
+        | HeightMapFormat::Vk4 => Stage::Budget(input::INSTRUMENT_MAP),
+        // Refused on its first bytes.
+        HeightMapFormat::Datx => Stage::Stop,
         HeightMapFormat::Csv => input::text_stage(head, input::MAP_TEXT),
         HeightMapFormat::Xyz => input::text_stage(head, input::MAP_XYZ),
     }
@@ -241,9 +362,24 @@ fn budget_of(format: HeightMapFormat, head: &[u8]) -> input::Stage {
 
 impl HeightMapFormat {
     /// The format the first bytes of a file show: `.gsf` and `.sdf` by their first line,
-    /// else CSV (a grid, or a point list with an `x,y,z` header).
+    /// the instruments' binary files by their magic, a zip archive as `.plux` or `.x3p`,
+    /// else CSV (a grid, or a point list with an `x,y,z` header). A `.plu` has no magic.
     pub fn sniff(head: &[u8]) -> HeightMapFormat {
-        if head.starts_with(b"Gwyddion Simple Field") {
+        if sur::is_sur(head) {
+            HeightMapFormat::Sur
+        } else if head.starts_with(al3d::MAGIC) {
+            HeightMapFormat::Al3d
+        } else if head.starts_with(gwy::MAGIC) {
+            HeightMapFormat::Gwy
+        } else if head.starts_with(opd::MAGIC) {
+            HeightMapFormat::Opd
+        } else if head.starts_with(vk4::MAGIC) {
+            HeightMapFormat::Vk4
+        } else if head.starts_with(b"\x89HDF\r\n\x1a\n") {
+            HeightMapFormat::Datx
+        } else if plux::looks_like(head) {
+            HeightMapFormat::Plux
+        } else if head.starts_with(b"Gwyddion Simple Field") {
             HeightMapFormat::Gsf
         } else if [b"aBCR", b"aISO", b"bBCR", b"bISO"]
             .iter()
@@ -341,6 +477,12 @@ pub fn parse_heightmap(
     format: HeightMapFormat,
     opts: &ReadOptions,
 ) -> Result<HeightMap, FormatError> {
+    if let (Some(name), false) = (&opts.channel, format == HeightMapFormat::Gwy) {
+        return Err(FormatError::file(format!(
+            "--channel {name:?} names a channel of a Gwyddion .gwy file; this is a {} file, which has one height layer",
+            format.extension()
+        )));
+    }
     let map = match format {
         HeightMapFormat::Csv => {
             let text = as_text(bytes)?;
@@ -372,6 +514,14 @@ pub fn parse_heightmap(
         HeightMapFormat::Gsf => gsf::parse(bytes)?,
         HeightMapFormat::Sdf => sdf::parse(bytes)?,
         HeightMapFormat::X3p => x3p::parse(bytes)?,
+        HeightMapFormat::Sur => sur::parse(bytes)?,
+        HeightMapFormat::Al3d => al3d::parse(bytes)?,
+        HeightMapFormat::Gwy => gwy::parse(bytes, opts.channel.as_deref())?,
+        HeightMapFormat::Plu => plu::parse(bytes)?,
+        HeightMapFormat::Plux => plux::parse(bytes)?,
+        HeightMapFormat::Opd => opd::parse(bytes)?,
+        HeightMapFormat::Vk4 => vk4::parse(bytes)?,
+        HeightMapFormat::Datx => return Err(FormatError::file(DATX_REFUSED)),
     };
     check_heights(&map)?;
     check_against(opts.dx_um, map.dx_um, "dx")?;
@@ -408,6 +558,10 @@ fn as_text(bytes: &[u8]) -> Result<&str, FormatError> {
     })
 }
 
+/// Why a Zygo `.datx` is refused.
+pub const DATX_REFUSED: &str =
+    "Zygo .datx is HDF5, which crest cannot read; export .x3p or .sdf from Mx";
+
 /// Write a height map, the format chosen by the extension: `.csv` (rows = y ascending,
 /// µm), `.xyz`/`.txt` (x,y,z point list, µm), `.gsf` (Gwyddion Simple Field, metres,
 /// float32), `.sdf` (ISO 25178-71 / BCR text, metres, float64 values) or `.x3p` (ISO
@@ -425,11 +579,13 @@ pub fn stage_heightmap(
     path: &Path,
     map: &HeightMap,
 ) -> std::io::Result<()> {
-    let format = HeightMapFormat::from_path(path).ok_or_else(|| {
+    let format = HeightMapFormat::from_path(path)
+        .filter(|f| f.is_written())
+        .ok_or_else(|| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             format!(
-                "{}: unknown height-map extension (expected .csv, .xyz, .txt, .gsf, .sdf or .x3p)",
+                "{}: unknown height-map extension for writing (expected .csv, .xyz, .txt, .gsf, .sdf or .x3p)",
                 path.display()
             ),
         )
@@ -460,6 +616,13 @@ pub fn write_heightmap_to(
         HeightMapFormat::Gsf => gsf::write(w, map),
         HeightMapFormat::Sdf => sdf::write(w, map),
         HeightMapFormat::X3p => x3p::write(w, map),
+        f => Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!(
+                "crest reads {} files but does not write them (write .x3p, .sdf, .gsf, .csv or .xyz)",
+                f.extension()
+            ),
+        )),
     }
 }
 
@@ -471,6 +634,7 @@ pub fn as_stored(map: &HeightMap, format: HeightMapFormat) -> Result<HeightMap, 
     let opts = ReadOptions {
         dx_um: Some(map.dx_um),
         dy_um: Some(map.dy_um),
+        channel: None,
     };
     parse_heightmap(&bytes, format, &opts).map_err(|e| e.to_string())
 }
@@ -620,7 +784,7 @@ mod tests {
         let text = b"x,y,z\n0,0,1\n2,0,1\n0,2,1\n2,2,1\n";
         let opts = ReadOptions {
             dx_um: Some(1.0),
-            dy_um: None,
+            ..Default::default()
         };
         let e = parse_heightmap(text, HeightMapFormat::Xyz, &opts).unwrap_err();
         assert!(e.message.contains("dx = 2"), "{e}");

@@ -6,13 +6,16 @@
 //! keys allowed), a line `*`, then `NumPoints·NumProfiles` whitespace-separated values
 //! (profile 0 first = row 0, y ascending; `NumPoints` along x), then `*` and an optional
 //! trailer. Height in metres = value·`Zscale`; `Xscale`/`Yscale` are the spacings in metres.
-//! We write `DataType = 7` (double) with `Zscale = 1e-6`, so the values are µm, and `NaN`
+//! We write `aISO-1.0` (the version ISO 25178-71 gives, which surfalize requires) with
+//! `DataType = 7` (double) and `Zscale = 1e-6`, so the values are µm, and `NaN`
 //! for missing nodes.
 //!
 //! Binary form (read only): the 81-byte little-endian header (`bBCR`/`bISO` version, 8 bytes;
 //! manufacturer 10; dates 12 + 12; NumPoints, NumProfiles u16; Xscale, Yscale, Zscale,
 //! Zresolution f64; Compression, DataType, CheckType u8) followed by the raw values; the
-//! largest unsigned / smallest signed integer marks a missing node, as Gwyddion reads it.
+//! largest unsigned / smallest signed integer marks a missing node, as Gwyddion reads it,
+//! and so does the lowest float (`-f32::MAX`, `-f64::MAX`), the standard's invalid value
+//! that surfalize writes.
 
 use std::io::Write;
 
@@ -292,8 +295,14 @@ fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
                     u32::MAX => f64::NAN,
                     x => f64::from(x),
                 },
-                3 => f64::from(f32::from_le_bytes([c[0], c[1], c[2], c[3]])),
-                4 => f64::from(c[0] as i8),
+                3 => match f32::from_le_bytes([c[0], c[1], c[2], c[3]]) {
+                    f32::MIN => f64::NAN,
+                    x => f64::from(x),
+                },
+                4 => match c[0] as i8 {
+                    i8::MIN => f64::NAN,
+                    x => f64::from(x),
+                },
                 5 => match i16::from_le_bytes([c[0], c[1]]) {
                     i16::MIN => f64::NAN,
                     x => f64::from(x),
@@ -305,7 +314,10 @@ fn parse_binary(b: &[u8]) -> Result<HeightMap, FormatError> {
                 _ => {
                     let mut a = [0u8; 8];
                     a.copy_from_slice(c);
-                    f64::from_le_bytes(a)
+                    match f64::from_le_bytes(a) {
+                        f64::MIN => f64::NAN,
+                        x => x,
+                    }
                 }
             };
             v * zf
@@ -327,7 +339,7 @@ fn now_ddmmyyyyhhmm() -> String {
 pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
     let date = now_ddmmyyyyhhmm();
     let header = format!(
-        "aBCR-1.0\nManufacID   = crest\nCreateDate  = {date}\nModDate     = {date}\n\
+        "aISO-1.0\nManufacID   = crest\nCreateDate  = {date}\nModDate     = {date}\n\
          NumPoints   = {}\nNumProfiles = {}\nXscale      = {:e}\nYscale      = {:e}\n\
          Zscale      = 1.0e-6\nZresolution = -1\nCompression = 0\nDataType    = 7\n\
          CheckType   = 0\n*\n",

@@ -50,7 +50,8 @@ pub use params::{
     areal_parameters_of, preprocess_map, preprocess_profile, profile_parameters,
 };
 pub use profile::{
-    Profile, ProfileSpec, extract_profile, profile_values, rz_ra, sampling_length_mm,
+    Profile, ProfileSpec, extract_profile, profile_from_points, profile_values, rz_ra,
+    sampling_length_mm,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 pub use stream::RowStream;

@@ -95,6 +95,78 @@ pub struct Profile {
     pub step_um: f64,
 }
 
+/// A measured profile given as points (`x_mm` strictly ascending, heights µm) as an evenly
+/// sampled [`Profile`], which ISO 21920-2's parameters need: the points themselves when
+/// every step is within 1e-6 of the mean step, else the profile linearly interpolated every
+/// median step from the first point to the last (a missing height leaves its neighbourhood
+/// missing). The flag says whether it was resampled.
+pub fn profile_from_points(x_mm: &[f64], z_um: &[f64]) -> Result<(Profile, bool), MetricsError> {
+    let n = x_mm.len().min(z_um.len());
+    if n < 2 {
+        return Err(MetricsError::TooFew(format!(
+            "a profile needs at least 2 points, it has {n}"
+        )));
+    }
+    let mut steps = Vec::with_capacity(n - 1);
+    for k in 1..n {
+        let d = x_mm[k] - x_mm[k - 1];
+        if !(d.is_finite() && d > 0.0) {
+            return Err(MetricsError::BadProfile(format!(
+                "x must rise from point to point: point {} has x = {} mm after {} mm",
+                k + 1,
+                x_mm[k],
+                x_mm[k - 1]
+            )));
+        }
+        steps.push(d);
+    }
+    let length = x_mm[n - 1] - x_mm[0];
+    let mean = length / (n - 1) as f64;
+    if steps.iter().all(|d| (d - mean).abs() <= 1e-6 * mean) {
+        let z = z_um[..n].to_vec();
+        return Ok((
+            Profile {
+                z,
+                step_um: mean * 1e3,
+            },
+            false,
+        ));
+    }
+    let mut sorted = steps.clone();
+    sorted.sort_by(f64::total_cmp);
+    let step = sorted[sorted.len() / 2];
+    let samples = (length / step + 1e-9).floor() + 1.0;
+    if samples > crate::math::limits::MAX_NODES as f64 {
+        return Err(MetricsError::BadProfile(format!(
+            "resampling {length} mm every {step} mm (the median step) needs more than {} samples",
+            crate::math::limits::MAX_NODES
+        )));
+    }
+    let mut z = Vec::with_capacity(samples as usize);
+    let mut k = 0;
+    for i in 0..samples as usize {
+        let x = x_mm[0] + i as f64 * step;
+        while k + 2 < n && x_mm[k + 1] < x {
+            k += 1;
+        }
+        let t = ((x - x_mm[k]) / (x_mm[k + 1] - x_mm[k])).clamp(0.0, 1.0);
+        z.push(if t == 0.0 {
+            z_um[k]
+        } else if t == 1.0 {
+            z_um[k + 1]
+        } else {
+            z_um[k] + t * (z_um[k + 1] - z_um[k])
+        });
+    }
+    Ok((
+        Profile {
+            z,
+            step_um: step * 1e3,
+        },
+        true,
+    ))
+}
+
 /// Take a profile from a map.
 pub fn extract_profile(map: &HeightMap, spec: ProfileSpec) -> Result<Profile, MetricsError> {
     match spec {
@@ -419,5 +491,25 @@ mod tests {
             .collect();
         let v = profile_values(&Profile { z, step_um: 0.5 }, 5).unwrap();
         assert!((v.rsm - 80.0).abs() < 1e-6, "{}", v.rsm);
+    }
+
+    #[test]
+    fn points_to_an_even_profile() {
+        // Even: the points as they are.
+        let (p, r) = profile_from_points(&[1.0, 1.002, 1.004], &[3.0, f64::NAN, 5.0]).unwrap();
+        assert!(!r && p.z.len() == 3 && p.z[1].is_nan());
+        assert!((p.step_um - 2.0).abs() < 1e-9);
+        // Uneven: a line z = 1000·x + 2 resampled at the median step stays that line.
+        let xs = [0.0, 0.001, 0.003, 0.004, 0.0065, 0.0075];
+        let zs: Vec<f64> = xs.iter().map(|x| 1000.0 * x + 2.0).collect();
+        let (p, r) = profile_from_points(&xs, &zs).unwrap();
+        assert!(r);
+        assert!((p.step_um - 1.0).abs() < 1e-9);
+        assert_eq!(p.z.len(), 8);
+        for (k, z) in p.z.iter().enumerate() {
+            assert!((z - (k as f64 + 2.0)).abs() < 1e-9, "{k}: {z}");
+        }
+        assert!(profile_from_points(&[0.0, 0.0], &[1.0, 2.0]).is_err());
+        assert!(profile_from_points(&[0.0], &[1.0]).is_err());
     }
 }

@@ -51,6 +51,7 @@ fn csv_roundtrip_is_exact() {
     let opts = ReadOptions {
         dx_um: Some(0.5),
         dy_um: Some(0.25),
+        ..Default::default()
     };
     let back = roundtrip("csv", opts);
     same_heights(&sample_map(), &back, 0.0);
@@ -122,11 +123,11 @@ fn read_text(name: &str, content: &[u8], opts: ReadOptions) -> String {
 fn malformed_files_name_place_and_problem() {
     let dx = ReadOptions {
         dx_um: Some(1.0),
-        dy_um: None,
+        ..Default::default()
     };
-    let m = read_text("a.csv", b"1,2,3\n4,5,6\n7,8\n", dx);
+    let m = read_text("a.csv", b"1,2,3\n4,5,6\n7,8\n", dx.clone());
     assert!(m.contains("a.csv:3") && m.contains("2 fields"), "{m}");
-    let m = read_text("b.csv", b"1,2,3\n4,five,6\n", dx);
+    let m = read_text("b.csv", b"1,2,3\n4,five,6\n", dx.clone());
     assert!(m.contains("b.csv:2: field 2") && m.contains("five"), "{m}");
     let m = read_text(
         "c.xyz",
@@ -147,7 +148,7 @@ fn malformed_files_name_place_and_problem() {
     assert!(m.contains("e.gsf: byte 0"), "{m}");
     let m = read_text("f.sdf", b"aBCR-1.0\nNumPoints = 2\nNumProfiles = 1\nXscale = 1e-6\nYscale = 1e-6\nZscale = 1e-6\n*\n1\n*\n", ReadOptions::default());
     assert!(m.contains("f.sdf:") && m.contains("after 1 of"), "{m}");
-    let m = read_text("g.csv", b"", dx);
+    let m = read_text("g.csv", b"", dx.clone());
     assert!(m.contains("no data"), "{m}");
 }
 
@@ -176,7 +177,7 @@ proptest! {
                 prop_assert!(read_heightmap(&path, &ReadOptions::default()).is_err());
                 continue;
             }
-            let opts = ReadOptions { dx_um: Some(dx), dy_um: Some(dy) };
+            let opts = ReadOptions { dx_um: Some(dx), dy_um: Some(dy), ..Default::default() };
             // xyz with one row or column cannot know the other spacing: skip the check there.
             if ext == "xyz" && (nx == 1 || ny == 1 || m.z_um.iter().all(|v| v.is_nan())) {
                 continue;

@@ -16,12 +16,14 @@ mod hostile; // hostile input and lost data (issue 18): each reproduction, -o li
 mod hostile2; // hostile input, second round (issue 37): limits on every route, CR line ends, located messages, escaped text
 mod hostile3; // hostile input, third round (issue 37): failed commands change nothing, designs refused before their runs, no control characters on a terminal
 mod install; // the version, completions, man pages and plain error lines of an installed crest
+mod instruments; // the instruments' own height maps (issue 34): .sur, .al3d, .gwy, .plu, .plux, .opd, .vk4 written by hand, read exactly; truncations; exit 2; .datx refused
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod moves; // move kinds (issue 33): NX colours and feed changes, inspect counts and regions, patches in the air refused
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties
 mod plot; // `crest plot`: every plot kind, titles and axis labels
 mod process; // process effects: Brammertz limit of ploughing, calibration, run-out identification, Monte Carlo
+mod profile_metrics; // `crest metrics PROFILE.csv` (issue 34): a measured x_mm,z_um profile against the closed forms of a sine
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
