@@ -305,21 +305,11 @@ pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placemen
         .map(crate::toolpath::regions::regions_with_passes)
         .collect();
     let file = sim.file.display();
-    match sim.path {
-        Some(n) if n >= 1 && n <= program.paths.len() => {
-            for (i, r) in regions.iter_mut().enumerate() {
-                if i + 1 != n {
-                    r.clear();
-                }
-            }
+    let selected = super::inputs::select_paths(&sim.file, sim.path, program.paths.len())?;
+    for (i, r) in regions.iter_mut().enumerate() {
+        if !selected.contains(&i) {
+            r.clear();
         }
-        Some(n) => {
-            return Err(miette!(
-                "--path {n}: {file} has {} tool path(s)",
-                program.paths.len()
-            ));
-        }
-        None => {}
     }
     let count = regions.iter().map(Vec::len).sum();
     if count == 0 {

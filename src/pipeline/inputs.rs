@@ -273,6 +273,19 @@ pub fn resolve_cutter(
     Ok((cutter, what, Vec::new()))
 }
 
+/// The tool paths `path` (1-based, as users count them) selects among the `n` of `file`,
+/// 0-based: that one, or all of them.
+pub fn select_paths(file: &Path, path: Option<usize>, n: usize) -> miette::Result<Vec<usize>> {
+    match path {
+        Some(k) if k >= 1 && k <= n => Ok(vec![k - 1]),
+        Some(k) => Err(miette::miette!(
+            "{}: there is no tool path {k}: the file has {n} tool path(s)",
+            file.display()
+        )),
+        None => Ok((0..n).collect()),
+    }
+}
+
 /// The extent of the tool paths of `file` for budgets (one pass over the file, constant
 /// memory): cutting length, cutting runs and the range of programmed feeds, of the path
 /// `only` (0-based) or of all, with the moves `moves` selects as cutting.

@@ -175,16 +175,7 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
     if let Some(w) = derived.as_ref().and_then(DerivedContacts::summary) {
         warnings.push(w);
     }
-    let paths: Vec<usize> = match req.path {
-        Some(n) if n >= 1 && n <= program.paths.len() => vec![n - 1],
-        Some(n) => {
-            return Err(miette!(
-                "--path {n}: {file} has {} tool path(s)",
-                program.paths.len()
-            ));
-        }
-        None => (0..program.paths.len()).collect(),
-    };
+    let paths = super::inputs::select_paths(&req.file, req.path, program.paths.len())?;
     let mut posture_feeds = Vec::with_capacity(paths.len());
     for &i in &paths {
         let path = &program.paths[i];

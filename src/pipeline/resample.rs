@@ -5,6 +5,7 @@
 //! on the path length). s accumulates over the cutting runs of a tool path, t and θ restart
 //! at every run.
 
+use super::inputs::select_paths;
 use super::simulate::{FeedSource, resolve_feed_source};
 use crate::io::samples::SampleCsv;
 use crate::io::toolpath::{InputKind, ReadOptions, detect, stream_from};
@@ -147,18 +148,6 @@ fn feed_machine(
     resolve_feed_source(req.feed, req.machine.as_deref())
 }
 
-/// The tool paths `path` selects among `n` (0-based): one, or all.
-pub fn select_paths(file: &Path, path: Option<usize>, n: usize) -> miette::Result<Vec<usize>> {
-    match path {
-        Some(k) if k >= 1 && k <= n => Ok(vec![k - 1]),
-        Some(k) => Err(miette!(
-            "{}: --path {k} is out of range: the file has {n} tool path(s)",
-            file.display()
-        )),
-        None => Ok((0..n).collect()),
-    }
-}
-
 /// Resample the selected tool paths of `req` with the whole file in memory, handing each
 /// sample to `sink` with its tool path's index (0-based).
 pub fn resample_each(
@@ -276,6 +265,9 @@ pub fn resample_to_csv(
     })
 }
 
+/// A streamed tool path: its ordinal, counts, spindle scan, and whether it must be redone.
+type Finished = (usize, Option<Stats>, Option<SpindleScan>, bool);
+
 /// The spindle speed of every streamed tool path (in order), when known beforehand.
 type Spindles = Vec<Result<Option<(f64, SpindleSource)>, ResampleError>>;
 
@@ -361,37 +353,16 @@ fn stream_pass(
         ..read.clone()
     };
     let lazy = pass.spindles.is_none() && opts.rpm.is_none();
-    let selected = |ordinal: usize| match pass.target {
-        None => true,
-        Some(t) => t == Some(ordinal),
-    };
 
     let mut failure: Option<miette::Report> = None;
     let mut outcome: Option<PassResult> = None;
     let written = crate::io::write_atomic(&output, |w| {
         let mut out = SampleCsv::new(w)?;
         let mut current: Option<Current> = None;
-        let mut finished: Vec<(usize, Option<Stats>, Option<SpindleScan>, bool)> = Vec::new();
+        let mut finished: Vec<Finished> = Vec::new();
         let mut count = 0usize;
-        // Finish the current tool path: its last samples, its counts.
-        let finish = |cur: Current,
-                      out: &mut SampleCsv<'_>,
-                      finished: &mut Vec<(usize, Option<Stats>, Option<SpindleScan>, bool)>|
-         -> Result<(), ResampleError> {
-            let mut stats = None;
-            let mut redo = cur.lazy_error.is_some();
-            if let (Some(r), None) = (cur.resampler, &cur.lazy_error) {
-                match r.finish(|s| out.sample(s)) {
-                    Ok(s) => stats = Some(s),
-                    Err(e) if lazy => {
-                        let _ = e;
-                        redo = true;
-                    }
-                    Err(e) => return Err(e),
-                }
-            }
-            finished.push((cur.ordinal, stats, cur.scan, redo));
-            Ok(())
+        let finish = |cur: Current, out: &mut SampleCsv<'_>, finished: &mut Vec<Finished>| {
+            finish_path(cur, lazy, out, finished)
         };
         let mut error: Option<(String, ResampleError)> = None;
         let mut sink = |path: &Toolpath, p: &Posture| -> std::io::Result<()> {
@@ -404,21 +375,13 @@ fn stream_pass(
                 }
                 let ordinal = count;
                 count += 1;
-                let mut resampler = None;
-                if selected(ordinal) {
-                    let mut r = Resampler::new(opts).map_err(std::io::Error::other)?;
-                    if let Some(spindles) = pass.spindles {
-                        match spindles.get(ordinal) {
-                            Some(Ok(Some((rpm, source)))) => r = r.with_spindle(*rpm, *source),
-                            Some(Err(e)) => {
-                                error = Some((path.name.clone(), e.clone()));
-                                return Err(std::io::Error::other("resampling failed"));
-                            }
-                            _ => {}
-                        }
+                let resampler = match start_path(opts, pass, ordinal) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        error = Some((path.name.clone(), e));
+                        return Err(std::io::Error::other("resampling failed"));
                     }
-                    resampler = Some(r);
-                }
+                };
                 current = Some(Current {
                     ordinal,
                     resampler,
@@ -481,77 +444,20 @@ fn stream_pass(
         }
         out.flush()?;
 
-        // Which tool paths were streamed (those with postures), by ordinal.
-        let streamed_paths: Vec<usize> = (0..program.paths.len())
-            .filter(|&i| program.paths[i].stats.postures > 0)
-            .collect();
-        let wanted = match select_paths(file, req.path, program.paths.len()) {
-            Ok(w) => w,
+        match conclude(req, opts, pass, lazy, &program, &finished) {
+            Ok(done @ PassResult::Done(_)) => {
+                outcome = Some(done);
+                Ok(())
+            }
+            Ok(again) => {
+                outcome = Some(again);
+                Err(std::io::Error::other("again"))
+            }
             Err(e) => {
                 failure = Some(e);
-                return Err(std::io::Error::other("bad --path"));
-            }
-        };
-        let target = req
-            .path
-            .map(|n| streamed_paths.iter().position(|&i| i == n - 1));
-        let spindles = || -> Option<Spindles> {
-            let scans: Spindles = finished
-                .iter()
-                .map(|(_, _, scan, _)| match scan {
-                    Some(scan) => scan.resolve(opts),
-                    None => Ok(None),
-                })
-                .collect();
-            lazy.then_some(scans)
-        };
-        if target != pass.target {
-            outcome = Some(PassResult::Again(target, spindles()));
-            return Err(std::io::Error::other("again"));
-        }
-        if lazy {
-            let settled = finished.iter().all(|(_, stats, scan, redo)| {
-                let Some(stats) = stats else {
-                    return !redo;
-                };
-                let used = stats.spindle_rpm.zip(stats.spindle_source);
-                match scan.as_ref().map(|s| s.resolve(opts)) {
-                    Some(Ok(resolved)) => resolved == used,
-                    Some(Err(_)) => false,
-                    None => true,
-                }
-            });
-            if !settled {
-                outcome = Some(PassResult::Again(target, spindles()));
-                return Err(std::io::Error::other("again"));
+                Err(std::io::Error::other("resampling failed"))
             }
         }
-        let mut reports = Vec::new();
-        for idx in wanted {
-            let p = &program.paths[idx];
-            let stats = streamed_paths
-                .iter()
-                .position(|&i| i == idx)
-                .and_then(|ordinal| finished.iter().find(|f| f.0 == ordinal))
-                .and_then(|f| f.1.clone());
-            let stats = match stats {
-                Some(s) => s,
-                // A tool path without postures: nothing resampled.
-                None => Resampler::new(opts)
-                    .and_then(|r| r.finish(|_| {}))
-                    .map_err(std::io::Error::other)?,
-            };
-            reports.push(PathReport {
-                index: idx,
-                name: p.name.clone(),
-                tool: p.tool_name.clone(),
-                postures: p.stats.postures,
-                moves: p.stats.moves,
-                stats,
-            });
-        }
-        outcome = Some(PassResult::Done(reports));
-        Ok(())
     });
     if let Some(e) = failure {
         return Err(crate::io::toolpath::name_output(e, output));
@@ -565,6 +471,120 @@ fn stream_pass(
             file.display()
         )),
     }
+}
+
+/// The resampler of the tool path `ordinal` (`None` when the pass does not resample it),
+/// with the spindle speed an earlier pass found.
+fn start_path(
+    opts: &Options,
+    pass: &Pass<'_>,
+    ordinal: usize,
+) -> Result<Option<Resampler>, ResampleError> {
+    if pass.target.is_some_and(|t| t != Some(ordinal)) {
+        return Ok(None);
+    }
+    let mut r = Resampler::new(opts)?;
+    match pass.spindles.and_then(|s| s.get(ordinal)) {
+        Some(Ok(Some((rpm, source)))) => r = r.with_spindle(*rpm, *source),
+        Some(Err(e)) => return Err(e.clone()),
+        _ => {}
+    }
+    Ok(Some(r))
+}
+
+/// Finish the current tool path: its last samples, its counts (with a provisional spindle
+/// speed, `lazy`, an error only asks for another pass).
+fn finish_path(
+    cur: Current,
+    lazy: bool,
+    out: &mut SampleCsv<'_>,
+    finished: &mut Vec<Finished>,
+) -> Result<(), ResampleError> {
+    let mut stats = None;
+    let mut redo = cur.lazy_error.is_some();
+    if let (Some(r), None) = (cur.resampler, &cur.lazy_error) {
+        match r.finish(|s| out.sample(s)) {
+            Ok(s) => stats = Some(s),
+            Err(_) if lazy => redo = true,
+            Err(e) => return Err(e),
+        }
+    }
+    finished.push((cur.ordinal, stats, cur.scan, redo));
+    Ok(())
+}
+
+/// What a streaming pass found once the file is read: the reports of the tool paths asked
+/// for, or another pass (another target, or the spindle speeds of the whole paths).
+fn conclude(
+    req: &ResampleRequest,
+    opts: &Options,
+    pass: &Pass<'_>,
+    lazy: bool,
+    program: &Program,
+    finished: &[Finished],
+) -> miette::Result<PassResult> {
+    // Which tool paths were streamed (those with postures), by ordinal.
+    let streamed_paths: Vec<usize> = (0..program.paths.len())
+        .filter(|&i| program.paths[i].stats.postures > 0)
+        .collect();
+    let wanted = select_paths(&req.file, req.path, program.paths.len())?;
+    let target = req
+        .path
+        .map(|n| streamed_paths.iter().position(|&i| i == n - 1));
+    let spindles = || -> Option<Spindles> {
+        let scans: Spindles = finished
+            .iter()
+            .map(|(_, _, scan, _)| match scan {
+                Some(scan) => scan.resolve(opts),
+                None => Ok(None),
+            })
+            .collect();
+        lazy.then_some(scans)
+    };
+    if target != pass.target {
+        return Ok(PassResult::Again(target, spindles()));
+    }
+    if lazy {
+        let settled = finished.iter().all(|(_, stats, scan, redo)| {
+            let Some(stats) = stats else {
+                return !redo;
+            };
+            let used = stats.spindle_rpm.zip(stats.spindle_source);
+            match scan.as_ref().map(|s| s.resolve(opts)) {
+                Some(Ok(resolved)) => resolved == used,
+                Some(Err(_)) => false,
+                None => true,
+            }
+        });
+        if !settled {
+            return Ok(PassResult::Again(target, spindles()));
+        }
+    }
+    let mut reports = Vec::new();
+    for idx in wanted {
+        let p = &program.paths[idx];
+        let stats = streamed_paths
+            .iter()
+            .position(|&i| i == idx)
+            .and_then(|ordinal| finished.iter().find(|f| f.0 == ordinal))
+            .and_then(|f| f.1.clone());
+        let stats = match stats {
+            Some(s) => s,
+            // A tool path without postures: nothing resampled.
+            None => Resampler::new(opts)
+                .and_then(|r| r.finish(|_| {}))
+                .map_err(|e| path_error(&req.file, &p.name, e))?,
+        };
+        reports.push(PathReport {
+            index: idx,
+            name: p.name.clone(),
+            tool: p.tool_name.clone(),
+            postures: p.stats.postures,
+            moves: p.stats.moves,
+            stats,
+        });
+    }
+    Ok(PassResult::Done(reports))
 }
 
 fn path_error(file: &Path, name: &str, e: ResampleError) -> miette::Report {
