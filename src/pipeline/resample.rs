@@ -356,7 +356,7 @@ fn stream_pass(
 
     let mut failure: Option<miette::Report> = None;
     let mut outcome: Option<PassResult> = None;
-    let written = crate::io::write_atomic(&output, |w| {
+    let written = crate::io::write_atomic(output, |w| {
         let mut out = SampleCsv::new(w)?;
         let mut current: Option<Current> = None;
         let mut finished: Vec<Finished> = Vec::new();
