@@ -18,7 +18,7 @@ use clap::ValueEnum;
 use crest::pipeline::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crest::surface::ModelKind;
 use miette::{IntoDiagnostic, WrapErr, miette};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The surface model, as named on the command line.
@@ -50,7 +50,7 @@ impl From<ModelName> for ModelKind {
 /// path). Without `--part` and without contact data in the file, the reference surface is
 /// derived from the path itself (the cutter's offset surface fitted over neighbouring passes).
 #[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("grid").required(true).args(["window", "patch_at", "patch_near", "map_mm"])))]
+#[command(group(clap::ArgGroup::new("grid").required(true).multiple(true).args(["window", "patch_at", "patch_near", "map_mm", "like"])))]
 pub struct Args {
     /// Tool-path file (NX CLSF or APT, contact12, or G-code with `--machine`).
     pub file: PathBuf,
@@ -119,7 +119,12 @@ pub struct Args {
     pub band_um: Option<f64>,
     /// A window of the WCS xy plane, mm: X0,Y0,X1,Y1 (heights along +z above the reference
     /// surface).
-    #[arg(long, value_name = "X0,Y0,X1,Y1", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "X0,Y0,X1,Y1",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["patch_at", "patch_near", "map_mm"]
+    )]
     pub window: Option<String>,
     /// A patch on the tangent plane at the contact point at this arc length of the path, mm
     /// (heights along the surface normal).
@@ -127,7 +132,8 @@ pub struct Args {
         long,
         value_name = "S_MM",
         requires = "patch_mm",
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        conflicts_with_all = ["patch_near", "map_mm", "like"]
     )]
     pub patch_at: Option<f64>,
     /// A patch centred at the part point nearest X,Y,Z (on the design surface of --part;
@@ -137,12 +143,23 @@ pub struct Args {
         long,
         value_name = "X,Y,Z",
         allow_hyphen_values = true,
-        requires = "patch_mm"
+        conflicts_with = "map_mm"
     )]
     pub patch_near: Option<String>,
     /// Patch size, mm: L (along the feed), W (across).
     #[arg(long, value_name = "L,W")]
     pub patch_mm: Option<String>,
+    /// Simulate on the grid of a measured height map (any format crest reads: .x3p, .sur,
+    /// .sdf, .gsf, …): its node spacing and its extent. With --patch-near, a patch of the
+    /// map's size centred there (its columns along the feed); alone, the window of the WCS
+    /// xy plane the map covers (from its origin). The map's spacing must be the same along
+    /// x and y.
+    #[arg(
+        long,
+        value_name = "MEASURED",
+        conflicts_with_all = ["window", "map_mm", "grid_um", "patch_mm"]
+    )]
+    pub like: Option<PathBuf>,
     /// Map the whole part (needs --part) at this node spacing, mm; the output is a PLY point
     /// cloud with normals and a height_um property.
     #[arg(long, value_name = "SPACING")]
@@ -198,10 +215,52 @@ fn numbers(s: &str, n: usize, name: &str) -> miette::Result<Vec<f64>> {
     }
 }
 
+/// The grid and spacing (µm) of `--like MEASURED`: a patch of the map's size at
+/// `patch_near`, else the window the map covers.
+fn like_grid(measured: &Path, patch_near: Option<&str>) -> miette::Result<(GridRequest, f64)> {
+    let opts = crest::io::ReadOptions::default();
+    let map = crest::io::read_heightmap(measured, &opts).map_err(|e| miette!("{e}"))?;
+    let (dx, dy) = (map.dx_um, map.dy_um);
+    if (dx - dy).abs() > 1e-9 * dx.abs().max(dy.abs()) {
+        return Err(miette!(
+            "--like {}: the map's spacing is {dx} µm along x and {dy} µm along y; crest simulates on square grids (resample the map to one spacing first)",
+            measured.display()
+        ));
+    }
+    let (l, w) = (
+        (map.nx - 1) as f64 * dx * 1e-3,
+        (map.ny - 1) as f64 * dy * 1e-3,
+    );
+    let grid = match patch_near {
+        Some(p) => {
+            let q = numbers(p, 3, "patch-near")?;
+            GridRequest::PatchNear {
+                point: [q[0], q[1], q[2]],
+                length_mm: l,
+                width_mm: w,
+            }
+        }
+        None => GridRequest::Window {
+            x0_mm: map.x0_mm,
+            y0_mm: map.y0_mm,
+            x1_mm: map.x0_mm + l,
+            y1_mm: map.y0_mm + w,
+        },
+    };
+    Ok((grid, dx))
+}
+
 /// Run `crest simulate`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let started = Instant::now();
-    let grid = if let Some(w) = &args.window {
+    let like = match &args.like {
+        Some(m) => Some(like_grid(m, args.patch_near.as_deref())?),
+        None => None,
+    };
+    let grid_um = args.grid_um.or(like.map(|l| l.1));
+    let grid = if let Some((g, _)) = like {
+        g
+    } else if let Some(w) = &args.window {
         let v = numbers(w, 4, "window")?;
         GridRequest::Window {
             x0_mm: v[0],
@@ -301,7 +360,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         rtcp: args.rtcp.into(),
         model: args.model.into(),
         dtheta_deg: args.dtheta_deg,
-        grid_um: args.grid_um,
+        grid_um,
         chord_tol_um: args.chord_tol_um,
         band_um: args.band_um,
         grid,
@@ -414,7 +473,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                     m.nx,
                     m.ny,
                     run.grid_um,
-                    if args.grid_um.is_none() {
+                    if grid_um.is_none() {
                         " (a tenth of fz; --grid-um to change)"
                     } else {
                         ""
@@ -538,7 +597,7 @@ fn summary(
         "nodes_not_reached": run.nodes - run.nodes_cut,
         "cut_fraction": num(run.nodes_cut as f64 / run.nodes.max(1) as f64),
         "grid_um": num(run.grid_um),
-        "grid_um_default": args.grid_um.is_none(),
+        "grid_um_default": args.grid_um.is_none() && args.like.is_none(),
         "warning": warning,
         "warnings": run.warnings,
         "moves": run.moves.name(),

@@ -279,7 +279,7 @@ pub fn select_paths(file: &Path, path: Option<usize>, n: usize) -> miette::Resul
     match path {
         Some(k) if k >= 1 && k <= n => Ok(vec![k - 1]),
         Some(k) => Err(miette::miette!(
-            "{}: there is no tool path {k}: the file has {n} tool path(s)",
+            "{}: tool path {k} is out of range: the file has {n} tool path(s)",
             file.display()
         )),
         None => Ok((0..n).collect()),

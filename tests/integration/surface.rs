@@ -862,3 +862,67 @@ fn band_and_chord_tolerance_trade_speed_for_stated_accuracy() {
         assert!(!dir.path().join("never.csv").exists());
     }
 }
+
+#[test]
+fn simulate_like_a_measured_map_takes_its_grid_and_extent() {
+    // A map simulated on a window, then simulated again `--like` it: the same nodes, the
+    // same heights. Then a patch `--like` it: its spacing and node counts.
+    let dir = tempdir();
+    let first = dir.path().join("first.x3p");
+    let run = |grid: &[&str], out: &std::path::Path, code: i32| {
+        let assert = crest()
+            .current_dir(ROOT)
+            .args([
+                "simulate",
+                "samples/synth/plane-trial3.cls",
+                "--tool",
+                "samples/synth/torus-r5-rc1.5.toml",
+                "--model",
+                "dome",
+            ])
+            .args(grid)
+            .arg("-o")
+            .arg(out)
+            .arg("--json")
+            .assert()
+            .code(code);
+        stdout_json(&assert)
+    };
+    let a = run(
+        &["--grid-um", "10", "--window", "0.01,0,0.28,0.2"],
+        &first,
+        0,
+    );
+    let like = first.to_str().unwrap();
+    let b = run(&["--like", like], &dir.path().join("second.x3p"), 0);
+    for k in ["nx", "ny", "dx_um", "dy_um", "nodes_cut"] {
+        assert_eq!(a[k], b[k], "{k}");
+    }
+    assert_eq!((a["nx"].as_u64(), a["ny"].as_u64()), (Some(28), Some(21)));
+    assert_eq!(b["grid_um_default"], false);
+    assert_eq!(a["heights_um"], b["heights_um"]);
+    // (Narrower than the stepover: the patch fails that check, exit 1, and says so.)
+    let c = run(
+        &["--like", like, "--patch-near", "0.15,0.1,0"],
+        &dir.path().join("third.x3p"),
+        1,
+    );
+    assert_eq!((c["nx"].as_u64(), c["ny"].as_u64()), (Some(28), Some(21)));
+    assert_eq!(c["dx_um"], 10.0);
+    // A map is not a grid to fit a window or a spacing to as well.
+    crest()
+        .current_dir(ROOT)
+        .args([
+            "simulate",
+            "samples/synth/plane-trial3.cls",
+            "--like",
+            like,
+            "--grid-um",
+            "5",
+            "-o",
+        ])
+        .arg(dir.path().join("x.x3p"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--grid-um"));
+}
