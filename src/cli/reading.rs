@@ -88,6 +88,26 @@ pub fn read_options(
     })
 }
 
+/// The `--feed` values of `crest resample` and `crest simulate`: which feed drives the
+/// clock and the feed per tooth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeedSource {
+    /// The programmed feed (FEDRAT, or `--feed-mm-min`).
+    Programmed,
+    /// The feed the machine of `--machine` really reaches (`crest feed`: the jerk-limited
+    /// interpolator's tool-tip feed).
+    Predicted,
+}
+
+impl From<FeedSource> for crest::pipeline::simulate::FeedSource {
+    fn from(f: FeedSource) -> Self {
+        match f {
+            FeedSource::Programmed => crest::pipeline::simulate::FeedSource::Programmed,
+            FeedSource::Predicted => crest::pipeline::simulate::FeedSource::Predicted,
+        }
+    }
+}
+
 /// The machine to predict the feed on, for `resample` and `simulate`: for G-code the
 /// machine reads the file, and plans the feed only with `--feed predicted`; for CLSF and
 /// contact12 `--machine` means `--feed predicted` (see
@@ -95,14 +115,14 @@ pub fn read_options(
 pub fn feed_machine(
     kind: InputKind,
     read: &ReadOptions,
-    feed: Option<super::feed::FeedSource>,
+    feed: Option<FeedSource>,
     machine: Option<&Path>,
 ) -> miette::Result<Option<Machine>> {
     if kind == InputKind::Gcode {
         return Ok(match feed {
-            Some(super::feed::FeedSource::Predicted) => read.machine.clone(),
+            Some(FeedSource::Predicted) => read.machine.clone(),
             _ => None,
         });
     }
-    super::feed::resolve_feed_source(feed, machine)
+    crest::pipeline::simulate::resolve_feed_source(feed.map(Into::into), machine)
 }

@@ -241,7 +241,7 @@ fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (String, St
 /// ([`crate::math::limits::coordinates`]).
 fn coordinate(tok: Option<&str>, line: usize) -> Result<f64, (String, String)> {
     let v = number(tok, line, "a coordinate")?;
-    crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m))?;
+    crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m.to_string()))?;
     Ok(v)
 }
 
@@ -754,7 +754,7 @@ fn ply_item(
             if !xyz.iter().all(|v| v.is_finite()) {
                 return Err((place(at), "a vertex without finite x, y, z".into()));
             }
-            crate::math::limits::coordinates(&xyz).map_err(|m| (place(at), m))?;
+            crate::math::limits::coordinates(&xyz).map_err(|m| (place(at), m.to_string()))?;
             mesh.vertices.push(Point3::new(xyz[0], xyz[1], xyz[2]));
         }
         "face" => {
