@@ -21,6 +21,7 @@ use super::measured::{MeasuredCase, Side};
 use super::regression::{PredictError, Study, StudyCase, predict_case};
 use crate::surface::{Process, Texture};
 use crate::tool::Cutter;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -292,21 +293,15 @@ fn values(targets: &[Target], preds: &[(f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
+/// The inverse of `a` (LU with partial pivoting), NaN everywhere when `a` is singular.
 fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
-    let cols: Vec<Option<Vec<f64>>> = (0..n)
-        .map(|j| {
-            let mut e = vec![0.0; n];
-            e[j] = 1.0;
-            crate::math::dense::solve(a.to_vec(), e)
-        })
-        .collect();
+    let inv = DMatrix::from_fn(n, n, |i, j| a[i][j])
+        .lu()
+        .try_inverse()
+        .unwrap_or_else(|| DMatrix::from_element(n, n, f64::NAN));
     (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| cols[j].as_ref().map_or(f64::NAN, |c| c[i]))
-                .collect()
-        })
+        .map(|i| (0..n).map(|j| inv[(i, j)]).collect())
         .collect()
 }
 
@@ -378,11 +373,15 @@ fn fit(
             .collect();
         let mut improved = false;
         for _ in 0..8 {
-            let mut a = jtj.clone();
-            for (i, row) in a.iter_mut().enumerate() {
-                row[i] += lambda * jtj[i][i].max(1e-12);
-            }
-            let Some(d) = crate::math::dense::solve(a, g.clone()) else {
+            let a = DMatrix::from_fn(n, n, |i, j| {
+                let damping = if i == j {
+                    lambda * jtj[i][i].max(1e-12)
+                } else {
+                    0.0
+                };
+                jtj[i][j] + damping
+            });
+            let Some(d) = a.lu().solve(&DVector::from_column_slice(&g)) else {
                 lambda *= 10.0;
                 continue;
             };

@@ -268,8 +268,8 @@ pub fn identify(
                 v[p] += f[p] * z;
             }
         }
-        let mm: Vec<Vec<f64>> = m.iter().map(|r| r.to_vec()).collect();
-        if let Some(sol) = crate::math::dense::solve(mm, v.to_vec()) {
+        let mm = nalgebra::Matrix3::from_fn(|p, q| m[p][q]);
+        if let Some(sol) = mm.lu().solve(&nalgebra::Vector3::from(v)) {
             offset = Some((sol[1].hypot(sol[2]), sol[2].atan2(sol[1]).to_degrees()));
         }
     } else {

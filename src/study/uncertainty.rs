@@ -6,6 +6,7 @@
 
 use crate::math::rng::Rng;
 use crate::tool::Cutter;
+use nalgebra::DMatrix;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -144,7 +145,7 @@ pub fn draw_parameters(
     let g: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
     (0..n)
         .map(|i| {
-            let d: f64 = (0..=i).map(|k| l[i][k] * g[k]).sum();
+            let d: f64 = (0..n).map(|k| l[i][k] * g[k]).sum();
             let v = mean[i] + scale * d;
             let (lo, hi) = bounds.get(i).copied().unwrap_or((f64::MIN, f64::MAX));
             v.clamp(lo, hi)
@@ -152,27 +153,27 @@ pub fn draw_parameters(
         .collect()
 }
 
-/// Lower Cholesky factor of a symmetric positive semi-definite matrix (non-positive pivots
-/// become zero columns).
+/// A factor `L` with `L Lᵀ = a` of a symmetric positive semi-definite matrix: the lower
+/// Cholesky factor (nalgebra) when `a` is positive definite, else `V √max(Λ, 0)` of its
+/// symmetric eigen-decomposition, so that a singular direction gets no spread (zero when
+/// `a` holds a non-finite value).
 pub fn cholesky(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
-    let mut l = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..=i {
-            let s: f64 = (0..j).map(|k| l[i][k] * l[j][k]).sum();
-            if i == j {
-                let d = a[i][i] - s;
-                l[i][j] = if d > 0.0 && d.is_finite() {
-                    d.sqrt()
-                } else {
-                    0.0
-                };
-            } else if l[j][j] > 0.0 {
-                l[i][j] = (a[i][j] - s) / l[j][j];
+    let m = DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let factor = match m.clone().cholesky() {
+        Some(c) => c.l(),
+        None if m.iter().all(|v| v.is_finite()) => match m.try_symmetric_eigen(1e-15, 10_000) {
+            Some(e) => {
+                let root = e.eigenvalues.map(|l| l.max(0.0).sqrt());
+                e.eigenvectors * DMatrix::from_diagonal(&root)
             }
-        }
-    }
-    l
+            None => DMatrix::zeros(n, n),
+        },
+        None => DMatrix::zeros(n, n),
+    };
+    (0..n)
+        .map(|i| (0..n).map(|j| factor[(i, j)]).collect())
+        .collect()
 }
 
 /// Largest number of Monte Carlo samples (`--monte-carlo N`): the outputs of every sample
