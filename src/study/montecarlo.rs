@@ -1,8 +1,9 @@
-//! Monte Carlo bands: the inputs a prediction depends on but nobody knows exactly (spindle
-//! phase between passes, run-out offset, phase and tooth deviations, calibrated parameters
-//! within their covariance) sampled N times with a seeded generator, and the P5 / P50 / P95
-//! of every output. Samples run in parallel (rayon); sample i always draws from stream i of
-//! the seed, so the bands are the same for any thread count.
+//! Monte Carlo bands of a design's run and of a regression study's cases: the inputs a
+//! prediction depends on but nobody knows exactly (spindle phase between passes, run-out
+//! offset, phase and tooth deviations, calibrated parameters within their covariance)
+//! drawn N times by [`super::uncertainty`], each sample run, and the P5 / P50 / P95 of every
+//! output. Samples run in parallel (rayon); sample i always draws from stream i of the seed,
+//! so the bands are the same for any thread count.
 
 use super::uncertainty::{
     Band, SamplesError, Uncertainty, bands, check_samples, draw_parameters, perturb_cutter,
