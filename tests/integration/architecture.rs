@@ -725,8 +725,6 @@ fn library_errors_are_not_strings() {
         "src/resample/",
         // Chained with `io::as_stored`'s string error in `cli::simulate`.
         "src/report/view.rs",
-        // A reader's private check, with its (place, message) pairs.
-        "src/io/mesh.rs",
     ];
     let mut bad = Vec::new();
     for (path, _) in library_files() {
