@@ -27,7 +27,7 @@ pub(crate) fn metrics_of<'py>(
     };
     let bad = |e: String| CrestError::new_err(e);
     let pp = Preprocess {
-        level: Level::parse(level).map_err(bad)?,
+        level: Level::parse(level).map_err(|e| bad(e.to_string()))?,
         lambda_s_um,
         lambda_c_um,
         ends: match ends {
@@ -44,7 +44,7 @@ pub(crate) fn metrics_of<'py>(
         .as_deref()
         .map(ProfileSpec::parse)
         .transpose()
-        .map_err(bad)?;
+        .map_err(|e| bad(e.to_string()))?;
     let set = match &params {
         Some(list) => ParamSet::parse(list, spec.is_some()),
         None => Ok(ParamSet::all(spec.is_some())),

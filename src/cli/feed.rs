@@ -6,6 +6,7 @@
 //! 1 when a path fails the §7 self-check (an interpolator fallback was needed).
 
 use super::Outcome;
+use crest::io::tables::json_number;
 use crest::kinematics::{FeedPlan, Level};
 use crest::pipeline::feed::PlannedPath;
 use std::io::Write;
@@ -50,25 +51,8 @@ pub enum LevelArg {
     Acc,
 }
 
-/// The `--feed` values of `crest resample` and `crest simulate`: which feed drives the
-/// clock and the feed per tooth.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum FeedSource {
-    /// The programmed feed (FEDRAT, or `--feed-mm-min`).
-    Programmed,
-    /// The feed the machine of `--machine` really reaches (`crest feed`: the jerk-limited
-    /// interpolator's tool-tip feed).
-    Predicted,
-}
-
-impl From<FeedSource> for crest::pipeline::simulate::FeedSource {
-    fn from(f: FeedSource) -> Self {
-        match f {
-            FeedSource::Programmed => crest::pipeline::simulate::FeedSource::Programmed,
-            FeedSource::Predicted => crest::pipeline::simulate::FeedSource::Predicted,
-        }
-    }
-}
+/// The `--feed` values live with the other options of the commands that read tool paths.
+pub use super::reading::FeedSource;
 
 /// Run `crest feed`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
@@ -110,7 +94,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "level": match level { Level::Jerk => "jerk", Level::Acceleration => "acc" },
             "total_time_s": total,
             "programmed_time_s": programmed,
-            "time_ratio": json_num(ratio),
+            "time_ratio": json_number(ratio),
             "self_check_ok": all_ok,
             "paths": paths,
         });
@@ -146,14 +130,6 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     })
 }
 
-fn json_num(x: f64) -> serde_json::Value {
-    if x.is_finite() {
-        serde_json::json!(x)
-    } else {
-        serde_json::Value::Null
-    }
-}
-
 /// Joint value in interface units: mm for linear joints, degrees for rotary ones.
 fn joint_out(i: usize, q: f64) -> f64 {
     if i < 3 { q } else { q.to_degrees() }
@@ -181,7 +157,7 @@ fn path_json(
                 "t_s": p.t_s,
                 "feed_mm_min": p.feed_mm_s * 60.0,
                 "path_speed_mm_min": p.path_speed_mm_s * 60.0,
-                "programmed_feed_mm_min": json_num(inp.feed_mm_s * 60.0),
+                "programmed_feed_mm_min": json_number(inp.feed_mm_s * 60.0),
                 "limit": p.limit.label(names),
                 "branch": p.branch,
                 "joints": joints,
@@ -192,7 +168,7 @@ fn path_json(
         "name": name,
         "total_time_s": plan.total_time_s,
         "programmed_time_s": plan.programmed_time_s,
-        "time_ratio": json_num(plan.total_time_s / plan.programmed_time_s),
+        "time_ratio": json_number(plan.total_time_s / plan.programmed_time_s),
         "level1_time_s": plan.level1_time_s,
         "cycles": plan.cycles,
         "fallbacks": plan.fallbacks,
@@ -200,7 +176,7 @@ fn path_json(
         "branch_switches": plan.branch_switches,
         "self_check": {
             "max_axis_ratio": plan.max_axis_ratio,
-            "max_ceiling_ratio": json_num(plan.max_ceiling_ratio),
+            "max_ceiling_ratio": json_number(plan.max_ceiling_ratio),
             "ok": plan.self_check_ok(),
         },
         "postures": postures,
@@ -208,46 +184,42 @@ fn path_json(
 }
 
 fn write_csv(w: &mut dyn Write, plans: &[PlannedPath], names: &[&str; 5]) -> std::io::Result<()> {
-    write!(
-        w,
-        "path,index,line,t_s,feed_mm_min,path_speed_mm_min,programmed_feed_mm_min,limit,branch"
-    )?;
-    for n in names {
-        write!(w, ",{n}")?;
-    }
-    writeln!(w)?;
+    let mut csv = csv::Writer::from_writer(w);
+    let mut head = vec![
+        "path",
+        "index",
+        "line",
+        "t_s",
+        "feed_mm_min",
+        "path_speed_mm_min",
+        "programmed_feed_mm_min",
+        "limit",
+        "branch",
+    ];
+    head.extend(names);
+    csv.write_record(&head)?;
     for PlannedPath { name, input, plan } in plans {
-        // The path name is text from the file: quoted by the csv crate where it must be.
-        let name = {
-            let mut q = csv::WriterBuilder::new()
-                .has_headers(false)
-                .from_writer(Vec::new());
-            q.write_record([name.as_str()])?;
-            let b = q.into_inner().map_err(|e| e.into_error())?;
-            String::from_utf8_lossy(&b[..b.len() - 1]).into_owned()
-        };
         for (i, (p, inp)) in plan.postures.iter().zip(input).enumerate() {
             let f = inp.feed_mm_s * 60.0;
             let f = if f.is_finite() {
-                format!("{f}")
+                f.to_string()
             } else {
                 String::new()
             };
-            write!(
-                w,
-                "{name},{i},{},{},{},{},{f},{},{}",
-                inp.line,
-                p.t_s,
-                p.feed_mm_s * 60.0,
-                p.path_speed_mm_s * 60.0,
-                p.limit.label(names),
-                p.branch
-            )?;
-            for k in 0..5 {
-                write!(w, ",{}", joint_out(k, p.joints[k]))?;
-            }
-            writeln!(w)?;
+            let mut row = vec![
+                name.clone(),
+                i.to_string(),
+                inp.line.to_string(),
+                p.t_s.to_string(),
+                (p.feed_mm_s * 60.0).to_string(),
+                (p.path_speed_mm_s * 60.0).to_string(),
+                f,
+                p.limit.label(names).to_string(),
+                p.branch.to_string(),
+            ];
+            row.extend((0..5).map(|k| joint_out(k, p.joints[k]).to_string()));
+            csv.write_record(&row)?;
         }
     }
-    Ok(())
+    csv.flush()
 }

@@ -102,10 +102,7 @@ fn write_map(m: &PartMap, args: &Args, started: Instant) -> miette::Result<Outco
     let elapsed = started.elapsed().as_secs_f64();
     let nan = f64::NAN;
     if args.json {
-        let num = |v: f64| {
-            serde_json::Number::from_f64(v)
-                .map_or(serde_json::Value::Null, serde_json::Value::Number)
-        };
+        let num = crest::io::tables::json_number;
         let stat =
             |pick: fn(&crest::metrics::HeightStats) -> f64| num(st.as_ref().map_or(nan, pick));
         let j = serde_json::json!({

@@ -86,3 +86,23 @@ pub fn read_options(
         rtcp: rtcp.into(),
     })
 }
+
+/// The `--feed` values of `crest resample` and `crest simulate`: which feed drives the
+/// clock and the feed per tooth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FeedSource {
+    /// The programmed feed (FEDRAT, or `--feed-mm-min`).
+    Programmed,
+    /// The feed the machine of `--machine` really reaches (`crest feed`: the jerk-limited
+    /// interpolator's tool-tip feed).
+    Predicted,
+}
+
+impl From<FeedSource> for crest::pipeline::simulate::FeedSource {
+    fn from(f: FeedSource) -> Self {
+        match f {
+            FeedSource::Programmed => crest::pipeline::simulate::FeedSource::Programmed,
+            FeedSource::Predicted => crest::pipeline::simulate::FeedSource::Predicted,
+        }
+    }
+}

@@ -6,7 +6,7 @@
 //! output behind (the directory is not even created).
 
 use super::Outcome;
-use crest::study::regression::DEFAULT_TOLERANCE_PCT;
+use crest::study::compare::DEFAULT_TOLERANCE_PCT;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
 

@@ -173,8 +173,15 @@ fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
     let (xs, zs) = crest::io::profile_csv::read_profile_csv(&a.profile)?;
     let tool_text = crest::io::text::read_text(&a.tool, "tool file", crest::io::input::CONFIG)?;
     let cutter = crest::pipeline::tool_from_text(&tool_text, &a.tool.display().to_string())?;
-    let id = crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg)
-        .map_err(|e| miette!("{}: {e}", a.profile.display()))?;
+    let id =
+        crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg).map_err(|e| {
+            match e {
+                crest::study::identify::IdentifyError::Feed(v) => {
+                    miette!("--fz-mm must be positive, got {v}")
+                }
+                e => miette!("{}: {e}", a.profile.display()),
+            }
+        })?;
     if let Some(out) = &a.write_tool {
         let text = crest::config::tool::with_tooth_deviations(&tool_text, &id.tooth_deviation_um);
         crest::io::write_atomic(out, |w| w.write_all(text.as_bytes()))

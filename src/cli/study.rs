@@ -27,6 +27,7 @@
 //! carry the setting, so merged shards give the same bytes.
 
 use super::Outcome;
+use crest::io::tables::json_number;
 use crest::pipeline::design::{DesignRun, effects_json, run_json};
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::PathBuf;
@@ -69,7 +70,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let monte_carlo = args.monte_carlo.map(|n| (n, args.seed));
     if let Some(n) = args.monte_carlo {
-        crest::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
+        crest::study::uncertainty::check_samples(n)
+            .map_err(|e| miette!("{}", super::with_flag(e, "monte_carlo", "--monte-carlo")))?;
     }
     // A blocked output is refused before the first run, not after the last.
     let names: Vec<String> = match args.shard {
@@ -150,7 +152,7 @@ fn run_shard(
             "runs": results.iter().map(|r| r.run).collect::<Vec<_>>(),
             "failed": failed,
             "output": path.display().to_string(),
-            "time_s": num(elapsed),
+            "time_s": json_number(elapsed),
         });
         outln!("{j}");
     } else {
@@ -205,15 +207,15 @@ pub(crate) fn write_outputs(
                 "effects_csv": effects_csv.display().to_string(),
                 "charts": charts.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             },
-            "time_s": num(elapsed),
+            "time_s": json_number(elapsed),
         });
         if let Some((n, seed)) = monte_carlo {
             j["monte_carlo"] = serde_json::json!({
                 "samples": n,
                 "seed": seed,
                 "uncertainty": {
-                    "runout_offset_um": num(design.uncertainty.runout_offset_um),
-                    "tooth_deviation_um": num(design.uncertainty.tooth_deviation_um),
+                    "runout_offset_um": json_number(design.uncertainty.runout_offset_um),
+                    "tooth_deviation_um": json_number(design.uncertainty.tooth_deviation_um),
                     "spindle_phase": design.uncertainty.spindle_phase,
                 },
             });
@@ -250,8 +252,4 @@ pub(crate) fn write_outputs(
         }
     }
     Ok(Outcome::Ok)
-}
-
-fn num(v: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
 }

@@ -258,7 +258,7 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
             }
             u.to_uncertainty(text, file)?
         }
-        None => crate::study::montecarlo::Uncertainty::default(),
+        None => crate::study::uncertainty::Uncertainty::default(),
     };
     let factors = FactorLevels {
         yaw_deg: levels("yaw_deg", &f.yaw_deg)?,

@@ -281,7 +281,7 @@ pub fn parse_study(text: &str, file: &str) -> Result<Study, ConfigError> {
     };
     let uncertainty = match &s.uncertainty {
         Some(u) => u.to_uncertainty(text, file)?,
-        None => crate::study::montecarlo::Uncertainty::default(),
+        None => crate::study::uncertainty::Uncertainty::default(),
     };
     Ok(Study {
         process,

@@ -1,7 +1,7 @@
 //! The `[uncertainty]` table of a study file (the inputs of `--monte-carlo`: standard
 //! uncertainties of the run-out and whether the spindle phase is drawn): one schema and one
 //! check for the regression study of `crest report` and the design of `crest study`, read
-//! into a [`crate::study::montecarlo::Uncertainty`].
+//! into a [`crate::study::uncertainty::Uncertainty`].
 //!
 //! ```toml
 //! [uncertainty]
@@ -12,7 +12,7 @@
 //! ```
 
 use super::ConfigError;
-use crate::study::montecarlo::Uncertainty;
+use crate::study::uncertainty::Uncertainty;
 use serde::Deserialize;
 use toml::Spanned;
 

@@ -129,19 +129,11 @@ pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
         "# crest height map: dx_um={}, dy_um={}, x0_mm={}, y0_mm={}; heights in µm, rows = y ascending, NaN = not reached",
         map.dx_um, map.dy_um, map.x0_mm, map.y0_mm
     )?;
-    let mut line = String::with_capacity(map.nx * 12);
+    let mut csv = csv::WriterBuilder::new().has_headers(false).from_writer(w);
     for row in 0..map.ny {
-        line.clear();
-        for (k, v) in map.row(row).iter().enumerate() {
-            if k > 0 {
-                line.push(',');
-            }
-            line.push_str(&fmt_value(*v));
-        }
-        line.push('\n');
-        w.write_all(line.as_bytes())?;
+        csv.write_record(map.row(row).iter().map(|v| fmt_value(*v)))?;
     }
-    Ok(())
+    csv.flush()
 }
 
 #[cfg(test)]

@@ -241,7 +241,7 @@ fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (String, St
 /// ([`crate::math::limits::coordinates`]).
 fn coordinate(tok: Option<&str>, line: usize) -> Result<f64, (String, String)> {
     let v = number(tok, line, "a coordinate")?;
-    crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m))?;
+    crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m.to_string()))?;
     Ok(v)
 }
 
@@ -321,7 +321,7 @@ fn parse_binary_stl(bytes: &[u8]) -> ParseResult {
             })?;
         }
         check_stored_normal(&normal, &tri)
-            .map_err(|m| (format!("triangle {} (byte {o})", t + 1), m))?;
+            .map_err(|m| (format!("triangle {} (byte {o})", t + 1), m.to_string()))?;
         corners.push(tri);
         origins.push_byte(o);
     }
@@ -331,18 +331,22 @@ fn parse_binary_stl(bytes: &[u8]) -> ParseResult {
     })
 }
 
+/// A stored facet normal against the winding of its triangle's vertices.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error(
+    "the facet normal points against the winding of its vertices (counter-clockwise seen from outside)"
+)]
+struct NormalAgainstWinding;
+
 /// A stored facet normal that points against the winding's normal means the winding (or
 /// the normal) is wrong.
-fn check_stored_normal(stored: &Vec3, tri: &[Point3; 3]) -> Result<(), String> {
+fn check_stored_normal(stored: &Vec3, tri: &[Point3; 3]) -> Result<(), NormalAgainstWinding> {
     if !stored.iter().all(|c| c.is_finite()) || stored.norm() < 1e-6 {
         return Ok(()); // many exporters write zero normals
     }
     let n = (tri[1] - tri[0]).cross(&(tri[2] - tri[0]));
     if n.norm() > 0.0 && n.dot(stored) < 0.0 {
-        return Err(
-            "the facet normal points against the winding of its vertices (counter-clockwise seen from outside)"
-                .to_string(),
-        );
+        return Err(NormalAgainstWinding);
     }
     Ok(())
 }
@@ -394,7 +398,8 @@ fn parse_ascii_stl(bytes: &[u8]) -> ParseResult {
                         format!("a facet with {} vertices (3 expected)", verts.len()),
                     )
                 })?;
-                check_stored_normal(&normal, &tri).map_err(|m| (at_line(facet_line), m))?;
+                check_stored_normal(&normal, &tri)
+                    .map_err(|m| (at_line(facet_line), m.to_string()))?;
                 corners.push(tri);
                 origins.push_line(facet_line);
                 verts.clear();
@@ -754,7 +759,7 @@ fn ply_item(
             if !xyz.iter().all(|v| v.is_finite()) {
                 return Err((place(at), "a vertex without finite x, y, z".into()));
             }
-            crate::math::limits::coordinates(&xyz).map_err(|m| (place(at), m))?;
+            crate::math::limits::coordinates(&xyz).map_err(|m| (place(at), m.to_string()))?;
             mesh.vertices.push(Point3::new(xyz[0], xyz[1], xyz[2]));
         }
         "face" => {

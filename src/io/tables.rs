@@ -66,6 +66,12 @@ pub fn write_runout_csv(
     csv.flush()
 }
 
+/// A number of a JSON result: the number when finite, else `null` (JSON has no NaN or
+/// infinity). Every JSON output of crest writes its floats through this one rule.
+pub fn json_number(v: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
 /// A value of a results table: six decimals, empty when not finite (a failed run).
 fn fmt_value(v: f64) -> String {
     if v.is_finite() {
@@ -112,7 +118,7 @@ pub fn write_runs_csv(
                     .as_ref()
                     .and_then(|b| b.get(k))
                     .copied()
-                    .unwrap_or(crate::study::montecarlo::Band::NAN);
+                    .unwrap_or(crate::study::uncertainty::Band::NAN);
                 row.extend([b.p5, b.p50, b.p95].map(fmt_value));
             }
         }

@@ -200,20 +200,18 @@ pub(crate) fn parse(text: &str) -> Result<HeightMap, FormatError> {
 }
 
 pub(crate) fn write(w: &mut dyn Write, map: &HeightMap) -> std::io::Result<()> {
-    w.write_all(b"x_um,y_um,z_um\n")?;
+    let mut csv = csv::Writer::from_writer(w);
+    csv.write_record(["x_um", "y_um", "z_um"])?;
     let x0 = map.x0_mm * 1000.0;
     let y0 = map.y0_mm * 1000.0;
-    let mut line = String::new();
     for row in 0..map.ny {
-        let y = y0 + row as f64 * map.dy_um;
+        let y = (y0 + row as f64 * map.dy_um).to_string();
         for (col, v) in map.row(row).iter().enumerate() {
             let x = x0 + col as f64 * map.dx_um;
-            line.clear();
-            line.push_str(&format!("{x},{y},{}\n", fmt_value(*v)));
-            w.write_all(line.as_bytes())?;
+            csv.write_record([x.to_string(), y.clone(), fmt_value(*v)])?;
         }
     }
-    Ok(())
+    csv.flush()
 }
 
 #[cfg(test)]

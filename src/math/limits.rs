@@ -31,54 +31,86 @@ pub fn shown(v: f64) -> String {
     }
 }
 
+/// A value beyond a limit of this module. Each message is the rule the value breaks; the
+/// range error names the value (`what`, a request field or a file's key), the others leave
+/// the key or record to the caller.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LimitError {
+    /// Not finite or outside an inclusive range ([`within`]).
+    #[error("{what} must lie between {} and {} {unit}, got {}", .range.0, .range.1, shown(*.got))]
+    Range {
+        /// The value's name.
+        what: String,
+        /// Its unit ("" for none).
+        unit: String,
+        /// The value.
+        got: f64,
+        /// The allowed range, inclusive.
+        range: (f64, f64),
+    },
+    /// A tool radius outside (0, [`MAX_TOOL_RADIUS_MM`]] ([`tool_radius`]).
+    #[error("must lie in (0, {MAX_TOOL_RADIUS_MM}] mm")]
+    ToolRadius,
+    /// A corner radius that is NaN or infinite ([`corner_radius`]).
+    #[error("must be finite")]
+    NotFinite,
+    /// A negative corner radius ([`corner_radius`]).
+    #[error("must not be negative")]
+    Negative,
+    /// A corner radius over the tool radius, mm ([`corner_radius`]).
+    #[error("must not exceed the radius ({0} mm)")]
+    OverRadius(f64),
+    /// A coordinate that is NaN or beyond ±[`MAX_COORD_MM`], mm ([`coordinates`]).
+    #[error("coordinate {} mm is beyond the ±{MAX_COORD_MM} mm (100 m) limit", shown(*.0))]
+    Coordinate(f64),
+}
+
 /// `v` if it lies in `range` (inclusive) and is finite, else an error naming `what` with its
 /// unit.
-pub fn within(what: &str, unit: &str, v: f64, range: (f64, f64)) -> Result<f64, String> {
+pub fn within(what: &str, unit: &str, v: f64, range: (f64, f64)) -> Result<f64, LimitError> {
     if v.is_finite() && v >= range.0 && v <= range.1 {
         Ok(v)
     } else {
-        Err(format!(
-            "{what} must lie between {} and {} {unit}, got {}",
-            range.0,
-            range.1,
-            shown(v)
-        ))
+        Err(LimitError::Range {
+            what: what.to_string(),
+            unit: unit.to_string(),
+            got: v,
+            range,
+        })
     }
 }
 
 /// A tool radius R (also D/2 of a CLSF `TLDATA` or `CUTTER`): finite, in
 /// (0, [`MAX_TOOL_RADIUS_MM`]]. The error is the rule it breaks ("must …"), for the caller
 /// to name the key or record and the value: tool.toml and the lowering share this rule.
-pub fn tool_radius(r: f64) -> Result<f64, String> {
+pub fn tool_radius(r: f64) -> Result<f64, LimitError> {
     if r > 0.0 && r <= MAX_TOOL_RADIUS_MM {
         Ok(r)
     } else {
-        Err(format!("must lie in (0, {MAX_TOOL_RADIUS_MM}] mm"))
+        Err(LimitError::ToolRadius)
     }
 }
 
 /// A corner radius `rc` of a tool of radius `r`: finite, in [0, r]. The error is the rule
 /// it breaks, as for [`tool_radius`].
-pub fn corner_radius(rc: f64, r: f64) -> Result<f64, String> {
+pub fn corner_radius(rc: f64, r: f64) -> Result<f64, LimitError> {
     if !rc.is_finite() {
-        Err("must be finite".to_string())
+        Err(LimitError::NotFinite)
     } else if rc < 0.0 {
-        Err("must not be negative".to_string())
+        Err(LimitError::Negative)
     } else if rc > r {
-        Err(format!("must not exceed the radius ({r} mm)"))
+        Err(LimitError::OverRadius(r))
     } else {
         Ok(rc)
     }
 }
 
 /// The first coordinate of `p` that is NaN or beyond ±[`MAX_COORD_MM`], as an error
-/// message naming the limit.
-pub fn coordinates(p: &[f64]) -> Result<(), String> {
+/// naming the limit.
+pub fn coordinates(p: &[f64]) -> Result<(), LimitError> {
     match p.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD_MM) {
-        Some(c) => Err(format!(
-            "coordinate {} mm is beyond the ±{MAX_COORD_MM} mm (100 m) limit",
-            shown(*c)
-        )),
+        Some(c) => Err(LimitError::Coordinate(*c)),
         None => Ok(()),
     }
 }
@@ -98,11 +130,13 @@ mod tests {
         assert!(
             within("fz", "mm", 1e300, FZ_MM)
                 .unwrap_err()
+                .to_string()
                 .ends_with("got 1e300")
         );
         assert!(
             coordinates(&[0.0, 1e300])
                 .unwrap_err()
+                .to_string()
                 .contains("coordinate 1e300 mm")
         );
     }
@@ -110,9 +144,9 @@ mod tests {
     #[test]
     fn within_names_the_value_and_its_range() {
         assert_eq!(within("fz", "mm", 0.05, FZ_MM), Ok(0.05));
-        let e = within("--fz-mm", "mm", 1e305, FZ_MM).unwrap_err();
+        let e = within("fz_mm", "mm", 1e305, FZ_MM).unwrap_err().to_string();
         assert!(
-            e.contains("--fz-mm") && e.contains("1e305") || e.contains("100000"),
+            e.contains("fz_mm") && e.contains("1e305") || e.contains("100000"),
             "{e}"
         );
         assert!(within("rpm", "rpm", f64::NAN, RPM).is_err());
@@ -128,6 +162,7 @@ mod tests {
         assert!(
             corner_radius(50.0, 5.0)
                 .unwrap_err()
+                .to_string()
                 .contains("exceed the radius (5 mm)")
         );
         assert!(corner_radius(-1.0, 5.0).is_err());
@@ -135,6 +170,7 @@ mod tests {
         assert!(
             coordinates(&[0.0, 1e6, 0.0])
                 .unwrap_err()
+                .to_string()
                 .contains("1000000")
         );
         assert!(coordinates(&[f64::NAN]).is_err());

@@ -3,7 +3,6 @@
 //! Lengths are mm and angles radians everywhere inside the library; conversion to µm,
 //! degrees and mm/min happens only at the interface (`cli`, `io`, `report`).
 
-pub mod dense;
 pub mod limits;
 
 use nalgebra as na;

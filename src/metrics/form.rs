@@ -22,6 +22,18 @@ pub enum Level {
     Poly(u32),
 }
 
+/// Why a levelling's text is not a [`Level`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LevelError {
+    /// Not `none`, `plane` or `poly:N`.
+    #[error("expected none, plane or poly:N, found {0:?}")]
+    Form(String),
+    /// A degree that is not a whole number up to 12.
+    #[error("bad polynomial degree {0:?} (0..=12)")]
+    Degree(String),
+}
+
 impl Level {
     /// Polynomial degree (0 for none).
     pub fn degree(self) -> u32 {
@@ -33,7 +45,7 @@ impl Level {
     }
 
     /// Parse `none`, `plane` or `poly:N`.
-    pub fn parse(s: &str) -> Result<Level, String> {
+    pub fn parse(s: &str) -> Result<Level, LevelError> {
         let t = s.trim().to_ascii_lowercase();
         match t.as_str() {
             "none" => Ok(Level::None),
@@ -44,8 +56,8 @@ impl Level {
                     .ok()
                     .filter(|&n| n <= 12)
                     .map(Level::Poly)
-                    .ok_or_else(|| format!("bad polynomial degree {n:?} (0..=12)")),
-                None => Err(format!("expected none, plane or poly:N, found {s:?}")),
+                    .ok_or_else(|| LevelError::Degree(n.to_string())),
+                None => Err(LevelError::Form(s.to_string())),
             },
         }
     }

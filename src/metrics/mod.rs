@@ -43,15 +43,15 @@ pub use areal::{
     sdr_percent_of,
 };
 pub use filter::{EndEffects, gaussian_filter_map, gaussian_lowpass_line, gaussian_sigma};
-pub use form::{Level, fit_remove_line, fit_remove_map};
+pub use form::{Level, LevelError, fit_remove_line, fit_remove_map};
 pub use material::{MaterialRatio, material_ratio};
 pub use params::{
     AREAL_PARAMS, PASS_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters,
     areal_parameters_of, preprocess_map, preprocess_profile, profile_parameters,
 };
 pub use profile::{
-    Profile, ProfileSpec, extract_profile, profile_from_points, profile_values, rz_ra,
-    sampling_length_mm,
+    Profile, ProfileSpec, ProfileSpecError, extract_profile, profile_from_points, profile_values,
+    rz_ra, sampling_length_mm,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 pub use stream::RowStream;

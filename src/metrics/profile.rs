@@ -42,38 +42,58 @@ pub enum ProfileSpec {
     },
 }
 
+/// Why a profile's text is not a [`ProfileSpec`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProfileSpecError {
+    /// Not one of the four forms.
+    #[error("expected row:K, col:K, angle:DEG or line:X0,Y0,X1,Y1, found {0:?}")]
+    Form(String),
+    /// A row index that is not a whole number.
+    #[error("bad row index {0:?}")]
+    Row(String),
+    /// A column index that is not a whole number.
+    #[error("bad column index {0:?}")]
+    Col(String),
+    /// An angle that is not a finite number.
+    #[error("bad angle {0:?}")]
+    Angle(String),
+    /// A segment that is not four finite numbers.
+    #[error("bad line {0:?} (expected X0,Y0,X1,Y1 in µm)")]
+    Line(String),
+}
+
 impl ProfileSpec {
     /// Parse `row:K`, `col:K`, `angle:DEG` or `line:X0,Y0,X1,Y1` (µm).
-    pub fn parse(s: &str) -> Result<ProfileSpec, String> {
-        const EXPECTED: &str = "expected row:K, col:K, angle:DEG or line:X0,Y0,X1,Y1";
+    pub fn parse(s: &str) -> Result<ProfileSpec, ProfileSpecError> {
         let (kind, val) = s
             .split_once(':')
-            .ok_or_else(|| format!("{EXPECTED}, found {s:?}"))?;
+            .ok_or_else(|| ProfileSpecError::Form(s.to_string()))?;
         match kind.trim().to_ascii_lowercase().as_str() {
             "row" => val
                 .trim()
                 .parse()
                 .map(ProfileSpec::Row)
-                .map_err(|_| format!("bad row index {val:?}")),
+                .map_err(|_| ProfileSpecError::Row(val.to_string())),
             "col" | "column" => val
                 .trim()
                 .parse()
                 .map(ProfileSpec::Col)
-                .map_err(|_| format!("bad column index {val:?}")),
+                .map_err(|_| ProfileSpecError::Col(val.to_string())),
             "angle" => val
                 .trim()
                 .parse::<f64>()
                 .ok()
                 .filter(|a| a.is_finite())
                 .map(ProfileSpec::Angle)
-                .ok_or_else(|| format!("bad angle {val:?}")),
+                .ok_or_else(|| ProfileSpecError::Angle(val.to_string())),
             "line" => {
                 let v: Vec<f64> = val
                     .split(',')
                     .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
                     .collect::<Option<_>>()
                     .filter(|v: &Vec<f64>| v.len() == 4)
-                    .ok_or_else(|| format!("bad line {val:?} (expected X0,Y0,X1,Y1 in µm)"))?;
+                    .ok_or_else(|| ProfileSpecError::Line(val.to_string()))?;
                 Ok(ProfileSpec::Line {
                     x0_um: v[0],
                     y0_um: v[1],
@@ -81,7 +101,7 @@ impl ProfileSpec {
                     y1_um: v[3],
                 })
             }
-            _ => Err(format!("{EXPECTED}, found {s:?}")),
+            _ => Err(ProfileSpecError::Form(s.to_string())),
         }
     }
 }

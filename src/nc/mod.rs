@@ -47,9 +47,24 @@ pub enum Rtcp {
     Off,
 }
 
+/// Why a machine's joints cannot be G-code addresses.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LetterError {
+    /// A joint name that is not one address letter.
+    #[error("machine axis `{0}` is not a G-code address letter (X, Y, Z, A, B, C, U, V, W, …)")]
+    NotALetter(String),
+    /// The linear joints are not X, Y and Z.
+    #[error("the machine's linear axes are {}, {}, {}: G-code needs X, Y and Z", .0[0] as char, .0[1] as char, .0[2] as char)]
+    Linear([u8; 3]),
+    /// The two rotary joints share a letter or use a linear one.
+    #[error("the machine's rotary axes {} and {} need two letters of their own", *.0 as char, *.1 as char)]
+    Rotary(u8, u8),
+}
+
 /// The address letters of the machine's five joints (linear X Y Z in the machine file's
 /// order, then the rotary axes), or what is wrong with their names.
-pub fn joint_letters(machine: &Machine) -> Result<[u8; 5], String> {
+pub fn joint_letters(machine: &Machine) -> Result<[u8; 5], LetterError> {
     let mut out = [0u8; 5];
     for (k, name) in machine.joint_names().iter().enumerate() {
         let b = name.as_bytes();
@@ -57,25 +72,17 @@ pub fn joint_letters(machine: &Machine) -> Result<[u8; 5], String> {
             && b[0].is_ascii_alphabetic()
             && !b"DEFGHIJKLMNOPQRST".contains(&b[0].to_ascii_uppercase());
         if !ok {
-            return Err(format!(
-                "machine axis `{name}` is not a G-code address letter (X, Y, Z, A, B, C, U, V, W, …)"
-            ));
+            return Err(LetterError::NotALetter(name.to_string()));
         }
         out[k] = b[0].to_ascii_uppercase();
     }
     let mut lin = [out[0], out[1], out[2]];
     lin.sort_unstable();
     if lin != *b"XYZ" {
-        return Err(format!(
-            "the machine's linear axes are {}, {}, {}: G-code needs X, Y and Z",
-            out[0] as char, out[1] as char, out[2] as char
-        ));
+        return Err(LetterError::Linear([out[0], out[1], out[2]]));
     }
     if out[3] == out[4] || b"XYZ".contains(&out[3]) || b"XYZ".contains(&out[4]) {
-        return Err(format!(
-            "the machine's rotary axes {} and {} need two letters of their own",
-            out[3] as char, out[4] as char
-        ));
+        return Err(LetterError::Rotary(out[3], out[4]));
     }
     Ok(out)
 }

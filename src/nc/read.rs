@@ -72,7 +72,11 @@ pub struct NcReader<'m> {
 impl<'m> NcReader<'m> {
     /// A reader for `machine`; `name` names the tool paths (the file's stem). Fails when
     /// the machine's axis names are not G-code address letters.
-    pub fn new(machine: &'m Machine, rtcp: Rtcp, name: &str) -> Result<NcReader<'m>, String> {
+    pub fn new(
+        machine: &'m Machine,
+        rtcp: Rtcp,
+        name: &str,
+    ) -> Result<NcReader<'m>, super::LetterError> {
         let letters = joint_letters(machine)?;
         let joints = [0.0; 5];
         Ok(NcReader {

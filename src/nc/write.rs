@@ -37,7 +37,7 @@ impl<'m> GcodeWriter<'m> {
     /// A writer for `machine`; `tcp` writes the tip in the part frame under `G43.4`
     /// instead of joint positions. Fails when the machine's axis names are not G-code
     /// address letters.
-    pub fn new(machine: &'m Machine, tcp: bool) -> Result<GcodeWriter<'m>, String> {
+    pub fn new(machine: &'m Machine, tcp: bool) -> Result<GcodeWriter<'m>, super::LetterError> {
         Ok(GcodeWriter {
             machine,
             tcp,

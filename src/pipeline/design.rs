@@ -2,6 +2,7 @@
 //! design file), every run simulated in parallel, the factor effects computed and the
 //! outputs of `crest study` rendered.
 
+use crate::io::tables::json_number;
 use crate::io::text::read_text;
 use crate::study::design::{Design, Effects, RunResult, design_effects, run_design};
 use crate::study::run::simulate_run;
@@ -88,7 +89,7 @@ pub fn run(
 
 /// [`run`], with `monte_carlo` = (N, S) the P5/P50/P95 bands of every response of every run
 /// over N samples of seed S ([`crate::study::montecarlo::run_bands`]); the same for any
-/// thread count. N is checked (1 ≤ N ≤ [`crate::study::montecarlo::MAX_SAMPLES`]) before
+/// thread count. N is checked (1 ≤ N ≤ [`crate::study::uncertainty::MAX_SAMPLES`]) before
 /// any run.
 pub fn run_monte_carlo(
     design: Design,
@@ -98,7 +99,7 @@ pub fn run_monte_carlo(
     tick: &(dyn Fn() + Sync),
 ) -> miette::Result<DesignRun> {
     if let Some((n, _)) = monte_carlo {
-        crate::study::montecarlo::check_samples(n).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
     check_budget(&design, &cutter, file)?;
     let results = run_design(
@@ -123,9 +124,9 @@ pub fn evaluate(
     cutter: &Cutter,
     p: &crate::study::design::RunPoint,
     monte_carlo: Option<(usize, u64)>,
-) -> Result<crate::study::design::RunOutput, String> {
+) -> Result<crate::study::design::RunOutput, crate::study::montecarlo::MonteCarloError> {
     match monte_carlo {
-        None => simulate_run(design, cutter, p),
+        None => Ok(simulate_run(design, cutter, p)?),
         Some((n, seed)) => crate::study::montecarlo::run_bands(design, cutter, p, n, seed),
     }
 }
@@ -220,10 +221,6 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
     Ok(files)
 }
 
-fn num(v: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
-}
-
 /// One run as the JSON object of `crest study --json` (`run`, `factors`, `tilt_deg`,
 /// `yaw_deg`, `feed_mm_min`, `fz_mm`, `stepover_mm`, `responses`, `error`; with Monte
 /// Carlo bands also `bands`: response → `p5`, `p50`, `p95`).
@@ -232,22 +229,22 @@ pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
         .factors()
         .iter()
         .zip(&r.point.values)
-        .map(|(f, v)| (f.name.clone(), num(*v)))
+        .map(|(f, v)| (f.name.clone(), json_number(*v)))
         .collect();
     let responses: serde_json::Map<String, serde_json::Value> = design
         .responses
         .iter()
         .zip(&r.responses)
-        .map(|(k, v)| (k.clone(), num(*v)))
+        .map(|(k, v)| (k.clone(), json_number(*v)))
         .collect();
     let mut j = serde_json::json!({
         "run": r.point.run,
         "factors": factors,
-        "tilt_deg": num(r.point.tilt_deg),
-        "yaw_deg": num(r.point.yaw_deg),
-        "feed_mm_min": num(r.point.feed_mm_min),
-        "fz_mm": num(r.fz_mm),
-        "stepover_mm": num(r.stepover_mm),
+        "tilt_deg": json_number(r.point.tilt_deg),
+        "yaw_deg": json_number(r.point.yaw_deg),
+        "feed_mm_min": json_number(r.point.feed_mm_min),
+        "fz_mm": json_number(r.fz_mm),
+        "stepover_mm": json_number(r.stepover_mm),
         "responses": responses,
         "error": r.error,
     });
@@ -259,7 +256,7 @@ pub fn run_json(design: &Design, r: &RunResult) -> serde_json::Value {
             .map(|(k, b)| {
                 (
                     k.clone(),
-                    serde_json::json!({"p5": num(b.p5), "p50": num(b.p50), "p95": num(b.p95)}),
+                    serde_json::json!({"p5": json_number(b.p5), "p50": json_number(b.p50), "p95": json_number(b.p95)}),
                 )
             })
             .collect();
@@ -283,15 +280,15 @@ pub fn effects_json(design: &Design, effects: &[Effects]) -> Vec<serde_json::Val
                 .map(|(i, f)| {
                     serde_json::json!({
                         "factor": f.name,
-                        "levels": f.levels.iter().map(|v| num(*v)).collect::<Vec<_>>(),
-                        "effects": e.effects[i].iter().map(|v| num(*v)).collect::<Vec<_>>(),
-                        "relative_first": num(e.relative_first[i]),
+                        "levels": f.levels.iter().map(|v| json_number(*v)).collect::<Vec<_>>(),
+                        "effects": e.effects[i].iter().map(|v| json_number(*v)).collect::<Vec<_>>(),
+                        "relative_first": json_number(e.relative_first[i]),
                     })
                 })
                 .collect();
             serde_json::json!({
                 "response": name,
-                "mean": num(e.mean),
+                "mean": json_number(e.mean),
                 "factors": per,
             })
         })

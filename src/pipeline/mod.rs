@@ -18,6 +18,7 @@ pub mod patch;
 pub mod prepare;
 pub mod progress;
 pub mod report;
+pub mod request;
 pub mod resample;
 pub mod runout;
 pub mod sanity;

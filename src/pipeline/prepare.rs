@@ -5,7 +5,7 @@
 //! and simulates every patch from the same [`Prepared`].
 
 use super::contact::DerivedContacts;
-use super::simulate::{
+use super::request::{
     CHORD_TOL_UM, Cutting, FeedSource, GridRequest, ReferenceSource, SimulateRequest,
     default_grid_um, predicted_feed, resolve_cutting, resolve_feed_source,
 };

@@ -4,7 +4,7 @@
 
 use crate::io::text::read_text;
 use crate::study::calibrate::{Calibration, Free};
-use crate::study::regression::{Provenance, Regression, regress};
+use crate::study::compare::{Provenance, Regression, regress};
 use miette::{WrapErr, miette};
 use std::path::Path;
 
@@ -140,7 +140,7 @@ pub fn regression(
         None => None,
     };
     if let Some(cal) = calibration {
-        crate::study::regression::judge_by_loo(&mut reg, cal);
+        crate::study::compare::judge_by_loo(&mut reg, cal);
     }
     if let Some((n, seed)) = opts.monte_carlo {
         let bands = crate::study::montecarlo::case_bands(

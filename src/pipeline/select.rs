@@ -5,7 +5,7 @@
 //! still cover the whole path.
 
 use super::prepare::Prepared;
-use super::simulate::{GridRequest, SimulateRequest};
+use super::request::{GridRequest, SimulateRequest};
 use crate::math::Point3;
 use crate::resample::{self, Mode, Streamed};
 use crate::surface::cull::{Reach, Subset};

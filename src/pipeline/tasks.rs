@@ -19,7 +19,7 @@ pub mod runout;
 
 use super::design::{DesignRun, DesignTexts, finish, tool_of};
 use crate::study::design::{Design, RunResult};
-use crate::study::montecarlo::Band;
+use crate::study::uncertainty::Band;
 use miette::miette;
 use serde::{Deserialize, Serialize};
 
@@ -152,7 +152,7 @@ pub fn design_tasks_with(
     let design = parse(t)?;
     tool_of(t)?;
     if let Some(m) = monte_carlo {
-        crate::study::montecarlo::check_samples(m.samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(m.samples).map_err(|e| miette!("{e}"))?;
     }
     let runs = design.runs().len();
     Ok((1..=runs)
@@ -201,7 +201,7 @@ pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
     let n = design.responses.len();
     let mc = MonteCarlo::pair(task.monte_carlo);
     if let Some((samples, _)) = mc {
-        crate::study::montecarlo::check_samples(samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(samples).map_err(|e| miette!("{e}"))?;
     }
     let out = super::design::evaluate(&design, &cutter, point, mc);
     let (responses, fz_mm, stepover_mm, error, bands) = match out {
@@ -212,7 +212,13 @@ pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
             }
             (o.responses, o.fz_mm, o.stepover_mm, None, o.bands)
         }
-        Err(e) => (vec![f64::NAN; n], f64::NAN, f64::NAN, Some(e), None),
+        Err(e) => (
+            vec![f64::NAN; n],
+            f64::NAN,
+            f64::NAN,
+            Some(e.to_string()),
+            None,
+        ),
     };
     Ok(TaskResult {
         kind: DESIGN_RUN.to_string(),
@@ -253,7 +259,7 @@ pub fn run_shard_with(
     let cutter = tool_of(t)?;
     let mc = MonteCarlo::pair(monte_carlo);
     if let Some((samples, _)) = mc {
-        crate::study::montecarlo::check_samples(samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(samples).map_err(|e| miette!("{e}"))?;
     }
     // Every run of the design, as `crest study` checks them: a shard is refused like the
     // whole.
@@ -346,9 +352,14 @@ pub(crate) fn check_shards(
     Ok(())
 }
 
+/// A shard's text that is not `K/N` with 1 ≤ K ≤ N.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("'{0}' is not a shard K/N with 1 ≤ K ≤ N (e.g. 2/8)")]
+pub struct BadShard(pub String);
+
 /// Parse `K/N` (1 ≤ K ≤ N).
-pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("'{s}' is not a shard K/N with 1 ≤ K ≤ N (e.g. 2/8)");
+pub fn parse_shard(s: &str) -> Result<(usize, usize), BadShard> {
+    let bad = || BadShard(s.to_string());
     let (k, n) = s.split_once('/').ok_or_else(bad)?;
     let k: usize = k.trim().parse().map_err(|_| bad())?;
     let n: usize = n.trim().parse().map_err(|_| bad())?;

@@ -240,7 +240,7 @@ pub fn bands_chart(design: &Design, results: &[RunResult], samples: usize) -> Op
         .iter()
         .enumerate()
         .map(|(k, name)| {
-            let band = |f: fn(&crate::study::montecarlo::Band) -> f64| -> Vec<f64> {
+            let band = |f: fn(&crate::study::uncertainty::Band) -> f64| -> Vec<f64> {
                 results
                     .iter()
                     .map(|r| r.bands.as_ref().and_then(|b| b.get(k)).map_or(f64::NAN, f))

@@ -7,10 +7,10 @@ use super::chart::{
     color, draw_legend, legend_box, legend_headroom, style_mesh, tick_decimals, tick_label,
     title_font,
 };
-use super::{Draw, DrawResult, Format, render_bytes};
+use super::{Draw, DrawResult, Format, PlotError, render_bytes};
+use crate::study::compare::{CaseResult, Comparison, Regression};
 use crate::study::measured::{Param, Side};
-use crate::study::montecarlo::Band;
-use crate::study::regression::{CaseResult, Comparison, Regression};
+use crate::study::uncertainty::Band;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -30,8 +30,9 @@ fn band_of(r: &Regression, c: &CaseResult, parameter: &str) -> Option<Band> {
 
 /// Draw the figure of one parameter (a [`crate::study::measured::Param`] label: `Rz`, `Ra`,
 /// `Sz`, `Sa`, `Rz stepover`, `Ra stepover`) as an SVG string.
-pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
-    let param = Param::from_label(parameter).ok_or_else(|| format!("no parameter {parameter}"))?;
+pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, PlotError> {
+    let param = Param::from_label(parameter)
+        .ok_or_else(|| PlotError::Invalid(format!("no parameter {parameter}")))?;
     let pts: Vec<(&CaseResult, &Comparison)> = r
         .cases
         .iter()
@@ -43,7 +44,7 @@ pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
         })
         .collect();
     if pts.is_empty() {
-        return Err(format!("no {parameter} values to plot"));
+        return Err(PlotError::Invalid(format!("no {parameter} values to plot")));
     }
     let figure = Figure {
         r,
@@ -51,8 +52,8 @@ pub fn render_plot(r: &Regression, parameter: &str) -> Result<String, String> {
         param,
         pts,
     };
-    let bytes = render_bytes(Format::Svg, PLOT_SIZE, &figure).map_err(|e| e.to_string())?;
-    String::from_utf8(bytes).map_err(|e| e.to_string())
+    let bytes = render_bytes(Format::Svg, PLOT_SIZE, &figure)?;
+    String::from_utf8(bytes).map_err(|e| PlotError::Draw(e.to_string()))
 }
 
 const PLOT_SIZE: (u32, u32) = (1000, 560);

@@ -4,7 +4,7 @@
 
 use crate::math::trim_decimals;
 use crate::study::calibrate::Calibration;
-use crate::study::regression::Regression;
+use crate::study::compare::Regression;
 use std::fmt::Write;
 
 fn pct(v: f64, m: f64) -> f64 {

@@ -3,8 +3,9 @@
 //! numbers come from [`crate::study::regression`], the plots from [`crate::plot::regression`].
 
 use crate::math::trim_decimals;
+use crate::study::compare::{CaseResult, Regression};
 use crate::study::measured::{Param, Stat};
-use crate::study::regression::{CaseResult, CrestPrediction, PROFILE_STEP_MM, Regression};
+use crate::study::regression::{CrestPrediction, PROFILE_STEP_MM};
 use crate::surface::ModelKind;
 use std::fmt::Write as _;
 
@@ -537,10 +538,20 @@ pub use super::calibration::{calibration_csv, calibration_json};
 /// What the simulated column holds in a calibrated report.
 const LOO_NOTE: &str = "With --free, the simulated column (and the plots) hold each case's leave-one-out prediction: the model refitted without that case. The model table below shows the model fitted on every case.";
 
+/// A report's figure that could not be drawn.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw the {param} plot: {error}")]
+pub struct PlotFailed {
+    /// The figure's parameter (`Rz`, `Sa`, …).
+    pub param: String,
+    /// Why.
+    pub error: crate::plot::PlotError,
+}
+
 /// Every file of a report, rendered in memory: `rz.svg` and `ra.svg`, and `sz.svg`, `sa.svg`,
 /// `rz-stepover.svg`, `ra-stepover.svg` (for the parameters the table has), `report.html` and
 /// `report.md`, as `(file name, bytes)`.
-pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, String> {
+pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, PlotFailed> {
     let mut plots: Vec<(String, String, String)> = Vec::new(); // (file, caption, svg)
     for p in Param::ALL {
         let (param, file) = (p.label(), format!("{}.svg", p.file_stem()));
@@ -549,8 +560,11 @@ pub fn outputs(reg: &Regression) -> Result<Vec<(String, Vec<u8>)>, String> {
             .iter()
             .any(|c| c.comparisons.iter().any(|k| k.parameter == param))
         {
-            let svg = crate::plot::regression::render_plot(reg, param)
-                .map_err(|e| format!("cannot draw the {param} plot: {e}"))?;
+            let svg =
+                crate::plot::regression::render_plot(reg, param).map_err(|error| PlotFailed {
+                    param: param.to_string(),
+                    error,
+                })?;
             let caption = format!(
                 "{param}: measured mean ± σ and samples against simulated, per lead angle and side"
             );

@@ -15,6 +15,7 @@
 //!
 //! The key parameters are computed here by [`crate::metrics`] and embedded.
 
+use crate::io::tables::json_number;
 use crate::metrics::{self, ParamSet};
 use crate::surface::{HeightMap, MapPoint};
 use std::fmt::Write as _;
@@ -135,7 +136,7 @@ pub fn heightmap_page(map: &HeightMap, info: &ViewInfo) -> Result<String, String
         },
         "params": params
             .iter()
-            .map(|(p, v)| serde_json::json!([p.symbol(), finite(*v), p.unit()]))
+            .map(|(p, v)| serde_json::json!([p.symbol(), json_number(*v), p.unit()]))
             .collect::<Vec<_>>(),
     });
     if full {
@@ -173,13 +174,13 @@ pub fn part_map_page(points: &[MapPoint], info: &ViewInfo) -> Result<String, Str
         "n_f32": base64_f32(&normals),
         "h_f32": base64_f32(&h),
         "params": [
-            ["points reached", finite(reached), "%"],
-            ["mean height", finite(stats.mean), "µm"],
-            ["Sa (about the mean)", finite(stats.sa), "µm"],
-            ["Sq", finite(stats.sq), "µm"],
-            ["Sz (max − min)", finite(stats.sz()), "µm"],
-            ["lowest", finite(stats.min), "µm"],
-            ["highest", finite(stats.max), "µm"],
+            ["points reached", json_number(reached), "%"],
+            ["mean height", json_number(stats.mean), "µm"],
+            ["Sa (about the mean)", json_number(stats.sa), "µm"],
+            ["Sq", json_number(stats.sq), "µm"],
+            ["Sz (max − min)", json_number(stats.sz()), "µm"],
+            ["lowest", json_number(stats.min), "µm"],
+            ["highest", json_number(stats.max), "µm"],
         ],
     });
     Ok(page(&info.title, &data))
@@ -188,7 +189,7 @@ pub fn part_map_page(points: &[MapPoint], info: &ViewInfo) -> Result<String, Str
 /// The viewer pages of a regression's simulated windows (`model = "simulate"`), one per
 /// case, named `view-N.html` (N = the case's 1-based number); none for the crest model.
 pub fn regression_pages(
-    reg: &crate::study::regression::Regression,
+    reg: &crate::study::compare::Regression,
 ) -> Result<Vec<(String, Vec<u8>)>, String> {
     let mut out = Vec::new();
     for (i, c) in reg.cases.iter().enumerate() {
@@ -208,14 +209,6 @@ pub fn regression_pages(
         out.push((format!("view-{}.html", i + 1), html.into_bytes()));
     }
     Ok(out)
-}
-
-fn finite(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        v.into()
-    } else {
-        serde_json::Value::Null
-    }
 }
 
 fn page(title: &str, data: &serde_json::Value) -> String {
@@ -287,21 +280,8 @@ fn base64_f32(v: &[f64]) -> String {
 
 /// Standard base64 with padding (RFC 4648), what the browser's `atob` reads.
 fn base64(bytes: &[u8]) -> String {
-    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(ABC[((n >> (18 - 6 * k)) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
+    use base64::Engine as _;
+    base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
 #[cfg(test)]

@@ -21,11 +21,26 @@ pub fn optimum_feed_mm(r_mm: f64, h_mm: f64) -> f64 {
     (2.0 * r_mm * h_mm).sqrt()
 }
 
+/// Why the engine's Rt cannot be measured.
+#[derive(Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum EngineError {
+    /// The straight pass would need too many samples.
+    #[error("too many samples")]
+    TooManySamples,
+    /// The simulation failed.
+    #[error(transparent)]
+    Surface(#[from] crate::surface::SurfaceError),
+    /// The measured line has nodes no pass reached.
+    #[error("the centre line has nodes no pass reached")]
+    NotReached,
+}
+
 /// Rt (mm) of the surface the engine leaves: a one-tooth ball end of radius `r_mm` at lead
 /// 15° along one straight pass over a plane, one imprint (dome model) every `s_mm`, minimum
 /// chip `h_mm`, on the centre line of a window two feeds long after 20 passes, grid
 /// `grid_mm`.
-pub fn engine_rt_mm(r_mm: f64, s_mm: f64, h_mm: f64, grid_mm: f64) -> Result<f64, String> {
+pub fn engine_rt_mm(r_mm: f64, s_mm: f64, h_mm: f64, grid_mm: f64) -> Result<f64, EngineError> {
     let cutter = Cutter::new(Shape::Ball, r_mm, 1, 0.0);
     let depth = 0.02f64.max(10.0 * h_mm);
     let reach = (2.0 * r_mm * depth).sqrt();
@@ -38,7 +53,7 @@ pub fn engine_rt_mm(r_mm: f64, s_mm: f64, h_mm: f64, grid_mm: f64) -> Result<f64
         margin + 2.0 * s_mm + reach,
         360.0,
     )
-    .ok_or("too many samples")?;
+    .ok_or(EngineError::TooManySamples)?;
     let grid = GridSpec::Window {
         x0_mm: 0.0,
         y0_mm: -2.0 * grid_mm,
@@ -51,10 +66,10 @@ pub fn engine_rt_mm(r_mm: f64, s_mm: f64, h_mm: f64, grid_mm: f64) -> Result<f64
         min_chip_mm: h_mm,
         ..Process::default()
     };
-    let sim = simulate(&samples, &cutter, &opts, &|_, _| {}).map_err(|e| e.to_string())?;
+    let sim = simulate(&samples, &cutter, &opts, &|_, _| {})?;
     let row = sim.map.row(sim.map.ny / 2);
     if row.iter().any(|v| !v.is_finite()) {
-        return Err("the centre line has nodes no pass reached".into());
+        return Err(EngineError::NotReached);
     }
     let hi = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let lo = row.iter().copied().fold(f64::INFINITY, f64::min);
@@ -78,7 +93,7 @@ pub fn sweep(
     h_mm: f64,
     factors: &[f64],
     grid_mm: f64,
-) -> Result<Vec<SweepPoint>, String> {
+) -> Result<Vec<SweepPoint>, EngineError> {
     let s0 = optimum_feed_mm(r_mm, h_mm);
     factors
         .iter()

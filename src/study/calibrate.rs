@@ -18,9 +18,10 @@
 //! times a constant factor per parameter.
 
 use super::measured::{MeasuredCase, Side};
-use super::regression::{Study, StudyCase, predict_case};
+use super::regression::{PredictError, Study, StudyCase, predict_case};
 use crate::surface::{Process, Texture};
 use crate::tool::Cutter;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -54,10 +55,46 @@ pub const FREE_NAMES: [&str; 7] = [
     "tooth_deviation_um",
 ];
 
+/// Why a calibration cannot be made.
+#[derive(Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CalibrateError {
+    /// A name in the `free` list that is not a free parameter.
+    #[error("unknown free parameter '{name}' (expected {})", FREE_NAMES.join(", "))]
+    UnknownFree {
+        /// The name given.
+        name: String,
+    },
+    /// The `free` list names nothing.
+    #[error("the free list names no parameter")]
+    NoFree,
+    /// A study case without measured rows.
+    #[error("case {case} (lead {lead_deg}°, {side}) has no rows in the measured table")]
+    Unmeasured {
+        /// The case, 1-based.
+        case: usize,
+        /// Its lead angle, degrees.
+        lead_deg: f64,
+        /// Its side.
+        side: String,
+    },
+    /// Fewer measured values than parameters (and one more).
+    #[error("{values} measured values cannot fit {parameters} parameters")]
+    TooFewValues {
+        /// Measured values.
+        values: usize,
+        /// Free parameters.
+        parameters: usize,
+    },
+    /// A case cannot be predicted.
+    #[error(transparent)]
+    Predict(#[from] PredictError),
+}
+
 impl Free {
     /// Read a comma-separated list; `tooth_deviation_um` stands for teeth 2..Z (tooth 1 is
     /// the reference: a common deviation of every tooth is a change of radius).
-    pub fn parse_list(list: &str, teeth: usize) -> Result<Vec<Free>, String> {
+    pub fn parse_list(list: &str, teeth: usize) -> Result<Vec<Free>, CalibrateError> {
         let mut out = Vec::new();
         for name in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let f = match name {
@@ -69,10 +106,9 @@ impl Free {
                 "runout_phase_deg" => vec![Free::RunoutPhase],
                 "tooth_deviation_um" => (2..=teeth).map(Free::ToothDeviation).collect(),
                 _ => {
-                    return Err(format!(
-                        "unknown free parameter '{name}' (expected {})",
-                        FREE_NAMES.join(", ")
-                    ));
+                    return Err(CalibrateError::UnknownFree {
+                        name: name.to_string(),
+                    });
                 }
             };
             for x in f {
@@ -82,7 +118,7 @@ impl Free {
             }
         }
         if out.is_empty() {
-            return Err("--free names no parameter".to_string());
+            return Err(CalibrateError::NoFree);
         }
         Ok(out)
     }
@@ -237,7 +273,7 @@ fn predict_all(
     study: &Study,
     cutter: &Cutter,
     process: &Process,
-) -> Result<Vec<(f64, f64)>, String> {
+) -> Result<Vec<(f64, f64)>, PredictError> {
     study
         .cases
         .par_iter()
@@ -257,26 +293,20 @@ fn values(targets: &[Target], preds: &[(f64, f64)]) -> Vec<f64> {
         .collect()
 }
 
+/// The inverse of `a` (LU with partial pivoting), NaN everywhere when `a` is singular.
 fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
-    let cols: Vec<Option<Vec<f64>>> = (0..n)
-        .map(|j| {
-            let mut e = vec![0.0; n];
-            e[j] = 1.0;
-            crate::math::dense::solve(a.to_vec(), e)
-        })
-        .collect();
+    let inv = DMatrix::from_fn(n, n, |i, j| a[i][j])
+        .lu()
+        .try_inverse()
+        .unwrap_or_else(|| DMatrix::from_element(n, n, f64::NAN));
     (0..n)
-        .map(|i| {
-            (0..n)
-                .map(|j| cols[j].as_ref().map_or(f64::NAN, |c| c[i]))
-                .collect()
-        })
+        .map(|i| (0..n).map(|j| inv[(i, j)]).collect())
         .collect()
 }
 
 /// The model's values at the target cases for a parameter vector.
-type ModelFn<'a> = dyn Fn(&[f64]) -> Result<Vec<f64>, String> + 'a;
+type ModelFn<'a> = dyn Fn(&[f64]) -> Result<Vec<f64>, PredictError> + 'a;
 
 /// Finite-difference step, as a fraction of a parameter's scale (its value, at least 5 % of
 /// its range up to 10).
@@ -300,7 +330,7 @@ fn fit(
     keep: &[bool],
     x0: &[f64],
     bounds: &[(f64, f64)],
-) -> Result<Fit, String> {
+) -> Result<Fit, PredictError> {
     let resid = |v: &[f64]| -> Vec<f64> {
         targets
             .iter()
@@ -343,11 +373,15 @@ fn fit(
             .collect();
         let mut improved = false;
         for _ in 0..8 {
-            let mut a = jtj.clone();
-            for (i, row) in a.iter_mut().enumerate() {
-                row[i] += lambda * jtj[i][i].max(1e-12);
-            }
-            let Some(d) = crate::math::dense::solve(a, g.clone()) else {
+            let a = DMatrix::from_fn(n, n, |i, j| {
+                let damping = if i == j {
+                    lambda * jtj[i][i].max(1e-12)
+                } else {
+                    0.0
+                };
+                jtj[i][j] + damping
+            });
+            let Some(d) = a.lu().solve(&DVector::from_column_slice(&g)) else {
                 lambda *= 10.0;
                 continue;
             };
@@ -385,7 +419,7 @@ pub fn calibrate(
     study: &Study,
     cutter: &Cutter,
     free: &[Free],
-) -> Result<Calibration, String> {
+) -> Result<Calibration, CalibrateError> {
     // Measured values in study-case order.
     let mut targets = Vec::new();
     let pooled = |rz: bool| {
@@ -405,13 +439,10 @@ pub fn calibrate(
         let m = measured
             .iter()
             .find(|m| m.lead_deg == c.lead_deg && m.side == c.side)
-            .ok_or_else(|| {
-                format!(
-                    "case {} (lead {}°, {}) has no rows in the measured table",
-                    i + 1,
-                    c.lead_deg,
-                    c.side.name()
-                )
+            .ok_or_else(|| CalibrateError::Unmeasured {
+                case: i + 1,
+                lead_deg: c.lead_deg,
+                side: c.side.name().to_string(),
             })?;
         for (rz, stat, pool) in [(true, m.rz, pool_rz), (false, m.ra, pool_ra)] {
             if let Some(s) = stat {
@@ -433,10 +464,10 @@ pub fn calibrate(
     }
     let n = free.len();
     if targets.len() <= n {
-        return Err(format!(
-            "{} measured values cannot fit {n} parameters",
-            targets.len()
-        ));
+        return Err(CalibrateError::TooFewValues {
+            values: targets.len(),
+            parameters: n,
+        });
     }
     let bounds: Vec<(f64, f64)> = free.iter().map(Free::bounds).collect();
     let x0: Vec<f64> = free
@@ -444,7 +475,7 @@ pub fn calibrate(
         .zip(&bounds)
         .map(|(f, b)| f.start(&study.process, cutter).clamp(b.0, b.1))
         .collect();
-    let model = |x: &[f64]| -> Result<Vec<f64>, String> {
+    let model = |x: &[f64]| -> Result<Vec<f64>, PredictError> {
         let (p, c) = apply(free, x, &study.process, cutter);
         Ok(values(&targets, &predict_all(study, &c, &p)?))
     };

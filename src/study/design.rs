@@ -160,7 +160,7 @@ pub struct Design {
     /// The factors and their levels.
     pub factors: FactorLevels,
     /// Standard uncertainties of the inputs of `--monte-carlo` (the file's `[uncertainty]`).
-    pub uncertainty: super::montecarlo::Uncertainty,
+    pub uncertainty: super::uncertainty::Uncertainty,
 }
 
 /// How the pass interval of a run is given.
@@ -264,7 +264,7 @@ pub struct RunOutput {
     /// Pass interval (drive-plane spacing), mm.
     pub stepover_mm: f64,
     /// With `--monte-carlo`: the P5/P50/P95 band of every response, in response order.
-    pub bands: Option<Vec<super::montecarlo::Band>>,
+    pub bands: Option<Vec<super::uncertainty::Band>>,
 }
 
 /// The outcome of one run: its responses (in [`Design::responses`] order) or why it failed.
@@ -282,14 +282,15 @@ pub struct RunResult {
     pub error: Option<String>,
     /// With `--monte-carlo`: the P5/P50/P95 band of every response (NaN bands where the run
     /// failed).
-    pub bands: Option<Vec<super::montecarlo::Band>>,
+    pub bands: Option<Vec<super::uncertainty::Band>>,
 }
 
 /// Evaluate every run of `design` with `eval` in parallel (rayon); results come back in run
 /// order whatever the thread count. `tick` is called once per finished run.
-pub fn run_design<F, T>(design: &Design, eval: F, tick: T) -> Vec<RunResult>
+pub fn run_design<F, T, E>(design: &Design, eval: F, tick: T) -> Vec<RunResult>
 where
-    F: Fn(&RunPoint) -> Result<RunOutput, String> + Sync,
+    F: Fn(&RunPoint) -> Result<RunOutput, E> + Sync,
+    E: std::fmt::Display,
     T: Fn() + Sync,
 {
     run_points(design, design.runs(), eval, tick)
@@ -297,9 +298,15 @@ where
 
 /// Evaluate the runs `points` of `design` (some of [`Design::runs`], e.g. one shard) with
 /// `eval` in parallel (rayon); results come back in the order of `points`.
-pub fn run_points<F, T>(design: &Design, points: Vec<RunPoint>, eval: F, tick: T) -> Vec<RunResult>
+pub fn run_points<F, T, E>(
+    design: &Design,
+    points: Vec<RunPoint>,
+    eval: F,
+    tick: T,
+) -> Vec<RunResult>
 where
-    F: Fn(&RunPoint) -> Result<RunOutput, String> + Sync,
+    F: Fn(&RunPoint) -> Result<RunOutput, E> + Sync,
+    E: std::fmt::Display,
     T: Fn() + Sync,
 {
     use rayon::prelude::*;
@@ -313,7 +320,7 @@ where
                 Ok(mut o) => {
                     o.responses.resize(n, f64::NAN);
                     if let Some(b) = &mut o.bands {
-                        b.resize(n, super::montecarlo::Band::NAN);
+                        b.resize(n, super::uncertainty::Band::NAN);
                     }
                     RunResult {
                         point,
@@ -329,7 +336,7 @@ where
                     responses: vec![f64::NAN; n],
                     fz_mm: f64::NAN,
                     stepover_mm: f64::NAN,
-                    error: Some(e),
+                    error: Some(e.to_string()),
                     bands: None,
                 },
             }
@@ -416,10 +423,10 @@ mod tests {
     }
 
     /// A synthetic response with known effects: Sq = 1 + 0.5·[yaw 20] + 0.1·scallop.
-    fn fake(p: &RunPoint) -> Result<RunOutput, String> {
+    fn fake(p: &RunPoint) -> Result<RunOutput, &'static str> {
         let h = match p.step {
             StepSpec::ScallopUm(h) => h,
-            StepSpec::StepoverMm(_) => return Err("no scallop".into()),
+            StepSpec::StepoverMm(_) => return Err("no scallop"),
         };
         let sq = 1.0 + 0.5 * (p.yaw_deg / 20.0) + 0.1 * h;
         Ok(RunOutput {
@@ -509,7 +516,7 @@ mod tests {
             &d,
             |p| {
                 if p.run == 1 {
-                    Err("boom".into())
+                    Err("boom")
                 } else {
                     Ok(RunOutput {
                         responses: vec![1.0],

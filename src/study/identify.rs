@@ -65,6 +65,25 @@ fn interp(xs: &[f64], zs: &[f64], x: f64) -> f64 {
     zs[i - 1] + (zs[i] - zs[i - 1]) * (x - x0) / (x1 - x0)
 }
 
+/// Why a profile cannot identify the run-out.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IdentifyError {
+    /// The feed per tooth is not positive.
+    #[error("fz_mm must be positive, got {0}")]
+    Feed(f64),
+    /// The profile spans less than two turns' feed or has fewer than 8 points.
+    #[error(
+        "the profile spans {length_mm:.4} mm; identification needs at least two turns' feed ({needed_mm:.4} mm) and 8 points"
+    )]
+    Short {
+        /// Length of the profile, mm.
+        length_mm: f64,
+        /// Two turns' feed, mm.
+        needed_mm: f64,
+    },
+}
+
 /// Identify the run-out of `cutter` (its shape, radius, teeth and pitch; its run-out is
 /// ignored) from the profile `x_mm`, `z_um` (any order, irregular spacing) cut with feed per
 /// tooth `fz_mm` at lead `lead_deg`.
@@ -74,10 +93,10 @@ pub fn identify(
     cutter: &Cutter,
     fz_mm: f64,
     lead_deg: f64,
-) -> Result<Identification, String> {
+) -> Result<Identification, IdentifyError> {
     let nt = cutter.teeth();
     if !(fz_mm.is_finite() && fz_mm > 0.0) {
-        return Err(format!("--fz-mm must be positive, got {fz_mm}"));
+        return Err(IdentifyError::Feed(fz_mm));
     }
     let mut pts: Vec<(f64, f64)> = x_mm
         .iter()
@@ -90,10 +109,10 @@ pub fn identify(
     let len = xs.last().copied().unwrap_or(0.0) - xs.first().copied().unwrap_or(0.0);
     let period = nt as f64 * fz_mm;
     if xs.len() < 8 || len < 2.0 * period {
-        return Err(format!(
-            "the profile spans {len:.4} mm; identification needs at least two turns' feed ({:.4} mm) and 8 points",
-            2.0 * period
-        ));
+        return Err(IdentifyError::Short {
+            length_mm: len,
+            needed_mm: 2.0 * period,
+        });
     }
     let lead = lead_deg.to_radians();
     let profile = match cutter.shape {
@@ -249,8 +268,8 @@ pub fn identify(
                 v[p] += f[p] * z;
             }
         }
-        let mm: Vec<Vec<f64>> = m.iter().map(|r| r.to_vec()).collect();
-        if let Some(sol) = crate::math::dense::solve(mm, v.to_vec()) {
+        let mm = nalgebra::Matrix3::from_fn(|p, q| m[p][q]);
+        if let Some(sol) = mm.lu().solve(&nalgebra::Vector3::from(v)) {
             offset = Some((sol[1].hypot(sol[2]), sol[2].atan2(sol[1]).to_degrees()));
         }
     } else {

@@ -10,6 +10,7 @@
 pub mod atlas;
 pub mod brammertz;
 pub mod calibrate;
+pub mod compare;
 pub mod design;
 pub mod identify;
 pub mod measured;
@@ -18,3 +19,4 @@ pub mod regression;
 pub mod run;
 pub mod runout;
 pub mod stepover;
+pub mod uncertainty;

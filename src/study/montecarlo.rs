@@ -1,213 +1,32 @@
-//! Monte Carlo bands: the inputs a prediction depends on but nobody knows exactly (spindle
-//! phase between passes, run-out offset, phase and tooth deviations, calibrated parameters
-//! within their covariance) sampled N times with a seeded generator, and the P5 / P50 / P95
-//! of every output. Samples run in parallel (rayon); sample i always draws from stream i of
-//! the seed, so the bands are the same for any thread count.
+//! Monte Carlo bands of a design's run and of a regression study's cases: the inputs a
+//! prediction depends on but nobody knows exactly (spindle phase between passes, run-out
+//! offset, phase and tooth deviations, calibrated parameters within their covariance)
+//! drawn N times by [`super::uncertainty`], each sample run, and the P5 / P50 / P95 of every
+//! output. Samples run in parallel (rayon); sample i always draws from stream i of the seed,
+//! so the bands are the same for any thread count.
 
-use crate::math::rng::Rng;
+use super::uncertainty::{
+    Band, SamplesError, Uncertainty, bands, check_samples, draw_parameters, perturb_cutter,
+};
 use crate::tool::Cutter;
-use rayon::prelude::*;
 use serde::Serialize;
 
-/// Standard uncertainties of the inputs (a study's `[uncertainty]` table).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Uncertainty {
-    /// Standard deviation of the run-out offset e0, µm (added as a random 2-D vector).
-    pub runout_offset_um: f64,
-    /// Standard deviation of every tooth's radial deviation, µm.
-    pub tooth_deviation_um: f64,
-    /// Draw the spindle phase at the start of every pass uniformly (one full turn).
-    pub spindle_phase: bool,
-    /// Scale of the calibrated parameters' standard uncertainties (1 = as fitted).
-    pub parameter_scale: f64,
-}
-
-impl Default for Uncertainty {
-    fn default() -> Self {
-        Uncertainty {
-            runout_offset_um: 0.0,
-            tooth_deviation_um: 0.0,
-            spindle_phase: true,
-            parameter_scale: 1.0,
-        }
-    }
-}
-
-impl Uncertainty {
-    /// Every standard uncertainty times `k` (the spindle phase stays as it is).
-    pub fn scaled(&self, k: f64) -> Uncertainty {
-        Uncertainty {
-            runout_offset_um: self.runout_offset_um * k,
-            tooth_deviation_um: self.tooth_deviation_um * k,
-            spindle_phase: self.spindle_phase,
-            parameter_scale: self.parameter_scale * k,
-        }
-    }
-}
-
-/// P5, P50 and P95 of one output.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Band {
-    /// 5th percentile.
-    pub p5: f64,
-    /// Median.
-    pub p50: f64,
-    /// 95th percentile.
-    pub p95: f64,
-}
-
-impl Band {
-    /// A band of a run that failed or an output that was never finite.
-    pub const NAN: Band = Band {
-        p5: f64::NAN,
-        p50: f64::NAN,
-        p95: f64::NAN,
-    };
-
-    /// Whether `v` lies within [P5, P95] (with a relative slack of 1e-9 for rounding).
-    pub fn contains(&self, v: f64) -> bool {
-        let eps = 1e-9 * v.abs().max(1e-12);
-        v >= self.p5 - eps && v <= self.p95 + eps
-    }
-
-    /// P95 − P5.
-    pub fn width(&self) -> f64 {
-        self.p95 - self.p5
-    }
-}
-
-/// Percentile `q` (0..1) of sorted values, linear between order statistics.
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    let n = sorted.len();
-    if n == 1 {
-        return sorted[0];
-    }
-    let x = q * (n - 1) as f64;
-    let i = (x.floor() as usize).min(n - 2);
-    let f = x - i as f64;
-    sorted[i] + (sorted[i + 1] - sorted[i]) * f
-}
-
-/// The band of `values` (NaN values are ignored; an empty set gives NaN).
-pub fn band(values: &[f64]) -> Band {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return Band::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    Band {
-        p5: percentile(&v, 0.05),
-        p50: percentile(&v, 0.5),
-        p95: percentile(&v, 0.95),
-    }
-}
-
-/// `cutter` with its run-out perturbed by `u`: a 2-D offset error of standard deviation
-/// `runout_offset_um` per component added to the offset vector, and a normal error added
-/// to every tooth's deviation (only when the uncertainty is positive).
-pub fn perturb_cutter(cutter: &Cutter, u: &Uncertainty, rng: &mut Rng) -> Cutter {
-    let mut c = cutter.clone();
-    let (gx, gy) = (rng.normal(), rng.normal());
-    if u.runout_offset_um > 0.0 {
-        let r = &mut c.runout;
-        let (s, co) = r.offset_phase_rad.sin_cos();
-        let x = r.offset_mm * co + gx * u.runout_offset_um * 1e-3;
-        let y = r.offset_mm * s + gy * u.runout_offset_um * 1e-3;
-        r.offset_mm = x.hypot(y);
-        r.offset_phase_rad = y.atan2(x).rem_euclid(std::f64::consts::TAU);
-    }
-    let teeth = c.teeth();
-    let draws: Vec<f64> = (0..teeth).map(|_| rng.normal()).collect();
-    if u.tooth_deviation_um > 0.0 {
-        let r = &mut c.runout;
-        if r.tooth_radius_dev_mm.len() != teeth {
-            r.tooth_radius_dev_mm = vec![0.0; teeth];
-        }
-        for (d, g) in r.tooth_radius_dev_mm.iter_mut().zip(draws) {
-            *d += g * u.tooth_deviation_um * 1e-3;
-        }
-    }
-    c
-}
-
-/// Parameters drawn from N(`mean`, `scale²`·`cov`) (Cholesky; a singular direction gets no
-/// spread), each clamped to its `bounds`.
-pub fn draw_parameters(
-    mean: &[f64],
-    cov: &[Vec<f64>],
-    scale: f64,
-    bounds: &[(f64, f64)],
-    rng: &mut Rng,
-) -> Vec<f64> {
-    let n = mean.len();
-    let l = cholesky(cov);
-    let g: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
-    (0..n)
-        .map(|i| {
-            let d: f64 = (0..=i).map(|k| l[i][k] * g[k]).sum();
-            let v = mean[i] + scale * d;
-            let (lo, hi) = bounds.get(i).copied().unwrap_or((f64::MIN, f64::MAX));
-            v.clamp(lo, hi)
-        })
-        .collect()
-}
-
-/// Lower Cholesky factor of a symmetric positive semi-definite matrix (non-positive pivots
-/// become zero columns).
-pub fn cholesky(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
-    let n = a.len();
-    let mut l = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..=i {
-            let s: f64 = (0..j).map(|k| l[i][k] * l[j][k]).sum();
-            if i == j {
-                let d = a[i][i] - s;
-                l[i][j] = if d > 0.0 && d.is_finite() {
-                    d.sqrt()
-                } else {
-                    0.0
-                };
-            } else if l[j][j] > 0.0 {
-                l[i][j] = (a[i][j] - s) / l[j][j];
-            }
-        }
-    }
-    l
-}
-
-/// Largest number of Monte Carlo samples (`--monte-carlo N`): the outputs of every sample
-/// are kept until their percentiles are taken.
-pub const MAX_SAMPLES: usize = 100_000;
-
-/// Check a number of Monte Carlo samples: at least one, at most [`MAX_SAMPLES`].
-pub fn check_samples(n: usize) -> Result<(), String> {
-    if n == 0 {
-        return Err("--monte-carlo needs at least one sample".to_string());
-    }
-    if n > MAX_SAMPLES {
-        return Err(format!(
-            "--monte-carlo takes at most {MAX_SAMPLES} samples, got {n}"
-        ));
-    }
-    Ok(())
-}
-
-/// Run `f` for samples 0..`n` (each with its own stream of `seed`) in parallel and return
-/// the band of every output (`f` returns the same number of outputs every time).
-pub fn bands<F>(n: usize, seed: u64, f: F) -> Result<Vec<Band>, String>
-where
-    F: Fn(&mut Rng) -> Result<Vec<f64>, String> + Sync,
-{
-    check_samples(n)?;
-    let outs: Vec<Vec<f64>> = (0..n)
-        .into_par_iter()
-        .with_min_len(1)
-        .map(|i| f(&mut Rng::stream(seed, i as u64)))
-        .collect::<Result<_, _>>()?;
-    let m = outs[0].len();
-    Ok((0..m)
-        .map(|k| band(&outs.iter().map(|o| o[k]).collect::<Vec<_>>()))
-        .collect())
+/// Why Monte Carlo bands cannot be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MonteCarloError {
+    /// The number of samples is out of range.
+    #[error(transparent)]
+    Samples(#[from] SamplesError),
+    /// The deterministic run failed.
+    #[error(transparent)]
+    Run(#[from] super::run::RunError),
+    /// One sample of a run failed.
+    #[error("a Monte Carlo sample failed: {0}")]
+    Sample(super::run::RunError),
+    /// A case of a regression study cannot be predicted.
+    #[error(transparent)]
+    Case(#[from] super::regression::PredictError),
 }
 
 /// Run `p` of `design` with Monte Carlo bands: the deterministic responses (nominal
@@ -224,7 +43,7 @@ pub fn run_bands(
     p: &super::design::RunPoint,
     n: usize,
     seed: u64,
-) -> Result<super::design::RunOutput, String> {
+) -> Result<super::design::RunOutput, MonteCarloError> {
     use super::run::{evaluate_run, prepare_run};
     check_samples(n)?;
     let run = prepare_run(design, cutter, p)?;
@@ -249,7 +68,7 @@ pub fn prepared_bands(
     u: &Uncertainty,
     n: usize,
     seed: u64,
-) -> Result<Vec<Band>, String> {
+) -> Result<Vec<Band>, MonteCarloError> {
     bands(n, seed, |rng| {
         let c = perturb_cutter(cutter, u, rng);
         // One draw per pass whether or not the phase is drawn, so that the same seed gives
@@ -266,7 +85,7 @@ pub fn prepared_bands(
             .collect();
         super::run::evaluate_run(design, run, &c, &phases)
             .map(|o| o.responses)
-            .map_err(|e| format!("a Monte Carlo sample failed: {e}"))
+            .map_err(MonteCarloError::Sample)
     })
 }
 
@@ -294,7 +113,7 @@ pub fn case_bands(
     calibration: Option<(&super::calibrate::Calibration, &[super::calibrate::Free])>,
     n: usize,
     seed: u64,
-) -> Result<Vec<CaseBands>, String> {
+) -> Result<Vec<CaseBands>, MonteCarloError> {
     use super::calibrate::apply;
     use super::regression::predict_case;
     let u = study.uncertainty;
@@ -307,7 +126,7 @@ pub fn case_bands(
         .iter()
         .map(|c| predict_case(study, &base, c, &process, 0.0).map(|p| (p.rz_um, p.ra_um)))
         .collect::<Result<_, _>>()?;
-    let b = bands(n, seed, |rng| {
+    let b = bands(n, seed, |rng| -> Result<Vec<f64>, MonteCarloError> {
         let (p, c) = match calibration {
             Some((cal, free)) => {
                 let x = draw_parameters(
@@ -351,19 +170,8 @@ pub fn case_bands(
 
 #[cfg(test)]
 mod tests {
+    use super::super::uncertainty::MAX_SAMPLES;
     use super::*;
-
-    #[test]
-    fn percentiles_of_a_ramp_and_cholesky_of_a_2x2() {
-        let v: Vec<f64> = (0..=100).map(f64::from).collect();
-        let b = band(&v);
-        assert_eq!((b.p5, b.p50, b.p95), (5.0, 50.0, 95.0));
-        let l = cholesky(&[vec![4.0, 2.0], vec![2.0, 5.0]]);
-        assert_eq!(l, vec![vec![2.0, 0.0], vec![1.0, 2.0]]);
-        let a = bands(50, 3, |r| Ok(vec![r.normal()])).unwrap();
-        let b = bands(50, 3, |r| Ok(vec![r.normal()])).unwrap();
-        assert_eq!(a, b);
-    }
 
     /// A two-tooth ball end (R 5) with a 5 µm run-out offset, tilted 10° over the plane,
     /// stepover 0.1 mm, fz 0.05 mm: one tooth cuts deeper, and the responses of the unit cell

@@ -3,6 +3,90 @@
 //! design's window) and measured with the areal parameters of the design's responses.
 
 use super::design::{DEFAULT_DTHETA_DEG, Design, RunOutput, RunPoint, StepRule, StepSpec};
+use crate::synth::SynthError;
+
+/// Why a run of a design cannot be planned, is refused or fails. The messages name the
+/// design's keys (`grid_um`, `window_mm`, `dtheta_deg`), not command-line options.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// The synthetic path (its cross-section, pass interval or passes) cannot be made.
+    #[error(transparent)]
+    Synth(#[from] SynthError),
+    /// A value of the run beyond a plausibility limit (the feed per tooth).
+    #[error(transparent)]
+    Limit(#[from] crate::math::limits::LimitError),
+    /// The run is estimated past a simulation's limits or [`MAX_RUN_BYTES`].
+    #[error("{run} is refused before it starts: {why}")]
+    Refused {
+        /// "run 3 (yaw_deg = 0, …)".
+        run: String,
+        /// Which budget and the keys that bring the run within it.
+        why: String,
+    },
+    /// Runs of a design past the budget ([`check_runs`]).
+    #[error(
+        "{count} of {total} runs are past the budget, nothing was run:\n  {}{}",
+        join_refused(.refused),
+        more_refused(*.count, .refused.len())
+    )]
+    PastBudget {
+        /// Runs past the budget.
+        count: usize,
+        /// Runs of the design.
+        total: usize,
+        /// The first three refusals.
+        refused: Vec<RunError>,
+    },
+    /// The synthetic program came out without a tool path.
+    #[error("the synthetic program has no tool path")]
+    NoPath,
+    /// Resampling the synthetic path failed.
+    #[error(transparent)]
+    Resample(#[from] crate::resample::ResampleError),
+    /// A response that is not an areal parameter.
+    #[error("'{0}' is not an areal parameter")]
+    NotAreal(String),
+    /// The surface simulation failed.
+    #[error(transparent)]
+    Surface(#[from] crate::surface::SurfaceError),
+    /// The areal parameters failed.
+    #[error(transparent)]
+    Metrics(#[from] crate::metrics::MetricsError),
+    /// Nodes of the window that no pass reached.
+    #[error("{missing} of {nodes} nodes of the window were not reached")]
+    NotReached {
+        /// Nodes not reached.
+        missing: usize,
+        /// Nodes of the window.
+        nodes: usize,
+    },
+    /// The window reaches higher than the path covers.
+    #[error(
+        "the window reaches {top_um:.1} µm above the plane, beyond the {} µm the path covers",
+        1e3 * REACH_HEIGHT_MM
+    )]
+    TooHigh {
+        /// Highest node, µm.
+        top_um: f64,
+    },
+}
+
+fn join_refused(refused: &[RunError]) -> String {
+    refused
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("\n  ")
+}
+
+fn more_refused(count: usize, shown: usize) -> String {
+    if count > shown {
+        format!("\n  … and {} more", count - shown)
+    } else {
+        String::new()
+    }
+}
 
 /// The evaluated grid of a run: the unit cell or the design's window, in the WCS (passes
 /// along +x, stepped along +y), and the extent of the path that covers it.
@@ -26,9 +110,9 @@ pub fn reach_mm(
     cutter: &crate::tool::Cutter,
     axis_fgn: &crate::math::Vec3,
     h_mm: f64,
-) -> Result<(f64, f64), String> {
-    let one = |axis: &crate::math::Vec3| -> Result<f64, String> {
-        let cs = crate::synth::CrossSection::new(cutter, axis).map_err(|e| e.to_string())?;
+) -> Result<(f64, f64), SynthError> {
+    let one = |axis: &crate::math::Vec3| -> Result<f64, SynthError> {
+        let cs = crate::synth::CrossSection::new(cutter, axis)?;
         let [yb, zb] = cs.bottom();
         let step = 0.005;
         let mut reach: f64 = 0.0;
@@ -112,7 +196,7 @@ pub fn simulate_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<RunOutput, String> {
+) -> Result<RunOutput, RunError> {
     let prepared = prepare_run(design, cutter, p)?;
     evaluate_run(design, &prepared, cutter, &[])
 }
@@ -152,18 +236,18 @@ struct RunPlan {
 /// design share a few orientations and steps (they are the slow part of a plan).
 #[derive(Default)]
 struct PlanCache {
-    steps: std::collections::HashMap<[u64; 4], Result<f64, String>>,
-    sections: std::collections::HashMap<[u64; 3], Result<crate::synth::CrossSection, String>>,
+    steps: std::collections::HashMap<[u64; 4], Result<f64, SynthError>>,
+    sections: std::collections::HashMap<[u64; 3], Result<crate::synth::CrossSection, SynthError>>,
     /// Relative tolerance of the pass interval (0 for a run, a lower bound for a budget).
     step_rel: f64,
-    reaches: std::collections::HashMap<[u64; 3], Result<(f64, f64), String>>,
+    reaches: std::collections::HashMap<[u64; 3], Result<(f64, f64), SynthError>>,
 }
 
 fn plan_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<RunPlan, String> {
+) -> Result<RunPlan, RunError> {
     plan_run_with(design, cutter, p, &mut PlanCache::default())
 }
 
@@ -172,7 +256,7 @@ fn plan_run_with(
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
     cache: &mut PlanCache,
-) -> Result<RunPlan, String> {
+) -> Result<RunPlan, RunError> {
     use crate::synth::Orientation;
     let lead = design.factors.lead_deg.is_some();
     let orientation = if lead {
@@ -206,15 +290,10 @@ fn plan_run_with(
                     let section = cache
                         .sections
                         .entry([key[0], key[1], key[2]])
-                        .or_insert_with(|| {
-                            crate::synth::CrossSection::new(cutter, &axis)
-                                .map_err(|e| e.to_string())
-                        })
+                        .or_insert_with(|| crate::synth::CrossSection::new(cutter, &axis))
                         .as_ref()
                         .map_err(Clone::clone)?;
-                    let step = section
-                        .step_for_scallop_within(h * 1e-3, cache.step_rel)
-                        .map_err(|e| e.to_string());
+                    let step = section.step_for_scallop_within(h * 1e-3, cache.step_rel);
                     cache.steps.insert(key, step.clone());
                     step?
                 }
@@ -280,7 +359,7 @@ pub fn estimate_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<RunEstimate, String> {
+) -> Result<RunEstimate, RunError> {
     Ok(estimate_plan(
         design,
         cutter,
@@ -346,12 +425,12 @@ pub fn check_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<RunEstimate, String> {
+) -> Result<RunEstimate, RunError> {
     let plan = plan_run(design, cutter, p)?;
     check_estimate(design, p, estimate_plan(design, cutter, p, &plan))
 }
 
-fn check_estimate(design: &Design, p: &RunPoint, e: RunEstimate) -> Result<RunEstimate, String> {
+fn check_estimate(design: &Design, p: &RunPoint, e: RunEstimate) -> Result<RunEstimate, RunError> {
     use crate::math::limits::{MAX_NODES, MAX_SAMPLES};
     // NaN (an impossible plan) counts as beyond.
     let beyond = |v: f64, cap: f64| v.is_nan() || v > cap;
@@ -389,10 +468,10 @@ fn check_estimate(design: &Design, p: &RunPoint, e: RunEstimate) -> Result<RunEs
         None
     };
     match over {
-        Some(why) => Err(format!(
-            "{} is refused before it starts: {why}",
-            describe(design, p)
-        )),
+        Some(why) => Err(RunError::Refused {
+            run: describe(design, p),
+            why,
+        }),
         None => Ok(e),
     }
 }
@@ -401,7 +480,7 @@ fn check_estimate(design: &Design, p: &RunPoint, e: RunEstimate) -> Result<RunEs
 /// starts (nothing is built: a few milliseconds a run). A run whose plan itself fails (a
 /// feed per tooth out of range, …) is left to fail as it runs. The error names the refused
 /// runs (the first three) and how many there are.
-pub fn check_runs(design: &Design, cutter: &crate::tool::Cutter) -> Result<(), String> {
+pub fn check_runs(design: &Design, cutter: &crate::tool::Cutter) -> Result<(), RunError> {
     let runs = design.runs();
     let mut refused = Vec::new();
     let mut count = 0usize;
@@ -424,16 +503,11 @@ pub fn check_runs(design: &Design, cutter: &crate::tool::Cutter) -> Result<(), S
     if count == 0 {
         return Ok(());
     }
-    Err(format!(
-        "{count} of {} runs are past the budget, nothing was run:\n  {}{}",
-        runs.len(),
-        refused.join("\n  "),
-        if count > refused.len() {
-            format!("\n  … and {} more", count - refused.len())
-        } else {
-            String::new()
-        }
-    ))
+    Err(RunError::PastBudget {
+        count,
+        total: runs.len(),
+        refused,
+    })
 }
 
 /// "run 3 (yaw_deg = 0, scallop_um = 5, …)".
@@ -456,7 +530,7 @@ pub fn prepare_run(
     design: &Design,
     cutter: &crate::tool::Cutter,
     p: &RunPoint,
-) -> Result<PreparedRun, String> {
+) -> Result<PreparedRun, RunError> {
     use crate::synth::{PathSpec, Step, Surface};
     let plan = plan_run(design, cutter, p)?;
     check_estimate(design, p, estimate_plan(design, cutter, p, &plan))?;
@@ -480,26 +554,22 @@ pub fn prepare_run(
     spec.clearance_mm = 1.0;
     spec.feed_mm_min = p.feed_mm_min;
     spec.spindle_rpm = design.rpm;
-    let synth = crate::synth::generate(&spec).map_err(|e| e.to_string())?;
-    let path = synth
-        .program
-        .paths
-        .first()
-        .ok_or_else(|| "the synthetic program has no tool path".to_string())?;
+    let synth = crate::synth::generate(&spec)?;
+    let path = synth.program.paths.first().ok_or(RunError::NoPath)?;
 
     let dtheta = design.dtheta_deg.unwrap_or(DEFAULT_DTHETA_DEG).to_radians();
     let (model, mode) = design.model.with_resampling(dtheta, fz_mm, cutter.teeth());
     let ropts = crate::resample::Options::new(mode, fz_mm, cutter.teeth())
         .with_rpm(design.rpm)
         .with_feed_mm_min(p.feed_mm_min);
-    let samples = crate::resample::resample(path, &ropts).map_err(|e| e.to_string())?;
+    let samples = crate::resample::resample(path, &ropts)?;
     let params: Vec<crate::metrics::Param> = design
         .responses
         .iter()
         .map(|r| {
             crate::metrics::Param::from_symbol(r)
                 .filter(|p| !p.is_profile())
-                .ok_or_else(|| format!("'{r}' is not an areal parameter"))
+                .ok_or_else(|| RunError::NotAreal(r.clone()))
         })
         .collect::<Result<_, _>>()?;
     Ok(PreparedRun {
@@ -521,7 +591,7 @@ pub fn evaluate_run(
     run: &PreparedRun,
     cutter: &crate::tool::Cutter,
     phases_rad: &[f64],
-) -> Result<RunOutput, String> {
+) -> Result<RunOutput, RunError> {
     let shifted: Vec<crate::resample::Sample>;
     let samples = if phases_rad.iter().any(|&p| p != 0.0) {
         shifted = run
@@ -541,14 +611,13 @@ pub fn evaluate_run(
         &run.samples
     };
     let sopts = crate::surface::Options::new(run.model, run.window.grid, design.grid_um * 1e-3);
-    let sim =
-        crate::surface::simulate(samples, cutter, &sopts, &|_, _| {}).map_err(|e| e.to_string())?;
+    let sim = crate::surface::simulate(samples, cutter, &sopts, &|_, _| {})?;
     let nodes = sim.map.nx * sim.map.ny;
     if sim.nodes_cut != nodes {
-        return Err(format!(
-            "{} of {nodes} nodes of the window were not reached",
-            nodes - sim.nodes_cut
-        ));
+        return Err(RunError::NotReached {
+            missing: nodes - sim.nodes_cut,
+            nodes,
+        });
     }
     let top = sim
         .map
@@ -557,17 +626,13 @@ pub fn evaluate_run(
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
     if top > 1e3 * REACH_HEIGHT_MM {
-        return Err(format!(
-            "the window reaches {top:.1} µm above the plane, beyond the {} µm the path covers",
-            1e3 * REACH_HEIGHT_MM
-        ));
+        return Err(RunError::TooHigh { top_um: top });
     }
     let params = &run.params;
     let mut set_list: Vec<&str> = params.iter().map(|p| p.symbol()).collect();
     set_list.dedup();
-    let set =
-        crate::metrics::ParamSet::parse(&set_list.join(","), false).map_err(|e| e.to_string())?;
-    let values = crate::metrics::areal_parameters(&sim.map, &set).map_err(|e| e.to_string())?;
+    let set = crate::metrics::ParamSet::parse(&set_list.join(","), false)?;
+    let values = crate::metrics::areal_parameters(&sim.map, &set)?;
     let responses = params
         .iter()
         .map(|p| {

@@ -48,28 +48,52 @@ impl Across {
     }
 }
 
+/// Why the stepover-direction and areal values cannot be estimated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AcrossError {
+    /// The tool is not a ball end.
+    #[error(
+        "the stepover direction and the areal parameters need a ball-end tool (its profile across the passes is an arc of radius R)"
+    )]
+    NotBall,
+    /// `stepover_mm` is not in (0, 2R).
+    #[error(
+        "stepover_mm must be positive and below the tool diameter {diameter_mm} mm, found {stepover_mm}"
+    )]
+    Stepover {
+        /// The stepover, mm.
+        stepover_mm: f64,
+        /// The tool diameter, mm.
+        diameter_mm: f64,
+    },
+    /// The feed-direction profile is empty or not finite.
+    #[error("the feed-direction profile has no finite heights")]
+    NoProfile,
+    /// The estimated surface has no finite height.
+    #[error("the areal estimate has no finite height")]
+    NoHeight,
+}
+
 /// The stepover-direction Rz, Ra and the areal Sz, Sa of a ball end `cutter` at stepover
 /// `stepover_mm`, with the evaluated, evenly spaced feed-direction profile `feed_profile_um`.
 pub fn predict(
     cutter: &Cutter,
     stepover_mm: f64,
     feed_profile_um: &[f64],
-) -> Result<Across, String> {
+) -> Result<Across, AcrossError> {
     if !matches!(cutter.shape, Shape::Ball) {
-        return Err(
-            "the stepover direction and the areal parameters need a ball-end tool (its profile across the passes is an arc of radius R)"
-                .to_string(),
-        );
+        return Err(AcrossError::NotBall);
     }
     let r = cutter.radius_mm;
     if !(stepover_mm.is_finite() && stepover_mm > 0.0 && stepover_mm < 2.0 * r) {
-        return Err(format!(
-            "stepover_mm must be positive and below the tool diameter {} mm, found {stepover_mm}",
-            2.0 * r
-        ));
+        return Err(AcrossError::Stepover {
+            stepover_mm,
+            diameter_mm: 2.0 * r,
+        });
     }
     if feed_profile_um.is_empty() || feed_profile_um.iter().any(|h| !h.is_finite()) {
-        return Err("the feed-direction profile has no finite heights".to_string());
+        return Err(AcrossError::NoProfile);
     }
     let (rz, ra, _) = profile_roughness(r, stepover_mm);
     // One period of the scallop in an even number of steps (crest and valley are samples).
@@ -94,8 +118,7 @@ pub fn predict(
         .iter()
         .flat_map(|g| feed_profile_um.iter().map(move |f| f + g))
         .collect();
-    let stats = crate::metrics::height_stats(&z)
-        .ok_or_else(|| "the areal estimate has no finite height".to_string())?;
+    let stats = crate::metrics::height_stats(&z).ok_or(AcrossError::NoHeight)?;
     Ok(Across {
         rz_um: rz,
         ra_um: ra,

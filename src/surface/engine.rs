@@ -331,7 +331,9 @@ fn check_options(opts: &Options, cutter: &Cutter) -> Result<(), SurfaceError> {
     positive(opts.band_mm, "band")?;
     positive(opts.chord_tol_mm, "chord tolerance")?;
     positive(cutter.radius_mm, "tool radius")?;
-    opts.process.check().map_err(SurfaceError::InvalidOption)?;
+    opts.process
+        .check()
+        .map_err(|e| SurfaceError::InvalidOption(e.to_string()))?;
     if cutter.teeth() == 0 || cutter.teeth() > u16::MAX as usize {
         return Err(SurfaceError::InvalidOption(format!(
             "the cutter has {} teeth",

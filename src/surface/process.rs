@@ -64,29 +64,41 @@ impl Process {
     }
 
     /// Check the values; the message names the key of `process.toml`.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ProcessError> {
         if !(self.min_chip_mm.is_finite() && self.min_chip_mm >= 0.0) {
-            return Err(format!(
-                "min_chip_um must be ≥ 0, got {}",
-                self.min_chip_mm * 1e3
-            ));
+            return Err(ProcessError::MinChip(self.min_chip_mm * 1e3));
         }
         if !(0.0..=1.0).contains(&self.recovery) {
-            return Err(format!("recovery must lie in 0..1, got {}", self.recovery));
+            return Err(ProcessError::Recovery(self.recovery));
         }
         if let Some(t) = self.texture {
             if !(t.sq_mm.is_finite() && t.sq_mm >= 0.0) {
-                return Err(format!("texture_sq_um must be ≥ 0, got {}", t.sq_mm * 1e3));
+                return Err(ProcessError::TextureSq(t.sq_mm * 1e3));
             }
             if !(t.corr_mm.is_finite() && t.corr_mm > 0.0) {
-                return Err(format!(
-                    "texture_corr_um must be positive, got {}",
-                    t.corr_mm * 1e3
-                ));
+                return Err(ProcessError::TextureCorr(t.corr_mm * 1e3));
             }
         }
         Ok(())
     }
+}
+
+/// A process value out of its range; the message names the key of `process.toml`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProcessError {
+    /// A negative or non-finite minimum chip, µm.
+    #[error("min_chip_um must be ≥ 0, got {0}")]
+    MinChip(f64),
+    /// A recovery outside 0..1.
+    #[error("recovery must lie in 0..1, got {0}")]
+    Recovery(f64),
+    /// A negative or non-finite texture Sq, µm.
+    #[error("texture_sq_um must be ≥ 0, got {0}")]
+    TextureSq(f64),
+    /// A non-positive texture correlation length, µm.
+    #[error("texture_corr_um must be positive, got {0}")]
+    TextureCorr(f64),
 }
 
 /// One pass applied to a node at height `z` (`+∞` = stock): the pass's lowest height `w`.

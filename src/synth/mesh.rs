@@ -9,6 +9,25 @@ use crate::part::Mesh;
 /// Largest number of triangles a surface mesh may have.
 pub const MAX_TRIANGLES: usize = 20_000_000;
 
+/// Why a surface cannot be meshed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// The chord tolerance is not a positive number, mm.
+    #[error("tol_mm (the chord tolerance) must be positive, got {0}")]
+    Tolerance(f64),
+    /// The mesh would have more than [`MAX_TRIANGLES`] triangles.
+    #[error(
+        "a mesh within {tol_mm} mm needs {triangles} triangles (more than {MAX_TRIANGLES}); raise the tolerance or shrink the field"
+    )]
+    TooManyTriangles {
+        /// The chord tolerance, mm.
+        tol_mm: f64,
+        /// Triangles the mesh would have.
+        triangles: usize,
+    },
+}
+
 /// A mesh of `surface` over the field `size_mm` (along the passes, across) centred on the
 /// origin with passes at `pass_angle_rad` from +x, widened by `margin_mm` on every side
 /// (clipped to where the surface is defined), with facets within `tol_mm` of the surface.
@@ -19,11 +38,9 @@ pub fn surface_mesh(
     pass_angle_rad: f64,
     margin_mm: f64,
     tol_mm: f64,
-) -> Result<Mesh, String> {
+) -> Result<Mesh, MeshError> {
     if !(tol_mm.is_finite() && tol_mm > 0.0) {
-        return Err(format!(
-            "the chord tolerance must be positive, got {tol_mm}"
-        ));
+        return Err(MeshError::Tolerance(tol_mm));
     }
     let du = Vec3::new(pass_angle_rad.cos(), pass_angle_rad.sin(), 0.0);
     let dv = Vec3::new(-du.y, du.x, 0.0);
@@ -69,9 +86,7 @@ pub fn surface_mesh(
     let nv = ((2.0 * half_v / spacing(kv, half_v)).ceil() as usize).max(1);
     let triangles = 2usize.saturating_mul(nu).saturating_mul(nv);
     if triangles > MAX_TRIANGLES {
-        return Err(format!(
-            "a mesh within {tol_mm} mm needs {triangles} triangles (more than {MAX_TRIANGLES}); raise the tolerance or shrink the field"
-        ));
+        return Err(MeshError::TooManyTriangles { tol_mm, triangles });
     }
     let mut mesh = Mesh::default();
     for j in 0..=nv {

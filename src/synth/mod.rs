@@ -53,6 +53,9 @@ pub enum SynthError {
     /// A parameter out of range.
     #[error("{0}")]
     Invalid(String),
+    /// A parameter beyond a plausibility limit.
+    #[error(transparent)]
+    Limit(#[from] crate::math::limits::LimitError),
     /// The cutter cannot follow the surface at the target scallop: a concave radius is
     /// smaller than the effective cutting radius.
     #[error(
@@ -384,7 +387,7 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
             crate::math::limits::RPM,
         ),
     ] {
-        crate::math::limits::within(what, unit, v, range).map_err(SynthError::Invalid)?;
+        crate::math::limits::within(what, unit, v, range)?;
     }
     if length / spec.point_step_mm > 1e6 {
         return Err(SynthError::Invalid(format!(

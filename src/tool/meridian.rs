@@ -17,7 +17,9 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::Arc;
 
-pub use super::shapes::{apt, barrel, classic, lens, oval, polyline, round_insert, taper_barrel};
+mod shapes;
+
+pub use shapes::{apt, barrel, classic, lens, oval, polyline, round_insert, taper_barrel};
 
 /// One piece of a meridian, (r, z) in mm.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -29,7 +29,6 @@ mod effective;
 mod ice;
 pub mod meridian;
 mod section;
-mod shapes;
 mod teeth;
 pub mod trochoid;
 

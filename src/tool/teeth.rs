@@ -48,15 +48,18 @@ impl Rule {
     }
 }
 
+/// A rule name that is neither `paper` nor `exact`.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("unknown rule `{0}`, expected `paper` or `exact`")]
+pub struct UnknownRule(pub String);
+
 impl std::str::FromStr for Rule {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Rule, String> {
+    type Err = UnknownRule;
+    fn from_str(s: &str) -> Result<Rule, UnknownRule> {
         match s.trim().to_ascii_lowercase().as_str() {
             "paper" => Ok(Rule::Paper),
             "exact" => Ok(Rule::Exact),
-            other => Err(format!(
-                "unknown rule `{other}`, expected `paper` or `exact`"
-            )),
+            other => Err(UnknownRule(other.to_string())),
         }
     }
 }

@@ -621,7 +621,7 @@ impl Lowerer {
                         line,
                         column,
                         "an MSYS origin within ±100000 mm (100 m)",
-                        e,
+                        e.to_string(),
                     ));
                 }
                 if frame.is_none() {

@@ -319,6 +319,497 @@ fn every_input_is_read_through_io_input() {
     assert!(bad.is_empty(), "inputs read outside io::input: {bad:?}");
 }
 
+/// The module path of a file under `src/` (`study/run.rs` → `study::run`, `nc/mod.rs` →
+/// `nc`); `None` for `lib.rs` and `main.rs`.
+fn module_of(src: &Path, path: &Path) -> Option<Vec<String>> {
+    let rel = path.strip_prefix(src).ok()?;
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let last = parts.pop()?;
+    let stem = last.strip_suffix(".rs")?;
+    if stem != "mod" {
+        parts.push(stem.to_string());
+    }
+    (parts.len() > 1 || (parts.len() == 1 && stem == "mod")).then_some(parts)
+}
+
+/// The paths a file's code names through `crate::…`, `super::…` and `self::…` (groups
+/// `a::{b, c::d}` expanded one level), resolved against the file's module `module`.
+fn named_paths(text: &str, module: &[String]) -> Vec<Vec<String>> {
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    let bytes: Vec<char> = text.chars().collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let rest: String = bytes[i..bytes.len().min(i + 8)].iter().collect();
+        let starts = ["crate::", "super::", "self::"]
+            .into_iter()
+            .find(|k| rest.starts_with(k));
+        let boundary = i == 0 || !(ident(bytes[i - 1]) || bytes[i - 1] == ':');
+        let Some(_) = starts.filter(|_| boundary) else {
+            i += 1;
+            continue;
+        };
+        // Read `seg::seg::…`, stopping at anything else; a `{` opens a group.
+        let mut segs: Vec<String> = Vec::new();
+        let mut cur = String::new();
+        let mut group = None;
+        while i < bytes.len() {
+            let c = bytes[i];
+            if ident(c) {
+                cur.push(c);
+                i += 1;
+            } else if c == ':' && bytes.get(i + 1) == Some(&':') {
+                segs.push(std::mem::take(&mut cur));
+                i += 2;
+                if bytes.get(i) == Some(&'{') {
+                    let mut depth = 0;
+                    let start = i + 1;
+                    while i < bytes.len() {
+                        match bytes[i] {
+                            '{' => depth += 1,
+                            '}' => {
+                                depth -= 1;
+                                if depth == 0 {
+                                    break;
+                                }
+                            }
+                            _ => {}
+                        }
+                        i += 1;
+                    }
+                    group = Some(bytes[start..i.min(bytes.len())].iter().collect::<String>());
+                    break;
+                }
+            } else {
+                break;
+            }
+        }
+        if !cur.is_empty() {
+            segs.push(cur);
+        }
+        // Resolve the leading keywords against the file's module (`super` of `a/mod.rs` and
+        // of `a/b.rs` alike is the module above the file's own).
+        let mut base: Vec<String> = module.to_vec();
+        let mut k = 0;
+        match segs.first().map(String::as_str) {
+            Some("crate") => {
+                base.clear();
+                k = 1;
+            }
+            Some("self") => k = 1,
+            Some("super") => {
+                while segs.get(k).map(String::as_str) == Some("super") {
+                    base.pop();
+                    k += 1;
+                }
+            }
+            _ => {}
+        }
+        let mut path = base;
+        path.extend(segs[k..].iter().cloned());
+        match group {
+            Some(g) => {
+                let mut depth = 0;
+                let mut item = String::new();
+                for c in g.chars().chain(std::iter::once(',')) {
+                    match c {
+                        '{' => depth += 1,
+                        '}' => depth -= 1,
+                        ',' if depth == 0 => {
+                            let first: Vec<String> = item
+                                .trim()
+                                .split("::")
+                                .map(|s| s.trim().to_string())
+                                .take_while(|s| !s.is_empty() && s.chars().all(ident))
+                                .collect();
+                            let mut p = path.clone();
+                            p.extend(first);
+                            out.push(p);
+                            item.clear();
+                            continue;
+                        }
+                        _ => {}
+                    }
+                    item.push(c);
+                }
+            }
+            None => out.push(path),
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The import cycles between the files of one stage under `src_dir`: each a list of module
+/// paths. An edge is a file naming another file of its stage (`use super::run::…`,
+/// `crate::study::design::Design`); a file naming its own parent module (`super::Item` of a
+/// `mod.rs`) or a `mod.rs` naming its children (re-exports) is not an edge.
+fn stage_import_cycles(src_dir: &Path) -> Vec<Vec<String>> {
+    let mut files = Vec::new();
+    rust_files(src_dir, &mut files);
+    let modules: Vec<(Vec<String>, PathBuf)> = files
+        .into_iter()
+        .filter_map(|p| module_of(src_dir, &p).map(|m| (m, p)))
+        .collect();
+    let index = |m: &[String]| modules.iter().position(|(n, _)| n.as_slice() == m);
+    let n = modules.len();
+    let mut edges = vec![Vec::new(); n];
+    for (a, (m, p)) in modules.iter().enumerate() {
+        for named in named_paths(&code(p), m) {
+            // The longest prefix that is a file of the same stage.
+            let Some(b) = (1..=named.len()).rev().find_map(|l| index(&named[..l])) else {
+                continue;
+            };
+            let other = &modules[b].0;
+            let related = other.starts_with(m) || m.starts_with(other);
+            if b != a && other[0] == m[0] && !related && !edges[a].contains(&b) {
+                edges[a].push(b);
+            }
+        }
+    }
+    // Tarjan's strongly connected components; any of more than one file is a cycle.
+    struct State {
+        index: Vec<Option<usize>>,
+        low: Vec<usize>,
+        on: Vec<bool>,
+        stack: Vec<usize>,
+        next: usize,
+        sccs: Vec<Vec<usize>>,
+    }
+    fn visit(v: usize, edges: &[Vec<usize>], s: &mut State) {
+        s.index[v] = Some(s.next);
+        s.low[v] = s.next;
+        s.next += 1;
+        s.stack.push(v);
+        s.on[v] = true;
+        for &w in &edges[v] {
+            match s.index[w] {
+                None => {
+                    visit(w, edges, s);
+                    s.low[v] = s.low[v].min(s.low[w]);
+                }
+                Some(iw) if s.on[w] => s.low[v] = s.low[v].min(iw),
+                _ => {}
+            }
+        }
+        if Some(s.low[v]) == s.index[v] {
+            let mut scc = Vec::new();
+            while let Some(w) = s.stack.pop() {
+                s.on[w] = false;
+                scc.push(w);
+                if w == v {
+                    break;
+                }
+            }
+            s.sccs.push(scc);
+        }
+    }
+    let mut s = State {
+        index: vec![None; n],
+        low: vec![0; n],
+        on: vec![false; n],
+        stack: Vec::new(),
+        next: 0,
+        sccs: Vec::new(),
+    };
+    for v in 0..n {
+        if s.index[v].is_none() {
+            visit(v, &edges, &mut s);
+        }
+    }
+    let mut cycles: Vec<Vec<String>> = s
+        .sccs
+        .into_iter()
+        .filter(|c| c.len() > 1)
+        .map(|c| {
+            let mut names: Vec<String> = c.iter().map(|&v| modules[v].0.join("::")).collect();
+            names.sort();
+            names
+        })
+        .collect();
+    cycles.sort();
+    cycles
+}
+
+/// No files of one stage (the binary's `cli` included) import each other in a circle: a
+/// stage's files form layers too.
+#[test]
+fn no_import_cycle_inside_a_stage() {
+    let cycles = stage_import_cycles(&root().join("src"));
+    assert!(
+        cycles.is_empty(),
+        "files of one stage that import each other in a circle:\n{}",
+        cycles
+            .iter()
+            .map(|c| c.join(", "))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+#[test]
+fn the_cycle_check_finds_a_cycle() {
+    let dir = tempfile::tempdir().unwrap();
+    let stage = dir.path().join("stage");
+    std::fs::create_dir(&stage).unwrap();
+    let write = |name: &str, text: &str| std::fs::write(stage.join(name), text).unwrap();
+    write(
+        "mod.rs",
+        "//! s\npub mod a;\npub mod b;\npub mod c;\npub use a::A;\n",
+    );
+    write("a.rs", "//! a\nuse super::b::B;\npub struct A;\n");
+    write(
+        "b.rs",
+        "//! b\nuse crate::stage::{c::C, a};\npub struct B;\n",
+    );
+    write(
+        "c.rs",
+        "//! c\npub struct C(super::A);\n#[cfg(test)]\nuse super::a::A;\n",
+    );
+    assert_eq!(
+        stage_import_cycles(dir.path()),
+        vec![vec!["stage::a".to_string(), "stage::b".to_string()]]
+    );
+}
+
+/// The stage table of ARCHITECTURE.md has one row per stage folder, in pipeline order, then
+/// the binary's `cli`; the order the data-flow invariant spells is [`STAGES`].
+#[test]
+fn the_stage_table_lists_every_stage_in_order() {
+    let doc = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let rows: Vec<&str> = doc
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|l| l.split('`').next())
+        .collect();
+    let mut want: Vec<&str> = STAGES.to_vec();
+    want.push("cli");
+    assert_eq!(rows, want, "ARCHITECTURE.md's stage table");
+    let mut folders: Vec<String> = std::fs::read_dir(root().join("src"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    folders.sort();
+    let mut listed: Vec<String> = want.iter().map(|s| s.to_string()).collect();
+    listed.sort();
+    assert_eq!(
+        folders, listed,
+        "a folder under src/ per stage, and no other"
+    );
+    let order = STAGES.join(", ");
+    assert!(
+        doc.replace("\n  ", " ").contains(&order),
+        "the data-flow invariant names the stages in the order {order}"
+    );
+}
+
+/// In the binary, rayon is used only by the commands ARCHITECTURE.md names (`atlas`,
+/// `simulate`, `study` size the pool; `simulate` joins two tasks; `metrics` cuts a streamed
+/// `.gsf` per thread), and no library code starts a thread of its own.
+#[test]
+fn threads_only_where_the_architecture_says() {
+    let allowed = ["atlas.rs", "metrics.rs", "simulate.rs", "study.rs"];
+    let mut files = Vec::new();
+    rust_files(&root().join("src/cli"), &mut files);
+    let bad: Vec<String> = files
+        .iter()
+        .filter(|p| code(p).contains("rayon::"))
+        .filter(|p| !allowed.iter().any(|a| p.ends_with(a)))
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "rayon in commands ARCHITECTURE.md does not name: {bad:?}"
+    );
+    let spawns: Vec<String> = library_files()
+        .into_iter()
+        .filter(|(p, _)| {
+            let c = code(p);
+            c.contains("thread::spawn")
+                || c.contains("thread::scope")
+                || c.contains("Builder::new().spawn")
+        })
+        .map(|(p, _)| p.display().to_string())
+        .collect();
+    assert!(
+        spawns.is_empty(),
+        "library code that starts threads: {spawns:?}"
+    );
+}
+
+/// The types of the earlier stages (before `config`) that derive or implement
+/// `Deserialize` are the ones ARCHITECTURE.md lists under "Serde only at the edge".
+#[test]
+fn only_the_listed_types_of_earlier_stages_deserialize() {
+    let config = STAGES.iter().position(|s| *s == "config").unwrap();
+    let mut found = Vec::new();
+    for (path, stage) in library_files() {
+        if STAGES.iter().position(|s| *s == stage).unwrap() >= config {
+            continue;
+        }
+        let text = code(&path);
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, l) in lines.iter().enumerate() {
+            let t = l.trim_start();
+            if t.starts_with("#[derive(") && t.contains("Deserialize") {
+                let item = lines[i + 1..]
+                    .iter()
+                    .map(|l| l.trim_start())
+                    .find(|l| l.starts_with("pub struct") || l.starts_with("pub enum"));
+                if let Some(item) = item {
+                    let name = item.split_whitespace().nth(2).unwrap_or("");
+                    found.push(name.trim_end_matches(['{', '(', ';']).to_string());
+                }
+            } else if let Some(rest) = t.split("Deserialize<'de> for ").nth(1) {
+                found.push(rest.split_whitespace().next().unwrap_or("").to_string());
+            }
+        }
+    }
+    found.sort();
+    let doc = std::fs::read_to_string(root().join("ARCHITECTURE.md")).unwrap();
+    let doc = doc.replace("\n  ", " ");
+    let para = doc
+        .split("**Serde only at the edge.**")
+        .nth(1)
+        .and_then(|r| r.split("\n- ").next())
+        .unwrap();
+    let mut listed: Vec<String> = para
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|s| s.rsplit("::").next().unwrap().to_string())
+        .filter(|s| s.chars().next().is_some_and(char::is_uppercase))
+        .filter(|s| s != "Deserialize" && s != "Serialize")
+        .collect();
+    listed.sort();
+    assert_eq!(found, listed, "Deserialize in the stages before config");
+}
+
+/// miette's `fancy` renderer is the binary's: the library's dependency has no features, the
+/// default `cli` feature (which the binary requires) turns it on, and the Python package
+/// links the library without default features.
+#[test]
+fn miette_fancy_only_in_the_binary() {
+    let manifest = std::fs::read_to_string(root().join("Cargo.toml")).unwrap();
+    let dep = manifest.lines().find(|l| l.starts_with("miette")).unwrap();
+    assert_eq!(dep.trim(), "miette = \"7\"", "the library's miette");
+    assert!(manifest.contains("cli = [\"miette/fancy\"]"), "{manifest}");
+    assert!(manifest.contains("default = [\"cli\"]"), "{manifest}");
+    assert!(
+        manifest.contains("required-features = [\"cli\"]"),
+        "{manifest}"
+    );
+    let python = std::fs::read_to_string(root().join("python/Cargo.toml")).unwrap();
+    assert!(
+        python.contains("crest = { path = \"..\", default-features = false }"),
+        "{python}"
+    );
+}
+
+/// Library errors are typed: no function outside the binary returns `Result<_, String>`
+/// (the files listed are the ones still to convert; a new one must not join them).
+#[test]
+fn library_errors_are_not_strings() {
+    let pending = [
+        // Rewritten for issue 36's request types and readers.
+        "src/pipeline/simulate.rs",
+        "src/pipeline/atlas.rs",
+        "src/pipeline/contact.rs",
+        "src/pipeline/inputs.rs",
+        "src/io/mod.rs",
+        "src/resample/",
+        // Chained with `io::as_stored`'s string error in `cli::simulate`.
+        "src/report/view.rs",
+    ];
+    let mut bad = Vec::new();
+    for (path, _) in library_files() {
+        let rel = path
+            .strip_prefix(root())
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if pending.iter().any(|p| rel.starts_with(p)) {
+            continue;
+        }
+        let text = code(&path).replace(char::is_whitespace, "");
+        if result_types(&text)
+            .iter()
+            .any(|args| args.len() == 2 && args[1] == "String")
+        {
+            bad.push(rel);
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "library files with Result<_, String>: {bad:?}"
+    );
+}
+
+/// The type arguments of every `Result<…>` in `text` (whitespace removed), split at their
+/// top-level commas.
+fn result_types(text: &str) -> Vec<Vec<String>> {
+    let mut out = Vec::new();
+    for (start, _) in text.match_indices("Result<") {
+        if text[..start].ends_with(|c: char| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        let mut depth = 0;
+        let mut args = vec![String::new()];
+        for c in text[start + "Result".len()..].chars() {
+            match c {
+                '<' | '(' | '[' => {
+                    depth += 1;
+                    if depth == 1 {
+                        continue;
+                    }
+                }
+                '>' | ')' | ']' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        break;
+                    }
+                }
+                ',' if depth == 1 => {
+                    args.push(String::new());
+                    continue;
+                }
+                _ => {}
+            }
+            args.last_mut().unwrap().push(c);
+        }
+        out.push(args);
+    }
+    out
+}
+
+/// One finite-or-null JSON number (`io::tables::json_number`): nobody else maps a float to
+/// `null` by hand.
+#[test]
+fn one_finite_or_null_json_number() {
+    let pending = ["src/cli/atlas.rs", "src/cli/simulate.rs"];
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let bad: Vec<String> = files
+        .iter()
+        .filter(|p| !p.ends_with("src/io/tables.rs"))
+        .filter(|p| !pending.iter().any(|f| p.ends_with(f)))
+        .filter(|p| {
+            let c = code(p).replace(char::is_whitespace, "");
+            c.contains("Number::from_f64(") || c.contains("else{serde_json::Value::Null}")
+        })
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "floats mapped to JSON null by hand: {bad:?}"
+    );
+}
+
 /// The lines of every function of `text` (non-test code, comments dropped): name and length
 /// from its `fn` line to its closing brace (braces in string and char literals skipped).
 fn function_lengths(text: &str) -> Vec<(String, usize)> {

@@ -16,7 +16,7 @@
 //!   with the axis, then the segment tangent to it up to the radius R: walls, with the
 //!   tip for the fillets.
 
-use super::meridian::{Family, Meridian, ProfileError, Segment, arc_point, err};
+use super::{Family, Meridian, ProfileError, Segment, arc_point, err};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// Ball, torus or flat end: flat face from the axis to R − rc, then the corner arc.
