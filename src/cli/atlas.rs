@@ -135,9 +135,7 @@ fn patch_size(s: &str) -> miette::Result<(f64, f64)> {
     }
 }
 
-fn num(v: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
-}
+use crest::io::tables::json_number as num;
 
 /// What an output name is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -407,9 +407,13 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 // clicked profile's Rz is the one `crest metrics OUT --profile …` prints.
                 Output::Grid(sim) => crest::io::HeightMapFormat::from_path(&args.output)
                     .ok_or_else(|| format!("{name}: unknown height-map extension"))
-                    .and_then(|f| crest::io::as_stored(&sim.map, f))
-                    .and_then(|m| crest::report::view::heightmap_page(&m, &info)),
-                Output::Map(m) => crest::report::view::part_map_page(&m.points, &info),
+                    .and_then(|f| crest::io::as_stored(&sim.map, f).map_err(|e| e.to_string()))
+                    .and_then(|m| {
+                        crest::report::view::heightmap_page(&m, &info).map_err(|e| e.to_string())
+                    }),
+                Output::Map(m) => {
+                    crest::report::view::part_map_page(&m.points, &info).map_err(|e| e.to_string())
+                }
             };
             Some(html.map_err(|e| miette!("{name}: cannot make the 3-D view: {e}"))?)
         }
@@ -572,9 +576,7 @@ fn grid_centre(sim: &crest::surface::Simulation) -> crest::math::Point3 {
         + f.v * (m.y0_mm + 0.5e-3 * m.dy_um * (m.ny.max(1) - 1) as f64)
 }
 
-fn num(v: f64) -> serde_json::Value {
-    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
-}
+use crest::io::tables::json_number as num;
 
 fn summary(
     args: &Args,

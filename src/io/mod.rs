@@ -626,17 +626,28 @@ pub fn write_heightmap_to(
     }
 }
 
+/// Why a map could not be taken through its stored form.
+#[derive(Debug, thiserror::Error)]
+pub enum StoredError {
+    /// The format cannot be written.
+    #[error("{0}")]
+    Write(#[from] std::io::Error),
+    /// What was written did not read back.
+    #[error("{0}")]
+    Read(FormatError),
+}
+
 /// The map as a file of `format` stores it (written and parsed back in memory): what a later
 /// `crest metrics FILE` reads, e.g. float32 heights for GSF.
-pub fn as_stored(map: &HeightMap, format: HeightMapFormat) -> Result<HeightMap, String> {
+pub fn as_stored(map: &HeightMap, format: HeightMapFormat) -> Result<HeightMap, StoredError> {
     let mut bytes = Vec::new();
-    write_heightmap_to(&mut bytes, format, map).map_err(|e| e.to_string())?;
+    write_heightmap_to(&mut bytes, format, map)?;
     let opts = ReadOptions {
         dx_um: Some(map.dx_um),
         dy_um: Some(map.dy_um),
         channel: None,
     };
-    parse_heightmap(&bytes, format, &opts).map_err(|e| e.to_string())
+    parse_heightmap(&bytes, format, &opts).map_err(StoredError::Read)
 }
 
 /// Seconds since 1970-01-01T00:00:00Z as (year, month, day, hour, minute, second), UTC, in

@@ -107,10 +107,25 @@ pub fn block_average(map: &HeightMap, f: usize) -> Blocks {
     }
 }
 
+/// Why a viewer page could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// The parameters shown on the page could not be computed.
+    #[error("{0}")]
+    Parameters(String),
+    /// A part map without points.
+    #[error("the part map has no points")]
+    NoPoints,
+    /// A part map whose heights are all NaN.
+    #[error("no point of the part map was reached (every height is NaN)")]
+    NotReached,
+}
+
 /// The viewer page of a height map.
-pub fn heightmap_page(map: &HeightMap, info: &ViewInfo) -> Result<String, String> {
-    let set = ParamSet::parse(AREAL, false).map_err(|e| e.to_string())?;
-    let params = metrics::areal_parameters(map, &set).map_err(|e| e.to_string())?;
+pub fn heightmap_page(map: &HeightMap, info: &ViewInfo) -> Result<String, ViewError> {
+    let set = ParamSet::parse(AREAL, false).map_err(|e| ViewError::Parameters(e.to_string()))?;
+    let params =
+        metrics::areal_parameters(map, &set).map_err(|e| ViewError::Parameters(e.to_string()))?;
     let f = block_factor(map.nx, map.ny, DISPLAY_NODES);
     let blocks = block_average(map, f);
     let full = map.nx * map.ny <= FULL_NODES;
@@ -146,13 +161,12 @@ pub fn heightmap_page(map: &HeightMap, info: &ViewInfo) -> Result<String, String
 }
 
 /// The viewer page of a part map (a point cloud, heights along the normal).
-pub fn part_map_page(points: &[MapPoint], info: &ViewInfo) -> Result<String, String> {
+pub fn part_map_page(points: &[MapPoint], info: &ViewInfo) -> Result<String, ViewError> {
     if points.is_empty() {
-        return Err("the part map has no points".into());
+        return Err(ViewError::NoPoints);
     }
     let heights: Vec<f64> = points.iter().map(|p| p.height_um).collect();
-    let stats = metrics::height_stats(&heights)
-        .ok_or_else(|| "no point of the part map was reached (every height is NaN)".to_string())?;
+    let stats = metrics::height_stats(&heights).ok_or(ViewError::NotReached)?;
     let stride = points.len().div_ceil(DISPLAY_POINTS).max(1);
     let shown: Vec<&MapPoint> = points.iter().step_by(stride).collect();
     let mut xyz = Vec::with_capacity(shown.len() * 3);
