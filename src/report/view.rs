@@ -116,6 +116,9 @@ pub enum ViewError {
     /// A part map without points.
     #[error("the part map has no points")]
     NoPoints,
+    /// The page of a regression's case.
+    #[error("case {0}: {1}")]
+    Case(usize, Box<ViewError>),
     /// A part map whose heights are all NaN.
     #[error("no point of the part map was reached (every height is NaN)")]
     NotReached,
@@ -204,7 +207,7 @@ pub fn part_map_page(points: &[MapPoint], info: &ViewInfo) -> Result<String, Vie
 /// case, named `view-N.html` (N = the case's 1-based number); none for the crest model.
 pub fn regression_pages(
     reg: &crate::study::compare::Regression,
-) -> Result<Vec<(String, Vec<u8>)>, String> {
+) -> Result<Vec<(String, Vec<u8>)>, ViewError> {
     let mut out = Vec::new();
     for (i, c) in reg.cases.iter().enumerate() {
         let Some(z) = &c.zmap else { continue };
@@ -219,7 +222,8 @@ pub fn regression_pages(
             source: format!("{} case {}", reg.study_file, i + 1),
             file: None,
         };
-        let html = heightmap_page(&z.map, &info).map_err(|e| format!("case {}: {e}", i + 1))?;
+        let html =
+            heightmap_page(&z.map, &info).map_err(|e| ViewError::Case(i + 1, Box::new(e)))?;
         out.push((format!("view-{}.html", i + 1), html.into_bytes()));
     }
     Ok(out)
