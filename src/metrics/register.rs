@@ -152,7 +152,8 @@ pub fn spectral_peak(map: &HeightMap) -> Option<(f64, f64)> {
 /// spectral peak's frequency vector.
 pub fn feed_direction_deg(map: &HeightMap) -> Option<f64> {
     let (fx, fy) = spectral_peak(map)?;
-    Some((fy.atan2(fx).to_degrees() + 90.0).rem_euclid(180.0))
+    let d = (fy.atan2(fx).to_degrees() + 90.0).rem_euclid(180.0);
+    Some(if d > 180.0 - 1e-9 { 0.0 } else { d })
 }
 
 /// A rigid placement of a prediction on a measurement: the prediction is rotated by
@@ -243,6 +244,7 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
     for (x, y) in fb.iter_mut().zip(&fa) {
         *x = y * x.conj();
     }
+    let cross = fb.clone();
     let mut f = Fft2::new(py, px, FftDirection::Inverse);
     f.rows(&mut fb);
     f.columns(&mut fb);
@@ -264,14 +266,43 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
             k as f64 - n as f64
         }
     };
+    let (mut tx, mut ty) = (lag(kx, px) + ox, lag(ky, py) + oy);
+    // Refine on the band-limited interpolation of the correlation (its Fourier series).
+    let mut h = 0.25;
+    for _ in 0..10 {
+        tx = parabolic_step(|t| correlation_at(&cross, px, py, t, ty), tx, h);
+        ty = parabolic_step(|t| correlation_at(&cross, px, py, tx, t), ty, h);
+        h *= 0.5;
+    }
     let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };
     Some((
-        [
-            snap(lag(kx, px) + ox) * measured.dx_um,
-            snap(lag(ky, py) + oy) * measured.dy_um,
-        ],
+        [snap(tx) * measured.dx_um, snap(ty) * measured.dy_um],
         peak / norm,
     ))
+}
+
+/// The cross-correlation at a fractional lag (tx, ty) nodes from its spectrum `cross`
+/// (`py × px`), by its Fourier series (the Nyquist terms taken as cosines).
+fn correlation_at(cross: &[Complex64], px: usize, py: usize, tx: f64, ty: f64) -> f64 {
+    let tau = 2.0 * std::f64::consts::PI;
+    let signed = |k: usize, n: usize| {
+        if 2 * k == n {
+            0.0
+        } else if k < n / 2 {
+            k as f64
+        } else {
+            k as f64 - n as f64
+        }
+    };
+    let ex: Vec<Complex64> = (0..px)
+        .map(|k| Complex64::from_polar(1.0, tau * signed(k, px) * tx / px as f64))
+        .collect();
+    let mut acc = Complex64::default();
+    for (ky, row) in cross.chunks_exact(px).enumerate() {
+        let s: Complex64 = row.iter().zip(&ex).map(|(a, e)| a * e).sum();
+        acc += s * Complex64::from_polar(1.0, tau * signed(ky, py) * ty / py as f64);
+    }
+    acc.re
 }
 
 /// The averaged power spectrum of lines and the period of its strongest peak.
