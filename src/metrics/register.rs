@@ -245,6 +245,22 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         *x = y * x.conj();
     }
     let cross = fb.clone();
+    // The spectrum of the count of overlapping valid nodes, to refine on the unbiased
+    // correlation (the biased one, whose peak is searched, leans towards zero lag).
+    let valid = |m: &HeightMap| -> Vec<f64> {
+        m.z_um
+            .iter()
+            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
+            .collect()
+    };
+    let ma = fft2_padded(&valid(measured), nx, ny, px, py);
+    let mut overlap = fft2_padded(&valid(placed), nx, ny, px, py);
+    for (x, y) in overlap.iter_mut().zip(&ma) {
+        *x = y * x.conj();
+    }
+    let unbiased = |tx: f64, ty: f64| {
+        correlation_at(&cross, px, py, tx, ty) / correlation_at(&overlap, px, py, tx, ty).max(1.0)
+    };
     let mut f = Fft2::new(py, px, FftDirection::Inverse);
     f.rows(&mut fb);
     f.columns(&mut fb);
@@ -267,11 +283,11 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         }
     };
     let (mut tx, mut ty) = (lag(kx, px) + ox, lag(ky, py) + oy);
-    // Refine on the band-limited interpolation of the correlation (its Fourier series).
+    // Refine on the band-limited interpolation of the unbiased correlation (Fourier series).
     let mut h = 0.25;
     for _ in 0..10 {
-        tx = parabolic_step(|t| correlation_at(&cross, px, py, t, ty), tx, h);
-        ty = parabolic_step(|t| correlation_at(&cross, px, py, tx, t), ty, h);
+        tx = parabolic_step(|t| unbiased(t, ty), tx, h);
+        ty = parabolic_step(|t| unbiased(tx, t), ty, h);
         h *= 0.5;
     }
     let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };

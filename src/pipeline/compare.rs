@@ -42,7 +42,7 @@ fn chain(map: &HeightMap, opts: &CompareOptions, name: &str) -> miette::Result<H
 
 /// The rotation (degrees, in (−180, 180]) and shift (µm) that lay the prediction onto the
 /// measurement; of the two rotations that align the feed directions, the one whose
-/// cross-correlation peak is higher.
+/// placement correlates better with the measurement.
 fn register(pred: &HeightMap, meas: &HeightMap, dirs: [f64; 2]) -> Placement {
     let base = dirs[1] - dirs[0];
     let mut best: Option<(f64, Placement)> = None;
@@ -59,16 +59,16 @@ fn register(pred: &HeightMap, meas: &HeightMap, dirs: [f64; 2]) -> Placement {
                 shift_um: [0.0, 0.0],
             },
         );
-        if let Some((shift_um, peak)) = correlation_shift(meas, &rotated)
-            && best.is_none_or(|b| peak > b.0)
-        {
-            best = Some((
-                peak,
-                Placement {
-                    rotation_deg: rot,
-                    shift_um,
-                },
-            ));
+        if let Some((shift_um, _)) = correlation_shift(meas, &rotated) {
+            let pl = Placement {
+                rotation_deg: rot,
+                shift_um,
+            };
+            // Judged by the correlation of the placed maps over their common nodes.
+            let r = pearson(&place(pred, meas, &pl).z_um, &meas.z_um);
+            if best.is_none_or(|b| r > b.0) {
+                best = Some((r, pl));
+            }
         }
     }
     best.map(|b| b.1).unwrap_or_default()

@@ -14,11 +14,12 @@ const STEPOVER: f64 = 30.0;
 const FEED: f64 = 12.0;
 
 /// The closed-form surface at (u along the feed, v across), µm: a parabolic scallop of a
-/// 0.5 mm ball across, and asymmetric feed marks (a parabola in the phase) along.
+/// 0.5 mm ball across, and asymmetric feed marks (a fundamental and its second harmonic)
+/// along.
 fn surface(u: f64, v: f64) -> f64 {
     let w = v - STEPOVER * (v / STEPOVER).round();
-    let t = (u / FEED).rem_euclid(1.0);
-    w * w / 1000.0 + 0.12 * t * t
+    let t = 2.0 * std::f64::consts::PI * u / FEED;
+    w * w / 1000.0 + 0.02 * (t.sin() + 0.35 * (2.0 * t).sin())
 }
 
 /// A small deterministic generator in [0, 1).
