@@ -221,6 +221,20 @@ fn exit_codes() {
         .args(["--tolerance-pct", "200"])
         .assert()
         .code(0);
+    // A prediction too small to cover the measurement: exit 2, both files named.
+    let tiny = HeightMap::from_rows(4, 4, 1.0, 1.0, (0..16).map(f64::from).collect()).unwrap();
+    let tiny = save(dir.path(), "tiny.gsf", &tiny);
+    let a = crest()
+        .arg("compare")
+        .arg(&tiny)
+        .arg(&meas)
+        .arg("-o")
+        .arg(dir.path().join("o4"))
+        .arg("--no-register")
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&a.get_output().stderr).to_string();
+    assert!(err.contains("tiny.gsf") && err.contains("m.gsf"), "{err}");
     // Bad input: a missing file, a damaged one; named, nothing written.
     let bad = crate::util::write(
         dir.path(),
