@@ -16,6 +16,10 @@ use crate::surface::HeightMap;
 /// Lowest frequency searched for a spectral peak, in cycles per extent of the data.
 const MIN_CYCLES: f64 = 1.5;
 
+/// Largest padded correlation field (nodes) refined on its Fourier series; larger ones are
+/// refined by a parabola through whole lags (each evaluation of the series costs the field).
+const FOURIER_REFINE_MAX: usize = 1 << 21;
+
 /// Zero-padding factor of the 1-D spectra.
 const PAD_1D: usize = 8;
 
@@ -283,12 +287,27 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         }
     };
     let (mut tx, mut ty) = (lag(kx, px) + ox, lag(ky, py) + oy);
-    // Refine on the band-limited interpolation of the unbiased correlation (Fourier series).
-    let mut h = 0.25;
-    for _ in 0..10 {
-        tx = parabolic_step(|t| unbiased(t, ty), tx, h);
-        ty = parabolic_step(|t| unbiased(tx, t), ty, h);
-        h *= 0.5;
+    if px * py <= FOURIER_REFINE_MAX {
+        // Refine on the band-limited interpolation of the unbiased correlation (its
+        // Fourier series).
+        let mut h = 0.25;
+        for _ in 0..10 {
+            tx = parabolic_step(|t| unbiased(t, ty), tx, h);
+            ty = parabolic_step(|t| unbiased(tx, t), ty, h);
+            h *= 0.5;
+        }
+    } else {
+        // Large maps: a parabola through the unbiased correlation at whole lags.
+        let mut m = overlap.clone();
+        f.rows(&mut m);
+        f.columns(&mut m);
+        let u = |y: usize, x: usize| {
+            let k = (y % py) * px + (x % px);
+            r[k] / (m[k].re / scale).max(1.0)
+        };
+        let u0 = u(ky, kx);
+        tx = lag(kx, px) + vertex(u(ky, kx + px - 1), u0, u(ky, kx + 1));
+        ty = lag(ky, py) + vertex(u(ky + py - 1, kx), u0, u(ky + 1, kx));
     }
     let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };
     Some((
