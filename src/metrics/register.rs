@@ -157,7 +157,13 @@ pub fn spectral_peak(map: &HeightMap) -> Option<(f64, f64)> {
 pub fn feed_direction_deg(map: &HeightMap) -> Option<f64> {
     let (fx, fy) = spectral_peak(map)?;
     let d = (fy.atan2(fx).to_degrees() + 90.0).rem_euclid(180.0);
-    Some(if d < 1e-9 || d > 180.0 - 1e-9 { 0.0 } else { d })
+    d.is_finite().then(|| {
+        if (1e-9..=180.0 - 1e-9).contains(&d) {
+            d
+        } else {
+            0.0
+        }
+    })
 }
 
 /// A rigid placement of a prediction on a measurement: the prediction is rotated by
