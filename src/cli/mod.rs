@@ -15,6 +15,7 @@ macro_rules! outln {
 
 mod atlas;
 mod calibrate;
+mod compare;
 mod contact;
 mod convert;
 mod demo;
@@ -68,6 +69,8 @@ enum Command {
     Plot(plot::Args),
     /// Regression report against a measured table.
     Report(report::Args),
+    /// Hold a predicted height map against a measured one (registered, same filters).
+    Compare(compare::Args),
     /// Fit process parameters to a measured table (weighted least squares, leave-one-out).
     Calibrate(calibrate::Args),
     /// Predict the actual feed from the machine's axis limits.
@@ -227,6 +230,7 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Plot(a) => plot::run(a),
         Command::Report(a) => report::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Compare(a) => compare::run(a),
         Command::Feed(a) => feed::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Study(a) => study::run(a),

@@ -35,6 +35,7 @@ mod form;
 mod material;
 mod params;
 mod profile;
+mod register;
 mod spatial;
 mod stream;
 
@@ -52,6 +53,10 @@ pub use params::{
 pub use profile::{
     Profile, ProfileSpec, ProfileSpecError, extract_profile, profile_from_points, profile_values,
     rz_ra, sampling_length_mm,
+};
+pub use register::{
+    LaySpectra, LineSpectrum, Placement, bilinear, correlation_shift, feed_direction_deg,
+    lay_spectra, place, spectral_peak,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 pub use stream::RowStream;

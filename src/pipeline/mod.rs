@@ -11,6 +11,7 @@ pub use inputs::{
 pub use progress::{Progress, Silent};
 pub mod air;
 pub mod atlas;
+pub mod compare;
 pub mod contact;
 pub mod design;
 pub mod feed;

@@ -152,6 +152,7 @@ pub(crate) fn render(path: &Path, size: (u32, u32), chart: &impl Draw) -> Result
 
 pub mod atlas;
 pub mod chart;
+pub mod compare;
 pub mod cutter;
 pub mod effects;
 pub mod feed;

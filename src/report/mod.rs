@@ -3,6 +3,7 @@
 //! [`crate::study`] and [`crate::metrics`], the charts from [`crate::plot`].
 
 pub mod calibration;
+pub mod compare;
 pub mod regression;
 pub mod view;
 

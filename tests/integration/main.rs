@@ -5,6 +5,7 @@
 
 mod architecture; // ARCHITECTURE.md's invariants read off the source: imports, rayon, files, sizes
 mod atlas; // `crest atlas` (issue 33): patches placed every D mm, numbers against closed forms, shards, patches in the air
+mod compare; // `crest compare` (issue 34 §2): registration of rotated, shifted, tilted, noisy maps; a map against itself; exit codes
 mod convert;
 mod cutters; // general cutters (issue 23): round inserts, APT, profiles, circle segments, axial run-out // `crest convert` and `crest inspect`: CLSF ↔ contact12 round trips, located errors
 mod dialects;

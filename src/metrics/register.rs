@@ -1,0 +1,519 @@
+//! Registration of a predicted height map onto a measured one: the feed direction from the
+//! 2-D spectrum, the rigid placement (rotation about the centres, then a shift), the shift by
+//! FFT cross-correlation, and the 1-D spectra and profiles along and across the feed.
+//!
+//! Angles are degrees counter-clockwise from +x in the map's own frame (y = row·dy,
+//! ascending). The feed direction is the lay of the dominant periodic texture (the scallops
+//! run along the feed): perpendicular to the frequency vector of the strongest spectral peak,
+//! in [0, 180).
+
+use rustfft::FftDirection;
+use rustfft::num_complex::Complex64;
+
+use super::fft::Fft2;
+use crate::surface::HeightMap;
+
+/// Lowest frequency searched for a spectral peak, in cycles per extent of the data.
+const MIN_CYCLES: f64 = 1.5;
+
+/// Largest padded correlation field (nodes) refined on its Fourier series; larger ones are
+/// refined by a parabola through whole lags (each evaluation of the series costs the field).
+const FOURIER_REFINE_MAX: usize = 1 << 21;
+
+/// Zero-padding factor of the 1-D spectra.
+const PAD_1D: usize = 8;
+
+fn hann(i: usize, n: usize) -> f64 {
+    if n <= 1 {
+        1.0
+    } else {
+        0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos()
+    }
+}
+
+/// Mean of the finite values (`NaN` when there is none).
+fn finite_mean(z: &[f64]) -> f64 {
+    let (s, n) = z
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    if n == 0 { f64::NAN } else { s / n as f64 }
+}
+
+/// Mean-removed heights with missing nodes as 0, times a 2-D Hann window when `window`.
+fn centred(map: &HeightMap, window: bool) -> Vec<f64> {
+    let m = finite_mean(&map.z_um);
+    let mut out = Vec::with_capacity(map.z_um.len());
+    for r in 0..map.ny {
+        let wy = if window { hann(r, map.ny) } else { 1.0 };
+        for c in 0..map.nx {
+            let v = map.z_um[r * map.nx + c];
+            let wx = if window { hann(c, map.nx) } else { 1.0 };
+            out.push(if v.is_finite() {
+                (v - m) * wx * wy
+            } else {
+                0.0
+            });
+        }
+    }
+    out
+}
+
+/// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)`.
+fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
+    let mut buf = vec![Complex64::default(); px * py];
+    for r in 0..ny {
+        for c in 0..nx {
+            buf[r * px + c] = Complex64::new(w[r * nx + c], 0.0);
+        }
+    }
+    let mut f = Fft2::new(py, px, FftDirection::Forward);
+    f.rows(&mut buf);
+    f.columns(&mut buf);
+    buf
+}
+
+/// `ln |DTFT|²` of the windowed field at the frequency (fx, fy), cycles/µm.
+fn dtft_log_power(w: &[f64], map: &HeightMap, fx: f64, fy: f64) -> f64 {
+    let tau = 2.0 * std::f64::consts::PI;
+    let ex: Vec<Complex64> = (0..map.nx)
+        .map(|j| Complex64::from_polar(1.0, -tau * fx * j as f64 * map.dx_um))
+        .collect();
+    let mut acc = Complex64::default();
+    for (i, row) in w.chunks_exact(map.nx).enumerate() {
+        let s: Complex64 = row.iter().zip(&ex).map(|(v, e)| e * v).sum();
+        acc += s * Complex64::from_polar(1.0, -tau * fy * i as f64 * map.dy_um);
+    }
+    (acc.norm_sqr() + 1e-300).ln()
+}
+
+/// One parabolic step towards the maximum of `f` around `x` with step `h`.
+fn parabolic_step(f: impl Fn(f64) -> f64, x: f64, h: f64) -> f64 {
+    let (fm, f0, fp) = (f(x - h), f(x), f(x + h));
+    let den = fm - 2.0 * f0 + fp;
+    if den < 0.0 {
+        x + (0.5 * (fm - fp) / den).clamp(-1.0, 1.0) * h
+    } else if fp > f0 && fp >= fm {
+        x + h
+    } else if fm > f0 {
+        x - h
+    } else {
+        x
+    }
+}
+
+/// The offset of a parabola's vertex through three equally spaced values (in steps, within ±½).
+fn vertex(fm: f64, f0: f64, fp: f64) -> f64 {
+    let den = fm - 2.0 * f0 + fp;
+    if den < 0.0 {
+        (0.5 * (fm - fp) / den).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    }
+}
+
+/// The frequency (fx, fy) of the strongest spectral peak of a map, cycles/µm, refined to a
+/// small fraction of a bin on the continuous spectrum of the Hann-windowed heights.
+pub fn spectral_peak(map: &HeightMap) -> Option<(f64, f64)> {
+    if map.nx < 8 || map.ny < 8 {
+        return None;
+    }
+    let w = centred(map, true);
+    let (px, py) = (2 * map.nx, 2 * map.ny);
+    let f = fft2_padded(&w, map.nx, map.ny, px, py);
+    let (bx, by) = (1.0 / (px as f64 * map.dx_um), 1.0 / (py as f64 * map.dy_um));
+    let (lx, ly) = (map.nx as f64 * map.dx_um, map.ny as f64 * map.dy_um);
+    let mut best: Option<(f64, f64, f64)> = None;
+    for ky in 0..=py / 2 {
+        for c in 0..px {
+            let kx = if c <= px / 2 {
+                c as f64
+            } else {
+                c as f64 - px as f64
+            };
+            let (fx, fy) = (kx * bx, ky as f64 * by);
+            if (fx * lx).powi(2) + (fy * ly).powi(2) < MIN_CYCLES * MIN_CYCLES {
+                continue;
+            }
+            let p = f[ky * px + c].norm_sqr();
+            if best.is_none_or(|b| p > b.0) {
+                best = Some((p, fx, fy));
+            }
+        }
+    }
+    let (_, mut fx, mut fy) = best?;
+    let (mut hx, mut hy) = (0.5 * bx, 0.5 * by);
+    for _ in 0..14 {
+        fx = parabolic_step(|t| dtft_log_power(&w, map, t, fy), fx, hx);
+        fy = parabolic_step(|t| dtft_log_power(&w, map, fx, t), fy, hy);
+        hx *= 0.5;
+        hy *= 0.5;
+    }
+    Some((fx, fy))
+}
+
+/// The feed direction of a map, degrees in [0, 180): perpendicular to its strongest
+/// spectral peak's frequency vector.
+pub fn feed_direction_deg(map: &HeightMap) -> Option<f64> {
+    let (fx, fy) = spectral_peak(map)?;
+    let d = (fy.atan2(fx).to_degrees() + 90.0).rem_euclid(180.0);
+    d.is_finite().then(|| {
+        if (1e-9..=180.0 - 1e-9).contains(&d) {
+            d
+        } else {
+            0.0
+        }
+    })
+}
+
+/// A rigid placement of a prediction on a measurement: the prediction is rotated by
+/// `rotation_deg` (counter-clockwise) about its centre, put on the measurement's centre, then
+/// moved by `shift_um`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Placement {
+    /// Rotation, degrees counter-clockwise.
+    pub rotation_deg: f64,
+    /// Shift (x, y), µm.
+    pub shift_um: [f64; 2],
+}
+
+/// Bilinear value of `map` at fractional node (col `j`, row `i`); `NaN` outside the map or
+/// where a node with weight is missing.
+pub fn bilinear(map: &HeightMap, j: f64, i: f64) -> f64 {
+    let snap = |t: f64| {
+        if (t - t.round()).abs() < 1e-9 {
+            t.round()
+        } else {
+            t
+        }
+    };
+    let (j, i) = (snap(j), snap(i));
+    if !(j >= 0.0 && i >= 0.0 && j <= (map.nx - 1) as f64 && i <= (map.ny - 1) as f64) {
+        return f64::NAN;
+    }
+    let (j0, i0) = (j.floor() as usize, i.floor() as usize);
+    let (tx, ty) = (j - j0 as f64, i - i0 as f64);
+    let mut s = 0.0;
+    for (di, wy) in [(0, 1.0 - ty), (1, ty)] {
+        for (dj, wx) in [(0, 1.0 - tx), (1, tx)] {
+            let w = wx * wy;
+            if w == 0.0 {
+                continue;
+            }
+            s += w * map.z_um[(i0 + di) * map.nx + j0 + dj];
+        }
+    }
+    s
+}
+
+/// The prediction `pred` placed on the grid of `grid` (its spacing, size and origin),
+/// bilinearly resampled; nodes it does not cover are `NaN`.
+pub fn place(pred: &HeightMap, grid: &HeightMap, pl: &Placement) -> HeightMap {
+    let mut out = HeightMap::new_nan(grid.nx, grid.ny, grid.dx_um, grid.dy_um);
+    out.x0_mm = grid.x0_mm;
+    out.y0_mm = grid.y0_mm;
+    let (s, c) = pl.rotation_deg.to_radians().sin_cos();
+    let (gcx, gcy) = (
+        (grid.nx - 1) as f64 * grid.dx_um / 2.0,
+        (grid.ny - 1) as f64 * grid.dy_um / 2.0,
+    );
+    let (pcx, pcy) = (
+        (pred.nx - 1) as f64 * pred.dx_um / 2.0,
+        (pred.ny - 1) as f64 * pred.dy_um / 2.0,
+    );
+    for r in 0..grid.ny {
+        for col in 0..grid.nx {
+            let mx = col as f64 * grid.dx_um - gcx - pl.shift_um[0];
+            let my = r as f64 * grid.dy_um - gcy - pl.shift_um[1];
+            // Rotate back by −rotation.
+            let (px, py) = (c * mx + s * my, -s * mx + c * my);
+            out.z_um[r * grid.nx + col] =
+                bilinear(pred, (px + pcx) / pred.dx_um, (py + pcy) / pred.dy_um);
+        }
+    }
+    out
+}
+
+/// The shift (µm) that best lays `placed` onto `measured` (the same grid): the peak of their
+/// linear cross-correlation, refined by a parabola through its neighbours in each axis; and
+/// the peak's normalised height (1 for identical maps).
+pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2], f64)> {
+    let (nx, ny) = (measured.nx, measured.ny);
+    if placed.nx != nx || placed.ny != ny || nx < 2 || ny < 2 {
+        return None;
+    }
+    let a = centred(measured, false);
+    let b = centred(placed, false);
+    let norm = (a.iter().map(|v| v * v).sum::<f64>() * b.iter().map(|v| v * v).sum::<f64>()).sqrt();
+    if norm.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let (px, py) = (2 * nx, 2 * ny);
+    let fa = fft2_padded(&a, nx, ny, px, py);
+    let mut fb = fft2_padded(&b, nx, ny, px, py);
+    for (x, y) in fb.iter_mut().zip(&fa) {
+        *x = y * x.conj();
+    }
+    let cross = fb.clone();
+    // The spectrum of the count of overlapping valid nodes, to refine on the unbiased
+    // correlation (the biased one, whose peak is searched, leans towards zero lag).
+    let valid = |m: &HeightMap| -> Vec<f64> {
+        m.z_um
+            .iter()
+            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
+            .collect()
+    };
+    let ma = fft2_padded(&valid(measured), nx, ny, px, py);
+    let mut overlap = fft2_padded(&valid(placed), nx, ny, px, py);
+    for (x, y) in overlap.iter_mut().zip(&ma) {
+        *x = y * x.conj();
+    }
+    let unbiased = |tx: f64, ty: f64| {
+        correlation_at(&cross, px, py, tx, ty) / correlation_at(&overlap, px, py, tx, ty).max(1.0)
+    };
+    let mut f = Fft2::new(py, px, FftDirection::Inverse);
+    f.rows(&mut fb);
+    f.columns(&mut fb);
+    let scale = (px * py) as f64;
+    let r: Vec<f64> = fb.iter().map(|v| v.re / scale).collect();
+    let (k, peak) =
+        r.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |b, (k, &v)| if v > b.1 { (k, v) } else { b },
+        );
+    let (ky, kx) = (k / px, k % px);
+    let at = |y: usize, x: usize| r[(y % py) * px + (x % px)];
+    let ox = vertex(at(ky, kx + px - 1), peak, at(ky, kx + 1));
+    let oy = vertex(at(ky + py - 1, kx), peak, at(ky + 1, kx));
+    let lag = |k: usize, n: usize| {
+        if k < n / 2 {
+            k as f64
+        } else {
+            k as f64 - n as f64
+        }
+    };
+    let (mut tx, mut ty) = (lag(kx, px) + ox, lag(ky, py) + oy);
+    if px * py <= FOURIER_REFINE_MAX {
+        // Refine on the band-limited interpolation of the unbiased correlation (its
+        // Fourier series).
+        let mut h = 0.25;
+        for _ in 0..10 {
+            tx = parabolic_step(|t| unbiased(t, ty), tx, h);
+            ty = parabolic_step(|t| unbiased(tx, t), ty, h);
+            h *= 0.5;
+        }
+    } else {
+        // Large maps: a parabola through the unbiased correlation at whole lags.
+        let mut m = overlap.clone();
+        f.rows(&mut m);
+        f.columns(&mut m);
+        let u = |y: usize, x: usize| {
+            let k = (y % py) * px + (x % px);
+            r[k] / (m[k].re / scale).max(1.0)
+        };
+        let u0 = u(ky, kx);
+        tx = lag(kx, px) + vertex(u(ky, kx + px - 1), u0, u(ky, kx + 1));
+        ty = lag(ky, py) + vertex(u(ky + py - 1, kx), u0, u(ky + 1, kx));
+    }
+    let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };
+    Some((
+        [snap(tx) * measured.dx_um, snap(ty) * measured.dy_um],
+        peak / norm,
+    ))
+}
+
+/// The cross-correlation at a fractional lag (tx, ty) nodes from its spectrum `cross`
+/// (`py × px`), by its Fourier series (the Nyquist terms taken as cosines).
+fn correlation_at(cross: &[Complex64], px: usize, py: usize, tx: f64, ty: f64) -> f64 {
+    let tau = 2.0 * std::f64::consts::PI;
+    let signed = |k: usize, n: usize| {
+        if 2 * k == n {
+            0.0
+        } else if k < n / 2 {
+            k as f64
+        } else {
+            k as f64 - n as f64
+        }
+    };
+    let ex: Vec<Complex64> = (0..px)
+        .map(|k| Complex64::from_polar(1.0, tau * signed(k, px) * tx / px as f64))
+        .collect();
+    let mut acc = Complex64::default();
+    for (ky, row) in cross.chunks_exact(px).enumerate() {
+        let s: Complex64 = row.iter().zip(&ex).map(|(a, e)| a * e).sum();
+        acc += s * Complex64::from_polar(1.0, tau * signed(ky, py) * ty / py as f64);
+    }
+    acc.re
+}
+
+/// The averaged power spectrum of lines and the period of its strongest peak.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LineSpectrum {
+    /// Frequencies, cycles/µm.
+    pub freq_per_um: Vec<f64>,
+    /// Mean power of the Hann-windowed lines, µm².
+    pub power: Vec<f64>,
+    /// Period of the strongest peak above 1.5 cycles per line, µm (`NaN` when none).
+    pub peak_period_um: f64,
+}
+
+/// Profiles and 1-D spectra along and across a feed direction.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LaySpectra {
+    /// Positions along the lines, µm from the centre.
+    pub position_um: Vec<f64>,
+    /// The profile through the centre along the feed, µm.
+    pub along_profile_um: Vec<f64>,
+    /// The profile through the centre across the feed, µm.
+    pub across_profile_um: Vec<f64>,
+    /// Spectrum of lines along the feed (feed-mark period).
+    pub along: LineSpectrum,
+    /// Spectrum of lines across the feed (stepover).
+    pub across: LineSpectrum,
+}
+
+/// A square of `n × n` nodes at spacing `d` centred on the map, its rows along `feed_deg`.
+fn rotated_square(map: &HeightMap, feed_deg: f64) -> Option<(Vec<f64>, usize, f64)> {
+    let d = map.dx_um.min(map.dy_um);
+    let (s, c) = feed_deg.to_radians().sin_cos();
+    let (ax, ay) = (
+        (map.nx - 1) as f64 * map.dx_um / 2.0,
+        (map.ny - 1) as f64 * map.dy_um / 2.0,
+    );
+    let h = ax.min(ay) / (c.abs() + s.abs()) * 0.999;
+    let n = (2.0 * h / d).floor() as usize + 1;
+    if n < 8 {
+        return None;
+    }
+    let half = (n - 1) as f64 * d / 2.0;
+    let mut z = Vec::with_capacity(n * n);
+    for iv in 0..n {
+        let v = iv as f64 * d - half;
+        for iu in 0..n {
+            let u = iu as f64 * d - half;
+            let (x, y) = (ax + u * c - v * s, ay + u * s + v * c);
+            z.push(bilinear(map, x / map.dx_um, y / map.dy_um));
+        }
+    }
+    Some((z, n, d))
+}
+
+/// Mean power spectrum of lines (each mean-removed, missing values as its mean, Hann window,
+/// padded [`PAD_1D`] times).
+fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
+    let n = lines.first().map_or(0, Vec::len);
+    let m = PAD_1D * n.max(1);
+    let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(m);
+    let mut power = vec![0.0; m / 2 + 1];
+    let mut used = 0usize;
+    for line in lines {
+        let valid = line.iter().filter(|v| v.is_finite()).count();
+        if 2 * valid < n {
+            continue;
+        }
+        let mean = finite_mean(line);
+        let mut buf = vec![Complex64::default(); m];
+        for (k, v) in line.iter().enumerate() {
+            let v = if v.is_finite() { v - mean } else { 0.0 };
+            buf[k] = Complex64::new(v * hann(k, n), 0.0);
+        }
+        fft.process(&mut buf);
+        for (p, b) in power.iter_mut().zip(&buf) {
+            *p += b.norm_sqr() / (n as f64).powi(2);
+        }
+        used += 1;
+    }
+    for p in power.iter_mut() {
+        *p /= used.max(1) as f64;
+    }
+    let df = 1.0 / (m as f64 * d);
+    let freq: Vec<f64> = (0..power.len()).map(|k| k as f64 * df).collect();
+    let k0 = ((MIN_CYCLES * PAD_1D as f64).ceil() as usize).max(1);
+    let mut peak = f64::NAN;
+    if used > 0 && power.len() > k0 + 2 {
+        let k = (k0..power.len() - 1).fold(k0, |b, k| if power[k] > power[b] { k } else { b });
+        let ln = |k: usize| (power[k] + 1e-300).ln();
+        let o = vertex(ln(k - 1), ln(k), ln(k + 1));
+        peak = 1.0 / ((k as f64 + o) * df);
+    }
+    LineSpectrum {
+        freq_per_um: freq,
+        power,
+        peak_period_um: peak,
+    }
+}
+
+/// Profiles through the centre and 1-D spectra along and across the feed direction
+/// `feed_deg`, on the largest centred square whose rotated sides fit in the map.
+pub fn lay_spectra(map: &HeightMap, feed_deg: f64) -> Option<LaySpectra> {
+    let (z, n, d) = rotated_square(map, feed_deg)?;
+    let rows: Vec<Vec<f64>> = z.chunks_exact(n).map(<[f64]>::to_vec).collect();
+    let cols: Vec<Vec<f64>> = (0..n)
+        .map(|c| (0..n).map(|r| z[r * n + c]).collect())
+        .collect();
+    let half = (n - 1) as f64 * d / 2.0;
+    Some(LaySpectra {
+        position_um: (0..n).map(|k| k as f64 * d - half).collect(),
+        along_profile_um: rows[n / 2].clone(),
+        across_profile_um: cols[n / 2].clone(),
+        along: line_spectrum(&rows, d),
+        across: line_spectrum(&cols, d),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stripes(nx: usize, ny: usize, deg: f64, period: f64) -> HeightMap {
+        let (s, c) = deg.to_radians().sin_cos();
+        let mut z = Vec::new();
+        for r in 0..ny {
+            for col in 0..nx {
+                // Frequency vector perpendicular to the lay `deg`.
+                let v = -(col as f64) * s + r as f64 * c;
+                z.push((2.0 * std::f64::consts::PI * v / period).sin());
+            }
+        }
+        HeightMap::from_rows(nx, ny, 1.0, 1.0, z).unwrap()
+    }
+
+    #[test]
+    fn direction_of_stripes() {
+        for deg in [0.0, 17.3, 45.0, 90.0, 121.7, 179.0] {
+            let m = stripes(128, 96, deg, 13.0);
+            let got = feed_direction_deg(&m).unwrap();
+            let err = ((got - deg + 90.0).rem_euclid(180.0) - 90.0).abs();
+            assert!(err < 0.1, "{deg}: {got}");
+        }
+    }
+
+    #[test]
+    fn shift_of_a_placed_map() {
+        let a = stripes(64, 64, 30.0, 9.0);
+        let b = stripes(64, 64, 100.0, 13.0);
+        let mut n = a.clone();
+        for (v, w) in n.z_um.iter_mut().zip(&b.z_um) {
+            *v += w;
+        }
+        for (k, v) in n.z_um.iter_mut().enumerate() {
+            *v += ((k * 7919 % 101) as f64 / 101.0) * 0.01;
+        }
+        let moved = place(
+            &n,
+            &n,
+            &Placement {
+                rotation_deg: 0.0,
+                shift_um: [2.4, -1.3],
+            },
+        );
+        let (s, _) = correlation_shift(&moved, &n).unwrap();
+        assert!(
+            (s[0] - 2.4).abs() < 0.5 && (s[1] + 1.3).abs() < 0.5,
+            "{s:?}"
+        );
+        let (s0, c) = correlation_shift(&n, &n).unwrap();
+        assert_eq!(s0, [0.0, 0.0]);
+        assert!((c - 1.0).abs() < 1e-9);
+    }
+}

@@ -1,0 +1,264 @@
+//! `crest compare`: a predicted height map held against a measured one: both read, the
+//! prediction registered (feed direction, rotation, shift) and resampled onto the measured
+//! grid, both put through the same ISO 25178-3 chain over their overlap, and compared
+//! parameter by parameter, spectrum by spectrum.
+
+use std::path::Path;
+
+use miette::miette;
+
+use crate::io::{ReadOptions, read_heightmap};
+use crate::metrics::{
+    LaySpectra, ParamSet, Placement, Preprocess, areal_parameters, correlation_shift,
+    feed_direction_deg, height_stats, lay_spectra, place, preprocess_map,
+};
+use crate::surface::HeightMap;
+
+pub use crate::report::compare::{
+    COMPARED, CompareOptions, Comparison, DEFAULT_TOLERANCE_PCT, JUDGED, Pair,
+};
+
+fn read(path: &Path) -> miette::Result<HeightMap> {
+    let name = path.display().to_string();
+    read_heightmap(path, &ReadOptions::default()).map_err(|e| {
+        let msg = e.to_string();
+        if msg.contains(&name) {
+            miette!("{msg}")
+        } else {
+            miette!("{name}: {msg}")
+        }
+    })
+}
+
+fn chain(map: &HeightMap, opts: &CompareOptions, name: &str) -> miette::Result<HeightMap> {
+    let pp = Preprocess {
+        level: opts.level,
+        lambda_s_um: opts.lambda_s_um,
+        lambda_c_um: opts.lambda_c_um,
+        ends: Default::default(),
+    };
+    preprocess_map(map, &pp).map_err(|e| miette!("{name}: {e}"))
+}
+
+/// The rotation (degrees, in (−180, 180]) and shift (µm) that lay the prediction onto the
+/// measurement; of the two rotations that align the feed directions, the one whose
+/// placement correlates better with the measurement.
+fn register(pred: &HeightMap, meas: &HeightMap, dirs: [f64; 2]) -> Placement {
+    let base = dirs[1] - dirs[0];
+    let mut best: Option<(f64, Placement)> = None;
+    for turn in [0.0, 180.0] {
+        let mut rot = (base + turn + 180.0).rem_euclid(360.0) - 180.0;
+        if rot.abs() < 1e-9 {
+            rot = 0.0;
+        }
+        let rotated = place(
+            pred,
+            meas,
+            &Placement {
+                rotation_deg: rot,
+                shift_um: [0.0, 0.0],
+            },
+        );
+        if let Some((shift_um, _)) = correlation_shift(meas, &rotated) {
+            let pl = Placement {
+                rotation_deg: rot,
+                shift_um,
+            };
+            // Judged by the correlation of the placed maps over their common nodes.
+            let r = pearson(&place(pred, meas, &pl).z_um, &meas.z_um);
+            if best.is_none_or(|b| r > b.0) {
+                best = Some((r, pl));
+            }
+        }
+    }
+    best.map(|b| b.1).unwrap_or_default()
+}
+
+/// Both maps with `NaN` outside their common valid nodes, cropped to those nodes' bounding box.
+fn overlap(a: &HeightMap, b: &HeightMap) -> Option<(HeightMap, HeightMap)> {
+    let both = |k: usize| a.z_um[k].is_finite() && b.z_um[k].is_finite();
+    let (mut c0, mut c1, mut r0, mut r1) = (usize::MAX, 0, usize::MAX, 0);
+    let mut count = 0usize;
+    for r in 0..a.ny {
+        for c in 0..a.nx {
+            if both(r * a.nx + c) {
+                (c0, c1, r0, r1) = (c0.min(c), c1.max(c), r0.min(r), r1.max(r));
+                count += 1;
+            }
+        }
+    }
+    if count < 64 || c1 - c0 < 7 || r1 - r0 < 7 {
+        return None;
+    }
+    let (nx, ny) = (c1 - c0 + 1, r1 - r0 + 1);
+    let crop = |m: &HeightMap| {
+        let mut z = Vec::with_capacity(nx * ny);
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                let k = r * m.nx + c;
+                z.push(if both(k) { m.z_um[k] } else { f64::NAN });
+            }
+        }
+        let mut o = HeightMap::from_rows(nx, ny, m.dx_um, m.dy_um, z)?;
+        o.x0_mm = m.x0_mm + c0 as f64 * m.dx_um / 1000.0;
+        o.y0_mm = m.y0_mm + r0 as f64 * m.dy_um / 1000.0;
+        Some(o)
+    };
+    Some((crop(a)?, crop(b)?))
+}
+
+/// Pearson correlation of the nodes valid in both.
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let pairs: Vec<(f64, f64)> = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .map(|(x, y)| (*x, *y))
+        .collect();
+    let n = pairs.len() as f64;
+    let (ma, mb) = pairs
+        .iter()
+        .fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in &pairs {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    sab / (saa * sbb).sqrt()
+}
+
+fn parameters(map: &HeightMap, name: &str) -> miette::Result<Vec<f64>> {
+    let set = ParamSet::parse(&COMPARED.join(","), false).map_err(|e| miette!("{e}"))?;
+    let vals = areal_parameters(map, &set).map_err(|e| miette!("{name}: {e}"))?;
+    Ok(COMPARED
+        .iter()
+        .map(|s| {
+            vals.iter()
+                .find(|(p, _)| p.symbol() == *s)
+                .map_or(f64::NAN, |v| v.1)
+        })
+        .collect())
+}
+
+/// Compare the prediction in `predicted` with the measurement in `measured`.
+pub fn compare(
+    predicted: &Path,
+    measured: &Path,
+    opts: &CompareOptions,
+) -> miette::Result<Comparison> {
+    let (pname, mname) = (
+        predicted.display().to_string(),
+        measured.display().to_string(),
+    );
+    let (pred_raw, meas_raw) = (read(predicted)?, read(measured)?);
+    let reg_p = chain(&pred_raw, opts, &pname)?;
+    let reg_m = chain(&meas_raw, opts, &mname)?;
+    let dir = |m: &HeightMap| feed_direction_deg(m).unwrap_or(f64::NAN);
+    let dirs = [dir(&reg_p), dir(&reg_m)];
+    let placement = if opts.register && dirs.iter().all(|d| d.is_finite()) {
+        register(&reg_p, &reg_m, dirs)
+    } else {
+        Placement::default()
+    };
+    let placed = place(&pred_raw, &meas_raw, &placement);
+    let (cp, cm) = overlap(&placed, &meas_raw).ok_or_else(|| {
+        miette!("{pname} and {mname}: the prediction, placed on the measurement, overlaps fewer than 8 × 8 of its valid nodes")
+    })?;
+    let proc_p = chain(&cp, opts, &pname)?;
+    let proc_m = chain(&cm, opts, &mname)?;
+    let mut difference = proc_m.clone();
+    for (d, (p, m)) in difference
+        .z_um
+        .iter_mut()
+        .zip(proc_p.z_um.iter().zip(&proc_m.z_um))
+    {
+        *d = p - m;
+    }
+    let (vp, vm) = (parameters(&proc_p, &pname)?, parameters(&proc_m, &mname)?);
+    let params: Vec<(&'static str, Pair)> = COMPARED
+        .iter()
+        .zip(vp.iter().zip(&vm))
+        .map(|(s, (p, m))| (*s, Pair::new(*p, *m)))
+        .collect();
+    let pred_dir = if placement == Placement::default() {
+        dirs[0]
+    } else {
+        dirs[1]
+    };
+    let lay_predicted = pred_dir
+        .is_finite()
+        .then(|| lay_spectra(&proc_p, pred_dir))
+        .flatten();
+    let lay_measured = dirs[1]
+        .is_finite()
+        .then(|| lay_spectra(&proc_m, dirs[1]))
+        .flatten();
+    let period = |l: &Option<LaySpectra>, along: bool| {
+        l.as_ref().map_or(f64::NAN, |l| {
+            if along {
+                l.along.peak_period_um
+            } else {
+                l.across.peak_period_um
+            }
+        })
+    };
+    let feed_period = Pair::new(period(&lay_predicted, true), period(&lay_measured, true));
+    let stepover = Pair::new(period(&lay_predicted, false), period(&lay_measured, false));
+    let mut failing = Vec::new();
+    let judged = params
+        .iter()
+        .filter(|(s, _)| JUDGED.contains(s))
+        .map(|(s, p)| (s.to_string(), *p))
+        .chain([
+            ("feed-mark period".to_string(), feed_period),
+            ("stepover".to_string(), stepover),
+        ]);
+    for (s, p) in judged {
+        if p.diff_pct.abs() > opts.tolerance_pct {
+            failing.push(format!("{s} {:+.1} %", p.diff_pct));
+        }
+    }
+    Ok(Comparison {
+        predicted_name: pname,
+        measured_name: mname,
+        options: *opts,
+        params,
+        feed_direction_deg: dirs,
+        rotation_deg: placement.rotation_deg,
+        shift_um: placement.shift_um,
+        correlation: pearson(&proc_p.z_um, &proc_m.z_um),
+        residual_sq_um: height_stats(&difference.z_um).map_or(f64::NAN, |s| s.sq),
+        feed_period,
+        stepover,
+        predicted: proc_p,
+        measured: proc_m,
+        difference,
+        lay_predicted,
+        lay_measured,
+        failing,
+    })
+}
+
+/// The `--json` object of a comparison (non-finite numbers as `null`).
+pub fn to_json(c: &Comparison) -> serde_json::Value {
+    use serde_json::{Map, Value, json};
+    let n = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
+    let mut params = Map::new();
+    for (s, p) in &c.params {
+        params.insert(
+            s.to_string(),
+            json!({"predicted": n(p.predicted), "measured": n(p.measured), "diff_pct": n(p.diff_pct)}),
+        );
+    }
+    let pm = |p: &Pair| json!({"predicted": n(p.predicted), "measured": n(p.measured)});
+    json!({
+        "params": params,
+        "feed_direction_deg": {"predicted": n(c.feed_direction_deg[0]), "measured": n(c.feed_direction_deg[1])},
+        "feed_period_um": pm(&c.feed_period),
+        "stepover_um": pm(&c.stepover),
+        "shift_um": [n(c.shift_um[0]), n(c.shift_um[1])],
+        "correlation": n(c.correlation),
+        "residual_sq_um": n(c.residual_sq_um),
+    })
+}
