@@ -84,7 +84,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     super::check_output_folder(&args.output, &["compare.md".into(), "compare.html".into()])?;
     let c = crest::pipeline::compare::compare(&args.predicted, &args.measured, &opts)?;
-    let files = crest::report::compare::outputs(&c, &command).map_err(|e| miette!("{e}"))?;
+    let files = crest::report::compare::outputs(&c, &command)
+        .map_err(|e| miette!("cannot draw the comparison: {e}"))?;
     let written = crest::io::write_files(&args.output, &files)
         .into_diagnostic()
         .wrap_err_with(|| format!("cannot write the comparison into {}", args.output.display()))?;

@@ -247,26 +247,25 @@ fn facts(c: &Comparison) -> Vec<String> {
 }
 
 /// The figures: (file, caption, SVG).
-fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, String> {
+fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, crate::plot::PlotError> {
     use crate::plot::compare as pc;
-    let e = |e: crate::plot::PlotError| format!("cannot draw the comparison: {e}");
     let (both, diff) = pc::ranges(&c.predicted, &c.measured, &c.difference);
     let label = "height [µm]";
     let mut out = vec![
         (
             "predicted.svg".to_string(),
             "Predicted height map (processed, on the measured grid)".to_string(),
-            pc::map_svg(&c.predicted, "Predicted", both, label).map_err(e)?,
+            pc::map_svg(&c.predicted, "Predicted", both, label)?,
         ),
         (
             "measured.svg".to_string(),
             "Measured height map (processed), same colour scale".to_string(),
-            pc::map_svg(&c.measured, "Measured", both, label).map_err(e)?,
+            pc::map_svg(&c.measured, "Measured", both, label)?,
         ),
         (
             "difference.svg".to_string(),
             "Difference predicted − measured".to_string(),
-            pc::map_svg(&c.difference, "Predicted − measured", diff, label).map_err(e)?,
+            pc::map_svg(&c.difference, "Predicted − measured", diff, label)?,
         ),
     ];
     if let (Some(p), Some(m)) = (&c.lay_predicted, &c.lay_measured) {
@@ -274,12 +273,12 @@ fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, String> {
             out.push((
                 format!("profiles-{what}.svg"),
                 format!("Profiles through the centre {what} the feed"),
-                pc::profiles_svg(p, m, along).map_err(e)?,
+                pc::profiles_svg(p, m, along)?,
             ));
             out.push((
                 format!("spectrum-{what}.svg"),
                 format!("1-D spectra {what} the feed"),
-                pc::spectra_svg(p, m, along).map_err(e)?,
+                pc::spectra_svg(p, m, along)?,
             ));
         }
     }
@@ -351,7 +350,10 @@ fn render_html(c: &Comparison, figs: &[(String, String, String)], command: &str)
 
 /// Every output file of a comparison, rendered in memory: `compare.md`, `compare.html` and
 /// the SVG figures.
-pub fn outputs(c: &Comparison, command: &str) -> Result<Vec<(String, Vec<u8>)>, String> {
+pub fn outputs(
+    c: &Comparison,
+    command: &str,
+) -> Result<Vec<(String, Vec<u8>)>, crate::plot::PlotError> {
     let figs = figures(c)?;
     let md = render_markdown(c, &figs, command);
     let html = render_html(c, &figs, command);
