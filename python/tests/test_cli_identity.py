@@ -128,6 +128,17 @@ def test_simulate_errors_are_the_cli_messages(cli, tmp_path):
     assert f"{bad}:2:" in first or f"{bad}:2:" in str(e.value), str(e.value)
 
 
+def test_a_bad_grid_names_the_keyword_here_and_the_flag_on_the_command_line(cli, tmp_path):
+    with pytest.raises(crest.CrestError) as e:
+        crest.simulate(TRIAL3, tool=TORUS, window=WINDOW, grid_um=-1.0)
+    assert str(e.value).startswith("grid_um must be positive, got -1"), str(e.value)
+    p = cli("simulate", TRIAL3, "--tool", TORUS, "--window", "0,0,0.27,0.2",
+            "--grid-um=-1", "-o", tmp_path / "x.csv")
+    assert p.returncode == 2
+    assert "--grid-um must be positive, got -1" in p.stderr, p.stderr
+    assert not (tmp_path / "x.csv").exists()
+
+
 def test_study_tasks_merge_to_the_bytes_of_crest_study(cli, tmp_path):
     d = tiny_design(tmp_path)
     out = tmp_path / "cli"

@@ -384,6 +384,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         progress.finish();
         return write_shard(&args, out?, started);
     }
+    // The request's fields named as flags.
+    crest::pipeline::prepare::check_request(&req).map_err(|e| miette!("{}", e.with_flag()))?;
     let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress));
     progress.finish();
     let run = run?;

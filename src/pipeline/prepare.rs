@@ -6,7 +6,7 @@
 
 use super::contact::DerivedContacts;
 use super::request::{
-    CHORD_TOL_UM, Cutting, FeedSource, GridRequest, ReferenceSource, SimulateRequest,
+    CHORD_TOL_UM, Cutting, FeedSource, GridRequest, ReferenceSource, RequestError, SimulateRequest,
     default_grid_um, predicted_feed, resolve_cutting, resolve_feed_source,
 };
 use crate::config::ProcessConfig;
@@ -66,33 +66,37 @@ impl Prepared {
     }
 }
 
-/// Check the numbers of a request that do not need its files.
-pub fn check_request(req: &SimulateRequest) -> miette::Result<()> {
+/// Check the numbers of a request that do not need its files; the error names the
+/// request's field (`grid_um`), which the command line shows as its flag.
+pub fn check_request(req: &SimulateRequest) -> Result<(), RequestError> {
+    let bad = |field: &'static str, message: String| Err(RequestError { field, message });
     if let Some(g) = req.grid_um
         && !(g.is_finite() && g > 0.0)
     {
-        return Err(miette!("--grid-um must be positive, got {g}"));
+        return bad("grid_um", format!("must be positive, got {g}"));
     }
     if let Some(t) = req.chord_tol_um
         && !(CHORD_TOL_UM.0..=CHORD_TOL_UM.1).contains(&t)
     {
-        return Err(miette!(
-            "--chord-tol-um must be between {} and {} µm, got {t}",
-            CHORD_TOL_UM.0,
-            CHORD_TOL_UM.1
-        ));
+        return bad(
+            "chord_tol_um",
+            format!(
+                "must be between {} and {} µm, got {t}",
+                CHORD_TOL_UM.0, CHORD_TOL_UM.1
+            ),
+        );
     }
     if let Some(b) = req.band_um
         && !(b.is_finite() && b >= 0.1)
     {
-        return Err(miette!("--band-um must be at least 0.1 µm, got {b}"));
+        return bad("band_um", format!("must be at least 0.1 µm, got {b}"));
     }
     let dmin = crate::math::limits::MIN_DTHETA_DEG;
     if !(req.dtheta_deg.is_finite() && req.dtheta_deg >= dmin && req.dtheta_deg <= 90.0) {
-        return Err(miette!(
-            "--dtheta-deg must be in [{dmin}, 90], got {}",
-            req.dtheta_deg
-        ));
+        return bad(
+            "dtheta_deg",
+            format!("must be in [{dmin}, 90], got {}", req.dtheta_deg),
+        );
     }
     match req.grid {
         GridRequest::Window {
@@ -100,18 +104,20 @@ pub fn check_request(req: &SimulateRequest) -> miette::Result<()> {
             y0_mm,
             x1_mm,
             y1_mm,
-        } if x1_mm < x0_mm || y1_mm < y0_mm => Err(miette!(
-            "--window X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"
-        )),
+        } if x1_mm < x0_mm || y1_mm < y0_mm => bad(
+            "window",
+            format!("X0,Y0,X1,Y1 needs X0 ≤ X1 and Y0 ≤ Y1, got {x0_mm},{y0_mm},{x1_mm},{y1_mm}"),
+        ),
         GridRequest::PatchNear { point, .. } if !point.iter().all(|v| v.is_finite()) => {
-            Err(miette!("--patch-near wants three finite numbers"))
+            bad("patch_near", "wants three finite numbers".to_string())
         }
         GridRequest::Map {
             region: Some(r), ..
         } if !(r.iter().all(|v| v.is_finite()) && r[3] >= r[0] && r[4] >= r[1] && r[5] >= r[2]) => {
-            Err(miette!(
-                "--region X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1"
-            ))
+            bad(
+                "region",
+                "X0,Y0,Z0,X1,Y1,Z1 needs finite numbers with X0 ≤ X1, Y0 ≤ Y1, Z0 ≤ Z1".to_string(),
+            )
         }
         _ => Ok(()),
     }

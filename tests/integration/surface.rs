@@ -926,3 +926,53 @@ fn simulate_like_a_measured_map_takes_its_grid_and_extent() {
         .code(2)
         .stderr(predicate::str::contains("--grid-um"));
 }
+
+#[test]
+fn a_bad_grid_names_the_flag() {
+    // The library names the request's field (`grid_um`, Python's keyword); the command
+    // line names its flag.
+    let dir = tempdir();
+    let out = dir.path().join("x.csv");
+    for (flag, value, said) in [
+        ("--grid-um", "-1", "--grid-um must be positive, got -1"),
+        (
+            "--band-um",
+            "0.01",
+            "--band-um must be at least 0.1 µm, got 0.01",
+        ),
+        ("--dtheta-deg", "100", "--dtheta-deg must be in ["),
+    ] {
+        crest()
+            .current_dir(ROOT)
+            .args([
+                "simulate",
+                "samples/synth/plane-trial3.cls",
+                "--tool",
+                "samples/synth/torus-r5-rc1.5.toml",
+                "--window",
+                "0,0,0.27,0.2",
+            ])
+            .arg(format!("{flag}={value}"))
+            .arg("-o")
+            .arg(&out)
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains(said));
+        assert!(!out.exists());
+    }
+    let req = crest::pipeline::simulate::SimulateRequest {
+        grid_um: Some(-1.0),
+        ..serde_json::from_value(serde_json::json!({
+            "file": "x.cls", "tool": null, "teeth": null, "helix_deg": null, "part": null,
+            "absolute": false, "process": null, "rpm": null, "feed_mm_min": null,
+            "fz_mm": null, "feed": null, "machine": null, "rtcp": "auto", "model": "dome",
+            "dtheta_deg": 1.0, "grid_um": null,
+            "grid": {"window": {"x0_mm": 0.0, "y0_mm": 0.0, "x1_mm": 1.0, "y1_mm": 1.0}},
+            "ap_mm": null, "path": null
+        }))
+        .unwrap()
+    };
+    let e = crest::pipeline::prepare::check_request(&req).unwrap_err();
+    assert_eq!(e.to_string(), "grid_um must be positive, got -1");
+    assert_eq!(e.with_flag(), "--grid-um must be positive, got -1");
+}
