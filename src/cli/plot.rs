@@ -161,6 +161,11 @@ pub struct ProfileArgs {
     /// by commas, semicolons or blanks; an optional header line.
     #[arg(long, value_name = "CSV")]
     pub measured: Option<PathBuf>,
+    /// Align the measured profile to the simulated one: the lateral shift of best
+    /// correlation (within half the profile, to a fraction of a node), then the offset of the
+    /// means; printed (and in --json).
+    #[arg(long, requires = "measured")]
+    pub align: bool,
     #[command(flatten)]
     pub common: Common,
 }
@@ -520,10 +525,40 @@ fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
             format!("along x at y = {y:.3} mm"),
         )
     };
-    let measured = match &a.measured {
+    let mut measured = match &a.measured {
         Some(p) => Some(read_two_columns(p)?),
         None => None,
     };
+    let mut alignment = serde_json::Value::Null;
+    if a.align
+        && let (Some(path), Some((mx, mz))) = (&a.measured, measured.as_mut())
+    {
+        let Some(al) = crest::metrics::align_profile((&pos, &z), (mx, mz)) else {
+            return Err(miette!(
+                "{}: --align: the measured profile cannot be aligned to the simulated one (its positions must rise, no shift within half the profile leaves half of it overlapped, or a profile is flat)",
+                path.display()
+            ));
+        };
+        for x in mx.iter_mut() {
+            *x += al.shift_mm;
+        }
+        for v in mz.iter_mut() {
+            *v += al.offset_um;
+        }
+        if !a.common.json {
+            outln!(
+                "measured profile aligned: moved {:+.4} mm and {:+.4} µm (correlation {:.4})",
+                al.shift_mm,
+                al.offset_um,
+                al.correlation
+            );
+        }
+        alignment = serde_json::json!({
+            "shift_mm": al.shift_mm,
+            "offset_um": al.offset_um,
+            "correlation": crest::io::tables::json_number(al.correlation),
+        });
+    }
     let title = a
         .common
         .title
@@ -539,7 +574,7 @@ fn run_profile(a: ProfileArgs) -> miette::Result<Outcome> {
     done(
         &a.common,
         "profile",
-        serde_json::json!({ "points": pos.len(), "profile": what }),
+        serde_json::json!({ "points": pos.len(), "profile": what, "align": alignment }),
     )
 }
 

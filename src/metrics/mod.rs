@@ -55,8 +55,8 @@ pub use profile::{
     rz_ra, sampling_length_mm,
 };
 pub use register::{
-    LaySpectra, LineSpectrum, Placement, bilinear, correlation_shift, feed_direction_deg,
-    lay_spectra, place, spectral_peak,
+    LaySpectra, LineSpectrum, Placement, ProfileAlignment, align_profile, bilinear,
+    correlation_shift, feed_direction_deg, lay_spectra, place, spectral_peak,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 pub use stream::RowStream;

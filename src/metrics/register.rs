@@ -461,6 +461,122 @@ pub fn lay_spectra(map: &HeightMap, feed_deg: f64) -> Option<LaySpectra> {
     })
 }
 
+/// A measured profile aligned to a predicted one (`crest plot profile --align`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileAlignment {
+    /// Added to the measured positions, mm.
+    pub shift_mm: f64,
+    /// Added to the measured heights, µm (the difference of the means over the overlap).
+    pub offset_um: f64,
+    /// Correlation coefficient of the two over the overlap at that shift.
+    pub correlation: f64,
+}
+
+/// The measured profile `z(x)` linearly interpolated at `x` (NaN outside, or where a
+/// neighbour is NaN); `xs` ascending.
+fn interpolate(xs: &[f64], zs: &[f64], x: f64) -> f64 {
+    let k = xs.partition_point(|&v| v < x);
+    if k == 0 {
+        return if xs.first() == Some(&x) {
+            zs[0]
+        } else {
+            f64::NAN
+        };
+    }
+    if k >= xs.len() {
+        return f64::NAN;
+    }
+    let (x0, x1) = (xs[k - 1], xs[k]);
+    let t = if x1 > x0 { (x - x0) / (x1 - x0) } else { 0.0 };
+    zs[k - 1] + (zs[k] - zs[k - 1]) * t
+}
+
+/// Correlation of the predicted profile with the measured one shifted by `shift` (mm) over
+/// their overlap, and the number of points compared and the mean difference.
+fn profile_correlation(
+    pred: (&[f64], &[f64]),
+    meas: (&[f64], &[f64]),
+    shift: f64,
+) -> (f64, usize, f64) {
+    let mut pairs = Vec::new();
+    for (&x, &z) in pred.0.iter().zip(pred.1) {
+        let m = interpolate(meas.0, meas.1, x - shift);
+        if z.is_finite() && m.is_finite() {
+            pairs.push((z, m));
+        }
+    }
+    let n = pairs.len();
+    if n < 3 {
+        return (f64::NAN, n, f64::NAN);
+    }
+    let (mp, mm) = pairs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (p, m)| (a + p, b + m));
+    let (mp, mm) = (mp / n as f64, mm / n as f64);
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (p, m) in &pairs {
+        let (dp, dm) = (p - mp, m - mm);
+        sxy += dp * dm;
+        sxx += dp * dp;
+        syy += dm * dm;
+    }
+    let r = if sxx > 0.0 && syy > 0.0 {
+        sxy / (sxx * syy).sqrt()
+    } else {
+        f64::NAN
+    };
+    (r, n, mp - mm)
+}
+
+/// Align a measured profile (positions mm ascending, heights µm) to a predicted one: the
+/// lateral shift that maximises their correlation over an overlap of at least half the
+/// predicted profile, searched at the predicted spacing within ± half its length and refined
+/// by a parabola through the best three, then the offset of the means. `None` when no shift
+/// leaves enough overlap or the profiles are flat.
+pub fn align_profile(pred: (&[f64], &[f64]), meas: (&[f64], &[f64])) -> Option<ProfileAlignment> {
+    let (px, mx) = (pred.0, meas.0);
+    if px.len() < 3 || mx.len() < 3 || mx.windows(2).any(|w| !(w[1] > w[0])) {
+        return None;
+    }
+    let step = (px[px.len() - 1] - px[0]) / (px.len() - 1) as f64;
+    if !(step.is_finite() && step > 0.0) {
+        return None;
+    }
+    let need = px.len().div_ceil(2);
+    // Shifts that bring the measured profile's middle within ± half the predicted length
+    // of the predicted profile's middle.
+    let centre = 0.5 * (px[0] + px[px.len() - 1]) - 0.5 * (mx[0] + mx[mx.len() - 1]);
+    let half = (px.len() / 2) as i64;
+    let at = |k: i64| centre + k as f64 * step;
+    let score = |k: i64| {
+        let (r, n, _) = profile_correlation(pred, meas, at(k));
+        if n >= need && r.is_finite() {
+            r
+        } else {
+            f64::NEG_INFINITY
+        }
+    };
+    let (best, r) = (-half..=half)
+        .map(|k| (k, score(k)))
+        .fold((0, f64::NEG_INFINITY), |b, c| if c.1 > b.1 { c } else { b });
+    if !r.is_finite() {
+        return None;
+    }
+    let (rm, rp) = (score(best - 1), score(best + 1));
+    let frac = if rm.is_finite() && rp.is_finite() {
+        vertex(rm, r, rp).clamp(-0.5, 0.5)
+    } else {
+        0.0
+    };
+    let shift_mm = at(best) + frac * step;
+    let (correlation, _, offset_um) = profile_correlation(pred, meas, shift_mm);
+    Some(ProfileAlignment {
+        shift_mm,
+        offset_um,
+        correlation,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -515,5 +631,31 @@ mod tests {
         let (s0, c) = correlation_shift(&n, &n).unwrap();
         assert_eq!(s0, [0.0, 0.0]);
         assert!((c - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_shifted_offset_profile_aligns_back() {
+        // A feed-mark-like profile (period 0.05 mm, asymmetric) on 2 µm steps; the
+        // "measured" one is the same shifted by 0.01234 mm, raised 3 µm, sampled every
+        // 1.5 µm with a little noise.
+        let f = |x: f64| {
+            let t = (x / 0.05).rem_euclid(1.0);
+            4.0 * (t - 0.5).powi(2) + 0.3 * (2.0 * std::f64::consts::PI * x / 0.31).sin()
+        };
+        let px: Vec<f64> = (0..1000).map(|i| i as f64 * 0.002).collect();
+        let pz: Vec<f64> = px.iter().map(|&x| f(x)).collect();
+        let mx: Vec<f64> = (0..1300).map(|i| -0.2 + i as f64 * 0.0015).collect();
+        let mz: Vec<f64> = mx
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| f(x + 0.01234) + 3.0 + 0.01 * ((i * 7919) % 13) as f64 / 13.0)
+            .collect();
+        let a = align_profile((&px, &pz), (&mx, &mz)).unwrap();
+        assert!((a.shift_mm - 0.01234).abs() < 0.002, "{a:?}");
+        assert!((a.offset_um + 3.0).abs() < 0.05, "{a:?}");
+        assert!(a.correlation > 0.99, "{a:?}");
+        // Flat or too short profiles do not align.
+        assert!(align_profile((&px, &vec![1.0; 1000]), (&mx, &mz)).is_none());
+        assert!(align_profile((&px[..2], &pz[..2]), (&mx, &mz)).is_none());
     }
 }

@@ -355,3 +355,53 @@ fn feed_plot_over_a_range_of_path_length() {
         assert!(!svg.exists(), "{range:?}");
     }
 }
+
+#[test]
+fn a_measured_profile_aligns_to_the_simulated_one() {
+    // A bump on feed marks, 80 nodes at 5 µm; the measured profile is the same line moved
+    // by −11.3 µm and raised 2 µm, sampled every 4 µm: --align moves it back.
+    let dir = tempdir();
+    let line = |c: f64| 3.0 * (-((c - 40.0) / 8.0).powi(2)).exp() + 0.5 * (c * 1.3).sin();
+    let (nx, ny) = (80, 3);
+    let z: Vec<f64> = (0..nx * ny).map(|i| line((i % nx) as f64)).collect();
+    let map = crest::surface::HeightMap::from_rows(nx, ny, 5.0, 5.0, z).unwrap();
+    let path = dir.path().join("map.x3p");
+    crest::io::write_heightmap(&path, &map).unwrap();
+    let mut text = String::from("x_mm,z_um\n");
+    for i in 0..90 {
+        let x = 0.002 + i as f64 * 0.004;
+        text.push_str(&format!("{x},{}\n", line((x + 0.0113) / 0.005) + 2.0));
+    }
+    let measured = dir.path().join("measured.csv");
+    std::fs::write(&measured, text).unwrap();
+    let prof = dir.path().join("p.svg");
+    let out = crest()
+        .args(["plot", "profile"])
+        .arg(&path)
+        .args(["--json", "--align", "--measured"])
+        .arg(&measured)
+        .arg("-o")
+        .arg(&prof)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = output_json(&out);
+    let a = &v["align"];
+    let shift = a["shift_mm"].as_f64().unwrap();
+    let offset = a["offset_um"].as_f64().unwrap();
+    assert!((shift - 0.0113).abs() < 0.005, "{a}");
+    assert!((offset + 2.0).abs() < 0.05, "{a}");
+    assert!(a["correlation"].as_f64().unwrap() > 0.99, "{a}");
+    // Without --measured, --align is a usage error.
+    crest()
+        .args(["plot", "profile"])
+        .arg(&path)
+        .args(["--align", "-o"])
+        .arg(&prof)
+        .assert()
+        .code(2);
+}
