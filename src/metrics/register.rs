@@ -535,7 +535,12 @@ fn profile_correlation(
 /// leaves enough overlap or the profiles are flat.
 pub fn align_profile(pred: (&[f64], &[f64]), meas: (&[f64], &[f64])) -> Option<ProfileAlignment> {
     let (px, mx) = (pred.0, meas.0);
-    if px.len() < 3 || mx.len() < 3 || mx.windows(2).any(|w| !(w[1] > w[0])) {
+    if px.len() < 3
+        || mx.len() < 3
+        || mx
+            .windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         return None;
     }
     let step = (px[px.len() - 1] - px[0]) / (px.len() - 1) as f64;
