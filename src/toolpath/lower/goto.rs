@@ -77,7 +77,7 @@ impl Lowerer {
             };
             self.current = Some(p.position);
             self.last_out = Some(p.position);
-            match self.kinds.quick(p.motion, p.feed_mm_min) {
+            match self.kinds.quick(p.motion, p.feed_mm_min, p.position) {
                 Some(kind) => {
                     p.motion = kind;
                     super::kinds::record(path, p, seg, sink)?;

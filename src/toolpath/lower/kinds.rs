@@ -20,7 +20,10 @@
 //! 3. **Feed changes**, in a path without any colour: in a stretch of feed moves between
 //!    rapids, the first moves are an engage when their feed is lower than the feed that
 //!    follows them, and the last moves a retract when their feed is lower than the feed
-//!    before them. Everything else fed is a cut, as without this rule.
+//!    before them, provided they also turn away from the cut: the chord of the slower
+//!    segment and the cut move next to it are more than [`TURN_DEG`] apart. A slower
+//!    segment that goes straight on is the cut at a falling (or rising) feed. Everything
+//!    else fed is a cut, as without this rule.
 //!
 //! Held-back postures are bounded ([`HOLD_LIMIT`] of a colour group, [`FEED_HOLD_LIMIT`]
 //! of a feed segment): a group longer than that is decided as it stands (a colour group as
@@ -28,6 +31,7 @@
 //! stream (`crest convert`) goes on.
 
 use super::{LowerError, Lowerer};
+use crate::math::{Point3, Vec3};
 use crate::toolpath::{MotionKind, Posture, PostureSink, Toolpath};
 use std::collections::VecDeque;
 
@@ -37,6 +41,21 @@ pub const HOLD_LIMIT: usize = 4096;
 /// At most this many postures of a feed segment are held back (no colours): an engage or
 /// a retract is a short lead-in or lead-out, a longer segment is decided a cut at once.
 pub const FEED_HOLD_LIMIT: usize = 64;
+
+/// A slower first or last feed segment is an engage or a retract only when it turns by more
+/// than this from the cut next to it (degrees).
+pub const TURN_DEG: f64 = 10.0;
+
+/// Whether the directions `a` and `b` differ by more than [`TURN_DEG`] (or one is not known).
+fn turns(a: Option<Vec3>, b: Option<Vec3>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => {
+            let (na, nb) = (a.norm(), b.norm());
+            !(na > 1e-12 && nb > 1e-12) || a.dot(&b) < na * nb * TURN_DEG.to_radians().cos()
+        }
+        _ => true,
+    }
+}
 
 /// NX's colours (`PAINT/COLOR,n`).
 const RAPID: u32 = 186;
@@ -70,6 +89,12 @@ pub(super) struct Kinds {
     in_stretch: bool,
     /// Feed of the current segment of the stretch (no colours).
     seg_feed: Option<f64>,
+    /// Where the last posture that arrived lies.
+    last_pos: Option<Point3>,
+    /// Where the tool was before the first held posture.
+    hold_from: Option<Point3>,
+    /// The direction of the last move into a posture emitted as a cut.
+    cut_dir: Option<Vec3>,
 }
 
 impl Default for Kinds {
@@ -81,6 +106,9 @@ impl Default for Kinds {
             hold: Hold::None,
             in_stretch: false,
             seg_feed: None,
+            last_pos: None,
+            hold_from: None,
+            cut_dir: None,
         }
     }
 }
@@ -110,17 +138,36 @@ impl Kinds {
     /// The kind of a posture lowered as `raw` (Rapid, Cut, From, Cycle or GoHome) at
     /// `feed`, when nothing is held back and it need not be: its kind now (the state moves
     /// on). `None`: nothing changed; give the posture to [`Self::push`].
-    pub(super) fn quick(&mut self, raw: MotionKind, feed: Option<f64>) -> Option<MotionKind> {
+    pub(super) fn quick(
+        &mut self,
+        raw: MotionKind,
+        feed: Option<f64>,
+        at: Point3,
+    ) -> Option<MotionKind> {
         if self.hold != Hold::None {
             return None;
         }
         match self.step(raw, feed) {
             Step::Emit(k) => {
                 self.advance(raw, feed);
+                self.arrived(k, at);
                 Some(k)
             }
             Step::Hold(_) => None,
         }
+    }
+
+    /// A posture of kind `kind` at `at` has left (in arrival order).
+    fn arrived(&mut self, kind: MotionKind, at: Point3) {
+        if kind == MotionKind::Cut {
+            self.cut_dir = self.last_pos.map(|p| at - p);
+        }
+        self.last_pos = Some(at);
+    }
+
+    /// The chord of the held postures: from where the tool was before them to the last.
+    fn held_chord(&self) -> Option<Vec3> {
+        Some(self.held.back()?.0.position - self.hold_from?)
     }
 
     /// What the state says of a posture when nothing is held.
@@ -182,10 +229,13 @@ impl Kinds {
                 self.seg_feed = Some(f);
             }
         }
+        self.last_pos = self.hold_from;
         while let Some((mut p, seg)) = self.held.pop_front() {
             p.motion = decide(hold, p.motion);
+            self.arrived(p.motion, p.position);
             out(p, seg)?;
         }
+        self.hold_from = None;
         Ok(())
     }
 
@@ -195,11 +245,14 @@ impl Kinds {
         &mut self,
         out: &mut dyn FnMut(Posture, f64) -> std::io::Result<()>,
     ) -> std::io::Result<()> {
+        // A slower tail that goes straight on from the cut is the cut at a lower feed.
+        let retract = turns(self.cut_dir, self.held_chord());
         self.release(
             |h, raw| match h {
                 Hold::Group => side(raw, false),
                 Hold::Lead(_) | Hold::None => raw,
-                Hold::Tail(_) => MotionKind::Retract,
+                Hold::Tail(_) if retract => MotionKind::Retract,
+                Hold::Tail(_) => MotionKind::Cut,
             },
             out,
         )
@@ -240,7 +293,9 @@ impl Kinds {
                     // what follows is an engage; a slower segment followed by more
                     // feed moves was a slower cut.
                     let lead = matches!(self.hold, Hold::Lead(_));
-                    let engage = lead && feed.is_some_and(|f| f > g);
+                    let next = self.held.back().map(|(q, _)| p.position - q.position);
+                    let engage =
+                        lead && feed.is_some_and(|f| f > g) && turns(self.held_chord(), next);
                     self.release(
                         |_, _| {
                             if engage {
@@ -261,10 +316,13 @@ impl Kinds {
                 self.advance(raw, feed);
                 let mut p = p;
                 p.motion = k;
+                self.arrived(k, p.position);
                 out(p, seg)
             }
             Step::Hold(h) => {
                 self.hold = h;
+                self.hold_from = self.last_pos;
+                self.last_pos = Some(p.position);
                 self.held.push_back((p, seg));
                 Ok(())
             }
@@ -436,5 +494,31 @@ mod tests {
             k,
             [Rapid, Engage, Engage, Cut, Cut, Cut, Retract, Rapid, Cut]
         );
+    }
+
+    #[test]
+    fn a_slower_end_that_goes_straight_on_is_the_cut() {
+        use MotionKind::*;
+        // The feed ramps down along the pass (as 001 Fig 6's path does) and up into the
+        // next: the slower last and first segments go straight on, so they cut. A slower
+        // segment that turns (down into the part, up out of it) is still an engage or a
+        // retract.
+        let k = kinds(
+            "TOOL PATH/A,TOOL,T\nRAPID\nGOTO/0,0,0\nFEDRAT/MMPM,900\nGOTO/5,0,0\nFEDRAT/MMPM,800\nGOTO/6,0,0\n\
+             FEDRAT/MMPM,500\nGOTO/7,0,0\nRAPID\nGOTO/7,0,5\nRAPID\nGOTO/0,1,0\nFEDRAT/MMPM,500\nGOTO/1,1,0\n\
+             FEDRAT/MMPM,900\nGOTO/6,1,0\nFEDRAT/MMPM,300\nGOTO/6.5,1,0.5\nRAPID\nGOTO/6.5,1,5\nEND-OF-PATH\n",
+        );
+        assert_eq!(
+            k,
+            [Rapid, Cut, Cut, Cut, Rapid, Rapid, Cut, Cut, Retract, Rapid]
+        );
+        assert!(super::turns(
+            Some(crate::math::Vec3::x()),
+            Some(crate::math::Vec3::new(1.0, 0.2, 0.0))
+        ));
+        assert!(!super::turns(
+            Some(crate::math::Vec3::x()),
+            Some(crate::math::Vec3::new(1.0, 0.1, 0.0))
+        ));
     }
 }
