@@ -239,16 +239,22 @@ fn run_profile(args: &Args, xs: &[f64], zs: &[f64]) -> miette::Result<Outcome> {
             pp.level.label(),
             args.sections
         );
-        for (p, v) in &values {
-            let shown = if v.is_finite() {
-                format!("{v:.6}")
-            } else {
-                "undefined".into()
-            };
-            outln!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
-        }
+        print_values(&values)?;
     }
     Ok(Outcome::Ok)
+}
+
+/// One line per parameter: symbol, value (six decimals, or "undefined"), unit.
+fn print_values(values: &[(crest::metrics::Param, f64)]) -> miette::Result<()> {
+    for (p, v) in values {
+        let shown = if v.is_finite() {
+            format!("{v:.6}")
+        } else {
+            "undefined".into()
+        };
+        outln!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
+    }
+    Ok(())
 }
 
 /// Run `crest metrics`.
@@ -405,14 +411,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
                 args.sections
             );
         }
-        for (p, v) in &values {
-            let shown = if v.is_finite() {
-                format!("{v:.6}")
-            } else {
-                "undefined".into()
-            };
-            outln!("{:<5} {:>14} {}", p.symbol(), shown, p.unit());
-        }
+        print_values(&values)?;
     }
     Ok(Outcome::Ok)
 }

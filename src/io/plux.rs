@@ -8,7 +8,7 @@
 //! surfalize keeps it as a height), is a point not measured.
 //! Each entry is decompressed within a budget (the layer to the size the index gives).
 
-use std::io::{Cursor, Read};
+use std::io::Cursor;
 
 use super::FormatError;
 use super::binary;
@@ -26,31 +26,13 @@ pub(crate) fn looks_like(head: &[u8]) -> bool {
             .any(|n| memchr::memmem::find(&head[..head.len().min(4096)], n).is_some())
 }
 
-fn entry(
-    zip: &mut zip::ZipArchive<Cursor<&[u8]>>,
-    name: &str,
-    limit: u64,
-) -> Result<Vec<u8>, FormatError> {
-    let file = zip.by_name(name).map_err(|e| match e {
-        zip::result::ZipError::FileNotFound => {
-            FormatError::file(format!("the archive has no {name}"))
-        }
-        e => FormatError::file(format!("{name}: {e}")),
-    })?;
-    let mut out = Vec::new();
-    file.take(limit)
-        .read_to_end(&mut out)
-        .map_err(|e| FormatError::file(format!("{name}: cannot decompress ({e})")))?;
-    Ok(out)
-}
-
 pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
     let mut zip = zip::ZipArchive::new(Cursor::new(bytes)).map_err(|e| {
         FormatError::file(format!(
             "not a readable .plux (a .plux is a zip archive): {e}"
         ))
     })?;
-    let xml = entry(&mut zip, INDEX, 64 << 20)?;
+    let xml = super::x3p::entry(&mut zip, INDEX, 64 << 20)?;
     let text = std::str::from_utf8(&xml)
         .map(str::to_string)
         .unwrap_or_else(|_| binary::latin1(&xml));
@@ -105,7 +87,7 @@ pub(crate) fn parse(bytes: &[u8]) -> Result<HeightMap, FormatError> {
         usize::try_from(stored).unwrap_or(usize::MAX),
         &format!("{LAYER}: IMAGE_SIZE_X × IMAGE_SIZE_Y"),
     )?;
-    let raw = entry(&mut zip, LAYER, 4 * n as u64)?;
+    let raw = super::x3p::entry(&mut zip, LAYER, 4 * n as u64)?;
     if raw.len() < 4 * n {
         return Err(FormatError::file(format!(
             "{LAYER} holds {} bytes, fewer than the {} of IMAGE_SIZE_X × IMAGE_SIZE_Y float32 heights",

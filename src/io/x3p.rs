@@ -36,7 +36,7 @@ pub(crate) fn is_zip(head: &[u8]) -> bool {
 }
 
 /// Read an entry of the archive whole, refusing past `limit` bytes (decompressed).
-fn entry(
+pub(crate) fn entry(
     zip: &mut zip::ZipArchive<Cursor<&[u8]>>,
     name: &str,
     limit: u64,

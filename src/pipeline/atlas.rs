@@ -322,11 +322,18 @@ pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placemen
         .iter()
         .flat_map(|p| p.postures.iter())
         .any(|p| p.motion == MotionKind::Cut && p.contact.is_some());
+    // The contacts: the file's, those derived for the simulation, else derived here.
     if !has_contacts {
-        if prep.derived.is_some() {
-            program = prep.program.clone();
-        } else {
-            super::contact::derive_contacts(&mut program, &prep.cutter);
+        match &prep.derived {
+            Some(d) => {
+                for &(pi, i) in &d.given {
+                    program.paths[pi].postures[i].contact =
+                        prep.program.paths[pi].postures[i].contact.clone();
+                }
+            }
+            None => {
+                super::contact::derive_contacts(&mut program, &prep.cutter);
+            }
         }
     }
     let sites = place(&program, &regions, d);

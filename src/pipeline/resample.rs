@@ -152,14 +152,25 @@ fn feed_machine(
 /// sample to `sink` with its tool path's index (0-based).
 pub fn resample_each(
     req: &ResampleRequest,
-    mut sink: impl FnMut(usize, &Sample),
+    sink: impl FnMut(usize, &Sample),
 ) -> miette::Result<ResampleRun> {
     let opts = options(req)?;
     let (kind, read, _) = reading(req)?;
+    resample_read(req, opts, kind, &read, sink)
+}
+
+/// [`resample_each`] with the options checked and the reading resolved.
+fn resample_read(
+    req: &ResampleRequest,
+    opts: Options,
+    kind: InputKind,
+    read: &ReadOptions,
+    mut sink: impl FnMut(usize, &Sample),
+) -> miette::Result<ResampleRun> {
     let mut program = crate::io::toolpath::read_program_with(&req.file, read.clone())?;
     req.moves.apply(&mut program);
     let selected = select_paths(&req.file, req.path, program.paths.len())?;
-    let machine = feed_machine(req, kind, &read)?;
+    let machine = feed_machine(req, kind, read)?;
     let mut paths = Vec::with_capacity(selected.len());
     for &idx in &selected {
         let path = &program.paths[idx];
@@ -202,7 +213,7 @@ pub fn resample_to_csv(
     force: bool,
 ) -> miette::Result<ResampleRun> {
     let opts = options(req)?;
-    let (_, read, in_memory) = reading(req)?;
+    let (kind, read, in_memory) = reading(req)?;
     if !(max_output_gb.is_finite() && max_output_gb > 0.0) {
         return Err(miette!(
             "--max-output-gb must be positive, got {max_output_gb}"
@@ -244,7 +255,7 @@ pub fn resample_to_csv(
     let mut failure = None;
     let written = crate::io::write_atomic(output, |w| {
         let mut out = SampleCsv::new(w)?;
-        match resample_each(req, |_, s| out.sample(s)) {
+        match resample_read(req, opts.clone(), kind, &read, |_, s| out.sample(s)) {
             Ok(r) => run = Some(r),
             Err(e) => {
                 failure = Some(e);
