@@ -74,6 +74,9 @@ struct Strip {
     hi: u16,
 }
 
+/// Strips between two updates of a tile's cull from its highest node ([`Tile::top`]).
+const TOP_EVERY: usize = 32;
+
 struct Setup<'a> {
     samples: &'a [Sample],
     cutter_teeth: usize,
@@ -919,8 +922,17 @@ impl Setup<'_> {
                 // (A distance ≥ 0: its bits order as its value.)
                 order.sort_by_cached_key(|si| (key(si).to_bits(), *si));
             }
-            for si in order {
-                self.raster_strip(&strips[si as usize], &mut tile, cull, &mut cols);
+            // Once every node is reached, nothing above the highest of them can lower one:
+            // the cull comes down to it (and a node tolerance's worth of extrapolation
+            // along the steepest triangle, 1 nm), so later strips mesh less or nothing.
+            let mut cull_now = cull;
+            for (n, si) in order.into_iter().enumerate() {
+                if n % TOP_EVERY == TOP_EVERY - 1
+                    && let Some(top) = tile.top()
+                {
+                    cull_now = cull.min(top + 1e-6);
+                }
+                self.raster_strip(&strips[si as usize], &mut tile, cull_now, &mut cols);
             }
             0.0
         };
@@ -1149,28 +1161,31 @@ impl Setup<'_> {
             poses[0] = (key, p);
             p
         };
-        let ncols = match self.opts.model {
+        match self.opts.model {
             Model::Ice { .. } => {
                 let edge = &self.profile.edge[j][lo..=hi];
                 for c in [s.a, s.b] {
                     let p = pose(c, s.n, true);
                     cols.extend(edge.iter().map(|e| p.apply(e)));
                 }
-                2
+                (2, hi - lo + 1)
             }
             Model::Dome => {
-                let body = &self.profile.body[j][lo..=hi];
+                // The end face's levels strictly between the stretch's ends lie on the
+                // segment between them: the quads they make are one plane's fan.
+                let flat = self.profile.flat;
+                let keep = |i: &usize| *i == lo || *i == hi || *i == 0 || *i >= flat;
+                let body = &self.profile.body[j];
                 let base = pose(0, 1, false);
                 let step = TAU / s.n as f64;
                 for m in s.a..=s.b {
                     let p = base.rotated(m as f64 * step);
-                    cols.extend(body.iter().map(|e| p.apply(e)));
+                    cols.extend((lo..=hi).filter(keep).map(|i| p.apply(&body[i])));
                 }
-                (s.b - s.a + 1) as usize
+                ((s.b - s.a + 1) as usize, (lo..=hi).filter(keep).count())
             }
             Model::Swept => unreachable!("the swept model has no triangles"),
-        };
-        (ncols, hi - lo + 1)
+        }
     }
 }
 

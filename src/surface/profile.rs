@@ -35,6 +35,10 @@ pub(crate) struct Profile {
     /// Whether the levels follow a convex meridian (a linear function of (r, z) is then
     /// unimodal along them).
     pub convex: bool,
+    /// Levels `0..flat` lie on the end face, and so does level `flat`: each tooth's body
+    /// points `0..=flat` are on one straight segment, so a dome mesh needs only the ends of
+    /// the stretch of them it uses (0 when there is no such stretch).
+    pub flat: usize,
 }
 
 impl Profile {
@@ -118,7 +122,8 @@ impl Profile {
             edge.push(e);
             body.push(b);
         }
-        Ok(Profile::finish(cutter, levels, edge, body, true))
+        let flat = if rd > 0.0 { flat_end } else { 0 };
+        Ok(Profile::finish(cutter, levels, edge, body, true, flat))
     }
 
     /// A round insert or a profile: the meridian polyline, each level's edge point and its
@@ -152,7 +157,14 @@ impl Profile {
                     .collect(),
             );
         }
-        Ok(Profile::finish(cutter, levels, edge, body, m.is_convex()))
+        Ok(Profile::finish(
+            cutter,
+            levels,
+            edge,
+            body,
+            m.is_convex(),
+            0,
+        ))
     }
 
     fn finish(
@@ -161,6 +173,7 @@ impl Profile {
         edge: Vec<Vec<Vec3>>,
         body: Vec<Vec<Vec3>>,
         convex: bool,
+        flat: usize,
     ) -> Profile {
         let z_top = levels.last().map(|l| l.z).unwrap_or(0.0);
         let ro = &cutter.runout;
@@ -190,6 +203,7 @@ impl Profile {
             runout_bound,
             reach,
             convex,
+            flat,
         }
     }
 }

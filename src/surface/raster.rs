@@ -49,6 +49,20 @@ impl Tile {
         }
     }
 
+    /// The highest height of the tile once every node has been reached (`None` before):
+    /// no triangle lying above it can lower a node. Recomputes the stale block bounds.
+    pub fn top(&mut self) -> Option<f64> {
+        let mut top = f64::NEG_INFINITY;
+        for b in 0..self.bmax.len() {
+            if self.dirty[b] {
+                self.bmax[b] = block_max(&self.z, self.w, b % self.bw, b / self.bw);
+                self.dirty[b] = false;
+            }
+            top = top.max(self.bmax[b]);
+        }
+        top.is_finite().then_some(top)
+    }
+
     /// Rasterise the triangle `a`, `b`, `c` ([X, Y, W]) unless its lowest vertex is above
     /// `cull_w`; each covered node keeps the minimum of its height and the triangle's.
     /// A triangle that lies above every node it could reach (by the block bounds) is
