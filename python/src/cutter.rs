@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::{CrestError, err, json_loads};
+use crate::{err, json_loads};
 
 /// A cutter, as `crest` reads it from a `tool.toml`.
 ///
@@ -119,13 +119,13 @@ impl Cutter {
             "exact" => crest::tool::Rule::Exact,
             "paper" => crest::tool::Rule::Paper,
             r => {
-                return Err(CrestError::new_err(format!(
+                return Err(crate::crest_error(format!(
                     "rule must be 'exact' or 'paper', got '{r}'"
                 )));
             }
         };
         let a = crest::tool::analyse(&self.inner, lead_deg, ap_mm, fz_mm, rule)
-            .map_err(|e| CrestError::new_err(e.to_string()))?;
+            .map_err(|e| crate::crest_error(e.to_string()))?;
         let v = crest::pipeline::tool::analysis_json(
             &self.inner,
             &self.source,

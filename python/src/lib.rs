@@ -21,11 +21,18 @@ fn err(e: miette::Report) -> PyErr {
         msg.push_str("\n  caused by: ");
         msg.push_str(&cause.to_string());
     }
-    CrestError::new_err(msg)
+    crest_error(msg)
+}
+
+/// A [`CrestError`] with `message`, its request fields as keywords (`‹grid_um›` → `grid_um`).
+fn crest_error(message: impl AsRef<str>) -> PyErr {
+    CrestError::new_err(crest::pipeline::fields::for_python(message.as_ref()).into_owned())
 }
 
 fn json_loads<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
-    py.import("json")?.call_method1("loads", (text,))
+    // Warnings and checks in the results name request fields as keywords.
+    let text = crest::pipeline::fields::for_python(text);
+    py.import("json")?.call_method1("loads", (text.as_ref(),))
 }
 
 fn json_dumps(obj: &Bound<'_, PyAny>) -> PyResult<String> {

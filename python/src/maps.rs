@@ -8,7 +8,6 @@ use numpy::{IntoPyArray, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::CrestError;
 use crate::metrics::metrics_of;
 
 /// A height map: heights in µm on a regular grid (`z_um[row, col]`, rows along y
@@ -78,7 +77,7 @@ impl HeightMap {
         };
         crest::io::read_heightmap(&path, &opts)
             .map(|inner| HeightMap { inner })
-            .map_err(|e| CrestError::new_err(e.to_string()))
+            .map_err(|e| crate::crest_error(e.to_string()))
     }
 
     /// Heights, µm: a (ny, nx) float64 array (a copy).
@@ -87,7 +86,7 @@ impl HeightMap {
         let m = &self.inner;
         Array2::from_shape_vec((m.ny, m.nx), m.z_um.clone())
             .map(|a| a.into_pyarray(py))
-            .map_err(|e| CrestError::new_err(e.to_string()))
+            .map_err(|e| crate::crest_error(e.to_string()))
     }
 
     /// Columns.
@@ -203,7 +202,7 @@ impl HeightMap {
     fn write(&self, path: PathBuf, format: crest::io::HeightMapFormat) -> PyResult<()> {
         let map = &self.inner;
         crest::io::write_atomic(&path, |w| crest::io::write_heightmap_to(w, format, map))
-            .map_err(|e| CrestError::new_err(format!("cannot write {}: {e}", path.display())))
+            .map_err(|e| crate::crest_error(format!("cannot write {}: {e}", path.display())))
     }
 }
 

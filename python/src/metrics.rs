@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::CrestError;
 use crate::maps::HeightMap;
 
 #[allow(clippy::too_many_arguments)]
@@ -25,7 +24,7 @@ pub(crate) fn metrics_of<'py>(
         EndEffects, Level, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
         preprocess_map, preprocess_profile, profile_parameters,
     };
-    let bad = |e: String| CrestError::new_err(e);
+    let bad = |e: String| crate::crest_error(e);
     let pp = Preprocess {
         level: Level::parse(level).map_err(|e| bad(e.to_string()))?,
         lambda_s_um,

@@ -8,7 +8,7 @@ use numpy::ndarray::{Array1, Array2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::{CrestError, err};
+use crate::err;
 
 /// Read a tool-path file (NX CLSF, other APT, contact12 CSV; chosen by content) into one
 /// dict per tool path: `name`, `tool_name`, and per posture `tip` (N×3, mm), `axis` (N×3,
@@ -95,7 +95,7 @@ pub(crate) fn resample<'py>(
     path: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     use crest::resample::{AxisInterpolation, Mode};
-    let bad = |m: String| CrestError::new_err(m);
+    let bad = |m: String| crate::crest_error(m);
     let mode = match mode {
         "fz" => Mode::FeedPerTooth,
         "dtheta" => Mode::SpindleStep {
@@ -216,7 +216,7 @@ pub(crate) fn plan_feed<'py>(
         "jerk" => Level::Jerk,
         "acc" => Level::Acceleration,
         l => {
-            return Err(CrestError::new_err(format!(
+            return Err(crate::crest_error(format!(
                 "level must be 'jerk' or 'acc', got '{l}'"
             )));
         }

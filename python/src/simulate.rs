@@ -7,8 +7,8 @@ use crest::pipeline::simulate::{FeedSource, GridRequest, Output, SimulateRequest
 use pyo3::prelude::*;
 
 use crate::cutter::Cutter;
+use crate::err;
 use crate::maps::{HeightMap, part_map};
-use crate::{CrestError, err};
 
 /// Where `tool=` comes from: a `Cutter` carries its tool.toml text (and where it came from);
 /// anything else is the path of a tool.toml.
@@ -59,7 +59,7 @@ pub(crate) fn request_of(
     helix_deg: Option<f64>,
     absolute: bool,
 ) -> PyResult<SimulateRequest> {
-    let bad = |m: &str| CrestError::new_err(m.to_string());
+    let bad = |m: &str| crate::crest_error(m);
     let given = [
         window.is_some(),
         patch_at.is_some(),

@@ -9,7 +9,7 @@ use pyo3::types::PyDict;
 
 use crate::maps::part_map;
 use crate::simulate::{request_of, tool_source};
-use crate::{CrestError, err, json_dumps, json_loads};
+use crate::{err, json_dumps, json_loads};
 
 /// The tasks of a designed experiment (`crest study` design): `design` is a path to the
 /// design TOML, or its text (its `tool` then relative to the working directory). One task
@@ -41,7 +41,7 @@ pub(crate) fn study_tasks<'py>(
     };
     let mc = crest::pipeline::tasks::MonteCarlo::of(monte_carlo.map(|n| (n, seed)));
     let tasks = crest::pipeline::tasks::design_tasks_with(&texts, mc).map_err(err)?;
-    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&tasks).map_err(|e| crate::crest_error(e.to_string()))?;
     json_loads(py, &text)
 }
 
@@ -105,7 +105,7 @@ pub(crate) fn map_tasks<'py>(
         absolute,
     )?;
     let tasks = crest::pipeline::tasks::map::map_tasks(&req, tasks).map_err(err)?;
-    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&tasks).map_err(|e| crate::crest_error(e.to_string()))?;
     json_loads(py, &text)
 }
 
@@ -181,7 +181,7 @@ pub(crate) fn atlas_tasks<'py>(
         patch_mm: patch_mm.map(|p| (p[0], p[1])),
     };
     let tasks = crest::pipeline::tasks::atlas::atlas_tasks(&req, tasks).map_err(err)?;
-    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&tasks).map_err(|e| crate::crest_error(e.to_string()))?;
     json_loads(py, &text)
 }
 
@@ -207,7 +207,7 @@ pub(crate) fn runout_tasks<'py>(
     }
     .map_err(err)?;
     let tasks = crest::pipeline::tasks::runout::runout_tasks(&texts, tasks).map_err(err)?;
-    let text = serde_json::to_string(&tasks).map_err(|e| CrestError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&tasks).map_err(|e| crate::crest_error(e.to_string()))?;
     json_loads(py, &text)
 }
 
@@ -221,7 +221,7 @@ pub(crate) fn run_task<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let text = json_dumps(task)?;
     let task: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| CrestError::new_err(format!("not a crest task: {e}")))?;
+        .map_err(|e| crate::crest_error(format!("not a crest task: {e}")))?;
     let result = py
         .allow_threads(|| crest::pipeline::tasks::run_any(task))
         .map_err(err)?;
@@ -253,7 +253,7 @@ pub(crate) fn merge<'py>(
     for (i, r) in results.try_iter()?.enumerate() {
         let text = json_dumps(&r?)?;
         let v: serde_json::Value = serde_json::from_str(&text)
-            .map_err(|e| CrestError::new_err(format!("not a crest task result: {e}")))?;
+            .map_err(|e| crate::crest_error(format!("not a crest task result: {e}")))?;
         parsed.push((format!("result {}", i + 1), v));
     }
     let merged = py
@@ -316,7 +316,7 @@ pub(crate) fn merge<'py>(
         (Merged::Atlas(a), files) => {
             let d = PyDict::new(py);
             let rows =
-                serde_json::to_string(&a.rows).map_err(|e| CrestError::new_err(e.to_string()))?;
+                serde_json::to_string(&a.rows).map_err(|e| crate::crest_error(e.to_string()))?;
             d.set_item("rows", json_loads(py, &rows)?)?;
             d.set_item("regions", a.regions)?;
             let f = PyDict::new(py);
@@ -363,7 +363,7 @@ pub(crate) fn runout_dict<'py>(
     d.set_item("rule", run.study.rule.name())?;
     d.set_item("x", run.study.x.key())?;
     d.set_item("tool", run.tool_path.display().to_string())?;
-    let rows = serde_json::to_string(&run.rows).map_err(|e| CrestError::new_err(e.to_string()))?;
+    let rows = serde_json::to_string(&run.rows).map_err(|e| crate::crest_error(e.to_string()))?;
     d.set_item("rows", json_loads(py, &rows)?)?;
     let f = PyDict::new(py);
     for (name, bytes) in files {

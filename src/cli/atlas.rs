@@ -180,6 +180,17 @@ pub fn write_outputs(
     json: bool,
     started: Instant,
 ) -> miette::Result<Outcome> {
+    // The rows' warnings name request fields (`‹grid_um›`): the files show options.
+    let mut shown = atlas.clone();
+    for w in shown
+        .rows
+        .iter_mut()
+        .flat_map(|r| r.warnings.iter_mut())
+        .chain(shown.warnings.iter_mut())
+    {
+        *w = crest::pipeline::fields::for_cli(w).into_owned();
+    }
+    let atlas = &shown;
     let (file, every_mm) = (atlas.file.as_str(), atlas.every_mm);
     crest::pipeline::atlas::check_numbers(file, &atlas.rows)?;
     let mut set = crest::io::output::Outputs::new();
@@ -242,7 +253,7 @@ pub fn write_outputs(
         outln!("{j}");
     } else {
         for w in &atlas.warnings {
-            eprintln!("warning: {w}");
+            super::warn(w);
         }
         outln!(
             "{file}: {} patches in {} finishing region(s), {} mm apart: {with_numbers} with numbers, {warned} with warnings; Sa {:.3}..{:.3} µm, scallop {:.3}..{:.3} µm; {elapsed:.1} s; wrote {}",

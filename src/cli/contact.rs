@@ -66,7 +66,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     };
     let run = contact(&req)?;
     for w in &run.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     let clsf = args
         .output

@@ -10,6 +10,11 @@ use std::io::IsTerminal;
 
 /// The text to print on stderr for `e` (ending in a newline).
 pub fn render(e: &miette::Report) -> String {
+    // The library names request fields (`‹grid_um›`): here they are options (`--grid-um`).
+    crest::pipeline::fields::for_cli(&render_as_is(e)).into_owned()
+}
+
+fn render_as_is(e: &miette::Report) -> String {
     if std::io::stderr().is_terminal() {
         // miette's own handler: it honours NO_COLOR (and FORCE_COLOR) and the terminal width.
         // Its own colour codes are kept (none under NO_COLOR); every other control character

@@ -7,6 +7,7 @@ use std::path::PathBuf;
 use miette::miette;
 
 use super::Outcome;
+use crest::io::tables::json_number;
 use crest::io::{GsfRows, HeightMapFormat, ReadOptions, open_gsf_rows, read_heightmap};
 use crest::metrics::{
     EndEffects, Level, ParamSet, Preprocess, ProfileSpec, RowStream, areal_parameters,
@@ -146,10 +147,6 @@ fn streamed(
     Ok((values, valid))
 }
 
-fn num(v: f64) -> serde_json::Value {
-    serde_json::Value::from(v)
-}
-
 fn preprocess(args: &Args) -> Preprocess {
     Preprocess {
         level: args.level,
@@ -212,15 +209,15 @@ fn run_profile(args: &Args, xs: &[f64], zs: &[f64]) -> miette::Result<Outcome> {
         info.insert("level".into(), pp.level.label().into());
         info.insert(
             "lambda_s_um".into(),
-            pp.lambda_s_um.map_or(serde_json::Value::Null, num),
+            pp.lambda_s_um.map_or(serde_json::Value::Null, json_number),
         );
         info.insert(
             "lambda_c_um".into(),
-            pp.lambda_c_um.map_or(serde_json::Value::Null, num),
+            pp.lambda_c_um.map_or(serde_json::Value::Null, json_number),
         );
         let mut units = serde_json::Map::new();
         for (p, v) in &values {
-            info.insert(p.symbol().into(), num(*v));
+            info.insert(p.symbol().into(), json_number(*v));
             units.insert(p.symbol().into(), p.unit().into());
         }
         info.insert("units".into(), units.into());
@@ -314,8 +311,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("format".into(), format.into());
     info.insert("nx".into(), nx.into());
     info.insert("ny".into(), ny.into());
-    info.insert("dx_um".into(), num(dx_um));
-    info.insert("dy_um".into(), num(dy_um));
+    info.insert("dx_um".into(), json_number(dx_um));
+    info.insert("dy_um".into(), json_number(dy_um));
     let known = match &loaded {
         Loaded::Map(m) => m.known(),
         Loaded::Streamed { valid, .. } => *valid,
@@ -324,11 +321,11 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     info.insert("level".into(), pp.level.label().into());
     info.insert(
         "lambda_s_um".into(),
-        pp.lambda_s_um.map_or(serde_json::Value::Null, num),
+        pp.lambda_s_um.map_or(serde_json::Value::Null, json_number),
     );
     info.insert(
         "lambda_c_um".into(),
-        pp.lambda_c_um.map_or(serde_json::Value::Null, num),
+        pp.lambda_c_um.map_or(serde_json::Value::Null, json_number),
     );
     info.insert(
         "end_effects".into(),
@@ -339,7 +336,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         }
         .into(),
     );
-    info.insert("trimmed_um".into(), num(pp.trim_um()));
+    info.insert("trimmed_um".into(), json_number(pp.trim_um()));
 
     let values = match (&loaded, args.profile) {
         (Loaded::Streamed { values, .. }, _) => {
@@ -382,7 +379,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     if args.json {
         let mut units = serde_json::Map::new();
         for (p, v) in &values {
-            info.insert(p.symbol().into(), num(*v));
+            info.insert(p.symbol().into(), json_number(*v));
             units.insert(p.symbol().into(), p.unit().into());
         }
         info.insert("units".into(), units.into());

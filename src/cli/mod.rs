@@ -167,7 +167,9 @@ pub(crate) fn with_flag(message: impl std::fmt::Display, field: &str, flag: &str
 pub(crate) fn print_line(args: std::fmt::Arguments<'_>) -> miette::Result<()> {
     use std::io::Write;
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{args}")
+    // Library text names request fields (`‹grid_um›`); the command line shows options.
+    let line = args.to_string();
+    writeln!(out, "{}", crest::pipeline::fields::for_cli(&line))
         .and_then(|()| out.flush())
         .map_err(stdout_error)
 }
@@ -240,6 +242,11 @@ pub fn run(cli: Cli) -> miette::Result<Outcome> {
         Command::Completions(a) => shell::completions(a),
         Command::Man(a) => shell::man(a),
     }
+}
+
+/// Print a library warning on stderr, its request fields as options (`--grid-um`).
+pub(crate) fn warn(w: &str) {
+    eprintln!("warning: {}", crest::pipeline::fields::for_cli(w));
 }
 
 #[cfg(test)]

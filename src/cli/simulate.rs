@@ -15,6 +15,7 @@
 
 use super::Outcome;
 use clap::ValueEnum;
+use crest::pipeline::fields::for_cli;
 use crest::pipeline::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crest::surface::ModelKind;
 use miette::{IntoDiagnostic, WrapErr, miette};
@@ -390,7 +391,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     progress.finish();
     let run = run?;
     for w in &run.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     // The page is rendered before the first output is written.
     let page = match &args.view {
@@ -509,10 +510,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         );
     }
     for w in &run.failed_checks {
-        eprintln!("crest simulate: {w}");
+        eprintln!("crest simulate: {}", for_cli(w));
     }
     if let Some(w) = warning {
-        eprintln!("crest simulate: {w}");
+        eprintln!("crest simulate: {}", for_cli(&w));
         return Ok(Outcome::CheckFailed);
     }
     if !run.failed_checks.is_empty() {
@@ -532,7 +533,7 @@ fn write_shard(
     started: Instant,
 ) -> miette::Result<Outcome> {
     for w in &run.warnings {
-        eprintln!("warning: {w}");
+        super::warn(w);
     }
     let (k, n) = (result.shard, result.shards);
     let mut text = serde_json::to_vec(&result).into_diagnostic()?;

@@ -290,7 +290,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "postures": postures,
             "scallop_um": args.scallop_um,
             "plane_step_mm": synth.plane_step_mm,
-            "r_eff_mm": if synth.r_eff_mm.is_finite() { Some(synth.r_eff_mm) } else { None },
+            "r_eff_mm": crest::io::tables::json_number(synth.r_eff_mm),
             "tilt_deg": tilt_deg,
             "yaw_deg": yaw_deg,
             "pass_angle_deg": args.pass_angle_deg,

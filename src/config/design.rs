@@ -252,7 +252,7 @@ pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
                 return Err(at(
                     pos,
                     "uncertainty.parameter_scale scales calibrated parameters (crest report \
-                     --free); a design has none"
+                     ‹free›); a design has none"
                         .into(),
                 ));
             }

@@ -280,7 +280,7 @@ pub(crate) fn parse(bytes: &[u8], channel: Option<&str>) -> Result<HeightMap, Fo
                     "the file holds no channel (/N/data data field)".to_string()
                 } else {
                     format!(
-                        "no channel has heights in a length unit (the channels: {}): name one with --channel",
+                        "no channel has heights in a length unit (the channels: {}): name one with ‹channel›",
                         list()
                     )
                 })

@@ -479,7 +479,7 @@ pub fn parse_heightmap(
 ) -> Result<HeightMap, FormatError> {
     if let (Some(name), false) = (&opts.channel, format == HeightMapFormat::Gwy) {
         return Err(FormatError::file(format!(
-            "--channel {name:?} names a channel of a Gwyddion .gwy file; this is a {} file, which has one height layer",
+            "‹channel› {name:?} names a channel of a Gwyddion .gwy file; this is a {} file, which has one height layer",
             format.extension()
         )));
     }
@@ -492,7 +492,7 @@ pub fn parse_heightmap(
                 // The spacing from the options, else from the comment crest writes.
                 let meta = csv_grid::meta(text);
                 let dx = opts.dx_um.or(meta.map(|m| m.dx_um)).ok_or_else(|| {
-                    FormatError::file("a grid CSV carries no spacing: give --dx-um (and --dy-um)")
+                    FormatError::file("a grid CSV carries no spacing: give ‹dx_um› (and ‹dy_um›)")
                 })?;
                 let dy = opts.dy_um.or(meta.map(|m| m.dy_um)).unwrap_or(dx);
                 check_spacing_value("dx", dx)?;
@@ -787,7 +787,7 @@ mod tests {
     fn csv_needs_spacing() {
         let e = parse_heightmap(b"1,2\n3,4\n", HeightMapFormat::Csv, &ReadOptions::default())
             .unwrap_err();
-        assert!(e.message.contains("--dx-um"), "{e}");
+        assert!(e.message.contains("‹dx_um›"), "{e}");
     }
 
     #[test]

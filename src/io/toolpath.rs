@@ -463,7 +463,7 @@ fn stream_as<const WRITTEN: bool>(
             InputKind::Gcode => {
                 let Some(machine) = opts.machine.as_ref() else {
                     return Err(miette::miette!(
-                        "{}: G-code is read through the machine's kinematics: give --machine MACHINE.toml",
+                        "{}: G-code is read through the machine's kinematics: give ‹machine› MACHINE.toml",
                         path.display()
                     ));
                 };

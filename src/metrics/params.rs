@@ -154,9 +154,9 @@ impl ParamSet {
                 return Err(MetricsError::WrongKind(
                     p.symbol().to_string(),
                     if p.is_profile() {
-                        "profile (give --profile)"
+                        "profile (give ‹profile›)"
                     } else {
-                        "areal (drop --profile)"
+                        "areal (drop ‹profile›)"
                     },
                 ));
             }

@@ -77,12 +77,7 @@ fn is_missing(s: &str) -> bool {
     s.is_empty() || s.eq_ignore_ascii_case("NA") || s.eq_ignore_ascii_case("N/A")
 }
 
-fn column_of(line: &str, byte: usize) -> u32 {
-    line.get(..byte.min(line.len()))
-        .map(|s| s.chars().count())
-        .unwrap_or(byte) as u32
-        + 1
-}
+use super::position::column_in_line as column_of;
 
 /// Parse one data line (not a header). `line_no` is 1-based.
 pub fn parse_row(line: &str, line_no: u32) -> Result<Contact12Row, ParseError> {

@@ -81,12 +81,7 @@ impl Block {
     }
 }
 
-/// Column (1-based, characters) of byte `at` of `line`.
-fn column_of(line: &str, at: usize) -> u32 {
-    line.get(..at.min(line.len()))
-        .map_or(at, |s| s.chars().count()) as u32
-        + 1
-}
+use super::position::column_in_line as column_of;
 
 /// The number of an address word: `[+|-] (digits [. [digits]] | . digits)`, no exponent
 /// (`E` is an address letter). Returns the value and the bytes used.

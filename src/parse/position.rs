@@ -1,5 +1,6 @@
 //! Positions in text: the 1-based line and column (in characters) of a byte offset, the one
-//! helper every reader of text input (CLSF, TOML configs, CSV tables) reports errors with.
+//! helper every reader of text input (CLSF, TOML configs, CSV tables) reports errors with,
+//! and the column within one line that the line-by-line readers (G-code, contact12) use.
 
 /// 1-based line and column (in characters) of byte offset `at` in `text`. An offset past the
 /// end points just after the last character; an offset inside a multi-byte character points
@@ -17,6 +18,15 @@ pub fn line_column(text: &str, at: usize) -> (usize, usize) {
     (line, column)
 }
 
+/// 1-based column (in characters) of byte `at` of a single `line`; an offset past the end or
+/// inside a multi-byte character counts the bytes before it.
+pub fn column_in_line(line: &str, at: usize) -> u32 {
+    let chars = line
+        .get(..at.min(line.len()))
+        .map_or(at, |s| s.chars().count());
+    u32::try_from(chars).unwrap_or(u32::MAX).saturating_add(1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -31,5 +41,14 @@ mod tests {
         // Inside the two bytes of 'µ': the character itself.
         assert_eq!(line_column(text, 7), (2, 1));
         assert_eq!(line_column(text, 1000), (3, 1));
+    }
+
+    #[test]
+    fn column_in_line_counts_characters_before_the_byte() {
+        assert_eq!(column_in_line("G1 X1", 0), 1);
+        assert_eq!(column_in_line("G1 X1", 3), 4);
+        assert_eq!(column_in_line("µ,X", 3), 3); // 'µ' is two bytes, one character
+        assert_eq!(column_in_line("ab", 10), 3); // past the end: after the last character
+        assert_eq!(column_in_line("µb", 1), 2); // inside 'µ': the bytes before it
     }
 }

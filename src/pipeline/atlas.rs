@@ -284,14 +284,14 @@ pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placemen
     let d = req.every_mm;
     if !(d.is_finite() && d > 0.0) {
         return Err(miette!(
-            "--every-mm must be positive, got {}",
+            "‹every_mm› must be positive, got {}",
             crate::math::limits::shown(d)
         ));
     }
     if let Some((l, w)) = req.patch_mm
         && !(l.is_finite() && l > 0.0 && w.is_finite() && w > 0.0)
     {
-        return Err(miette!("--patch-mm must be positive, got {l},{w}"));
+        return Err(miette!("‹patch_mm› must be positive, got {l},{w}"));
     }
     let sim = &req.simulate;
     // Regions from the path as read (contacts derived for the simulation taken off again).
@@ -466,7 +466,7 @@ pub fn run(
     let total = placed.sites.len();
     if total == 0 {
         return Err(miette!(
-            "{}: no pass of any finishing region is {} mm long: no patch placed; give a smaller --every-mm",
+            "{}: no pass of any finishing region is {} mm long: no patch placed; give a smaller ‹every_mm›",
             req.simulate.file.display(),
             req.every_mm
         ));

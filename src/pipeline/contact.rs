@@ -60,7 +60,7 @@ pub struct ContactRun {
 pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
     if !(req.tolerance_um.is_finite() && req.tolerance_um >= 0.0) {
         return Err(miette::miette!(
-            "--tolerance-um must be a non-negative number, got {}",
+            "‹tolerance_um› must be a non-negative number, got {}",
             req.tolerance_um
         ));
     }
@@ -112,7 +112,7 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
             let part = f.part;
             if !crate::part::contact::touch_supported(&cutter) {
                 return Err(miette::miette!(
-                    "{}: contact points from a part need a ball, torus, flat or round-insert cutter; the {} has no closed-form core (leave out --part to derive the contacts from the path)",
+                    "{}: contact points from a part need a ball, torus, flat or round-insert cutter; the {} has no closed-form core (leave out ‹part› to derive the contacts from the path)",
                     part_path.display(),
                     cutter.describe()
                 ));
@@ -203,7 +203,7 @@ fn check_orientation(
     }
     if inside > 3 * out.max(1) {
         return Err(miette::miette!(
-            "{}: the tool lies behind the part's faces at {inside} of {} sampled postures: its triangles face into the material (reverse their winding), or the part is not in the path's frame (crest reads the path in the MCS; --absolute applies MSYS)",
+            "{}: the tool lies behind the part's faces at {inside} of {} sampled postures: its triangles face into the material (reverse their winding), or the part is not in the path's frame (crest reads the path in the MCS; ‹absolute› applies MSYS)",
             file.display(),
             inside + out
         ));
@@ -241,7 +241,7 @@ impl DerivedContacts {
             .map(|(why, n)| format!("{n}: {}", why.describe()))
             .collect();
         Some(format!(
-            "{} of {} contacts derived from the path are inconsistent with the cutter and were left out ({}); heights near them need the part (--part PART.stl)",
+            "{} of {} contacts derived from the path are inconsistent with the cutter and were left out ({}); heights near them need the part (‹part› PART.stl)",
             self.inconsistent.len(),
             self.with_contact + self.inconsistent.len(),
             reasons.join("; ")
@@ -282,7 +282,7 @@ impl DerivedContacts {
         let (pi, i, why) = reaching.first()?;
         let p = &program.paths[*pi].postures[*i];
         Some(format!(
-            "{} postures whose derived contact is inconsistent reach the grid (the first at {:.4},{:.4},{:.4}: {}): the reference surface there is not the one the cutter touched; give the part (--part PART.stl)",
+            "{} postures whose derived contact is inconsistent reach the grid (the first at {:.4},{:.4},{:.4}: {}): the reference surface there is not the one the cutter touched; give the part (‹part› PART.stl)",
             reaching.len(),
             p.position.x,
             p.position.y,

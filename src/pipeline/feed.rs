@@ -54,7 +54,7 @@ pub fn plan_file(
                     let z = x.cross(&y);
                     if (z - crate::math::Vec3::z()).norm() > 1e-6 {
                         format!(
-                            "; the path is in the MCS of its MSYS, whose Z axis is ({:.3}, {:.3}, {:.3}) in the absolute frame: plan it in the absolute frame with --absolute",
+                            "; the path is in the MCS of its MSYS, whose Z axis is ({:.3}, {:.3}, {:.3}) in the absolute frame: plan it in the absolute frame with ‹absolute›",
                             z.x, z.y, z.z
                         )
                     } else {

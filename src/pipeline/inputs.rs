@@ -187,14 +187,14 @@ pub fn resolve_cutter(
     }
     let Some(t) = tldata else {
         return Err(miette::miette!(
-            "{} has no TLDATA to take the tool from: give --tool tool.toml",
+            "{} has no TLDATA to take the tool from: give ‹tool› tool.toml",
             file.display()
         ));
     };
     let r = 0.5 * t.diameter_mm;
     if !(r.is_finite() && r > 0.0 && t.corner_radius_mm.is_finite() && t.corner_radius_mm >= 0.0) {
         return Err(miette::miette!(
-            "{}: TLDATA gives diameter {} mm and corner radius {} mm, which describe no milling cutter: give --tool tool.toml",
+            "{}: TLDATA gives diameter {} mm and corner radius {} mm, which describe no milling cutter: give ‹tool› tool.toml",
             file.display(),
             t.diameter_mm,
             t.corner_radius_mm
@@ -202,7 +202,7 @@ pub fn resolve_cutter(
     }
     let Some(teeth) = teeth else {
         return Err(miette::miette!(
-            "the tool comes from {}'s TLDATA (D {} mm, corner radius {} mm), which has no tooth count: give --teeth N (or --tool tool.toml)",
+            "the tool comes from {}'s TLDATA (D {} mm, corner radius {} mm), which has no tooth count: give ‹teeth› N (or ‹tool› tool.toml)",
             file.display(),
             t.diameter_mm,
             t.corner_radius_mm
@@ -210,18 +210,18 @@ pub fn resolve_cutter(
     };
     if !(1..=crate::config::MAX_TEETH as usize).contains(&teeth) {
         return Err(miette::miette!(
-            "--teeth must be between 1 and {}, got {teeth}",
+            "‹teeth› must be between 1 and {}, got {teeth}",
             crate::config::MAX_TEETH
         ));
     }
     let helix = helix_deg.unwrap_or(TLDATA_HELIX_DEG);
     if !(helix.is_finite() && helix.abs() < 89.0) {
         return Err(miette::miette!(
-            "--helix-deg must lie within ±89°, got {helix}"
+            "‹helix_deg› must lie within ±89°, got {helix}"
         ));
     }
     let helix_note = if helix_deg.is_none() {
-        " (assumed; --helix-deg to change)"
+        " (assumed; ‹helix_deg› to change)"
     } else {
         ""
     };
@@ -238,7 +238,7 @@ pub fn resolve_cutter(
         ];
         let (m, warning) = crate::tool::meridian::apt(deg).map_err(|e| {
             miette::miette!(
-                "{}: the tool's APT parameters describe no cutter: {e}; give --tool tool.toml",
+                "{}: the tool's APT parameters describe no cutter: {e}; give ‹tool› tool.toml",
                 file.display()
             )
         })?;
@@ -354,7 +354,7 @@ pub fn check_output_budget(what: &str, bytes: f64, max_gb: f64, force: bool) -> 
         return Ok(());
     }
     Err(miette::miette!(
-        "{what} would write about {:.2} GB, more than --max-output-gb {max_gb}: check the inputs (a typo in a coordinate or a tiny step?), or raise --max-output-gb / give --force",
+        "{what} would write about {:.2} GB, more than ‹max_output_gb› {max_gb}: check the inputs (a typo in a coordinate or a tiny step?), or raise ‹max_output_gb› / give ‹force›",
         bytes / 1e9
     ))
 }

@@ -15,6 +15,7 @@ pub mod compare;
 pub mod contact;
 pub mod design;
 pub mod feed;
+pub mod fields;
 pub mod patch;
 pub mod prepare;
 pub mod progress;

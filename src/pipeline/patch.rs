@@ -54,7 +54,7 @@ pub fn place(
         // retract moves only is then a failed check, below).
         if d > tol && moves == Moves::Cut {
             return Err(miette!(
-                "{file}: --patch-near {},{},{} is {d:.3} mm from the surface the cut moves define (off it along its normal; nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect --regions` lists them), or simulate every feed move with --moves all",
+                "{file}: ‹patch_near› {},{},{} is {d:.3} mm from the surface the cut moves define (off it along its normal; nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect ‹regions›` lists them), or simulate every feed move with ‹moves› all",
                 point[0],
                 point[1],
                 point[2],

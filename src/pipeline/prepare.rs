@@ -138,7 +138,7 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
     };
     if matches!(req.grid, GridRequest::Map { .. }) && part.is_none() {
         return Err(miette!(
-            "--map-mm maps the design surface of a part: give --part PART.stl"
+            "‹map_mm› maps the design surface of a part: give ‹part› PART.stl"
         ));
     }
     let process = match &req.process {
@@ -174,7 +174,7 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
     };
     let ap_mm = req.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
-        return Err(miette!("--ap-mm must be positive, got {ap_mm}"));
+        return Err(miette!("‹ap_mm› must be positive, got {ap_mm}"));
     }
     let file = req.file.display().to_string();
     let (reference, derived) = reference(req, part.is_some(), &mut program, &cutter, progress)?;
@@ -277,7 +277,7 @@ fn reference(
     match req.grid {
         GridRequest::Window { .. } => Ok((ReferenceSource::None, Some(found))),
         _ => Err(miette!(
-            "{}: the path has no contact data and none can be derived from it (a single pass has no neighbour to fit the surface to); give --part PART.stl",
+            "{}: the path has no contact data and none can be derived from it (a single pass has no neighbour to fit the surface to); give ‹part› PART.stl",
             req.file.display()
         )),
     }

@@ -67,7 +67,7 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
 
 /// Calibrate the comma-separated `free` parameters of the inputs' study.
 pub fn calibrate(inputs: &Inputs, free: &str) -> miette::Result<Calibration> {
-    let free = Free::parse_list(free, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?;
+    let free = Free::parse_list(free, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?;
     let measured = crate::study::measured::summarize(&inputs.table);
     crate::study::calibrate::calibrate(&measured, &inputs.study, &inputs.cutter, &free)
         .map_err(|e| miette!("{}: {e}", inputs.study_name))
@@ -96,7 +96,7 @@ pub fn regression(
 ) -> miette::Result<Regression> {
     if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {
         return Err(miette!(
-            "--tolerance-pct must be a non-negative number, found {tolerance_pct}"
+            "‹tolerance_pct› must be a non-negative number, found {tolerance_pct}"
         ));
     }
     let inputs = load(measured, study_path)?;
@@ -109,7 +109,7 @@ pub fn regression(
     let (study, cutter) = match (&calibration, &opts.free) {
         (Some(cal), Some(f)) => {
             let free =
-                Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?;
+                Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?;
             let (process, cutter) = crate::study::calibrate::apply(
                 &free,
                 &cal.values(),
@@ -135,7 +135,7 @@ pub fn regression(
     )?;
     let free = match &opts.free {
         Some(f) => {
-            Some(Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("--free: {e}"))?)
+            Some(Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?)
         }
         None => None,
     };

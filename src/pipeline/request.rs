@@ -48,10 +48,10 @@ pub fn resolve_feed_source(
 ) -> miette::Result<Option<Machine>> {
     match (feed, machine) {
         (Some(FeedSource::Predicted), None) => Err(miette!(
-            "--feed predicted needs the machine: add --machine MACHINE.toml"
+            "‹feed› predicted needs the machine: add ‹machine› MACHINE.toml"
         )),
         (Some(FeedSource::Programmed), Some(m)) => Err(miette!(
-            "--machine {} is only used with --feed predicted (drop --feed programmed or --machine)",
+            "‹machine› {} is only used with ‹feed› predicted (drop ‹feed› programmed or ‹machine›)",
             m.display()
         )),
         (Some(FeedSource::Predicted) | None, Some(m)) => Ok(Some(super::load_machine(m)?)),
@@ -239,7 +239,7 @@ pub fn resolve_cutting(
     let feed_file = first_in_cut(program, |p| p.feed_mm_min.filter(|f| *f > 0.0));
     let Some(rpm) = rpm else {
         return Err(miette!(
-            "no spindle speed: {} has no SPINDL; add --rpm N (or rpm in --process process.toml)",
+            "no spindle speed: {} has no SPINDL; add ‹rpm› N (or rpm in ‹process› process.toml)",
             req.file.display()
         ));
     };
@@ -257,11 +257,11 @@ pub fn resolve_cutting(
             });
             return Err(match zero {
                 Some(line) => miette!(
-                    "{}:{line}: the cutting moves run at FEDRAT 0 mm/min; add --feed-mm-min V or --fz-mm F",
+                    "{}:{line}: the cutting moves run at FEDRAT 0 mm/min; add ‹feed_mm_min› V or ‹fz_mm› F",
                     req.file.display()
                 ),
                 None => miette!(
-                    "no feed: {} has no FEDRAT; add --feed-mm-min V or --fz-mm F (or feed_mm_min / fz_mm in --process process.toml)",
+                    "no feed: {} has no FEDRAT; add ‹feed_mm_min› V or ‹fz_mm› F (or feed_mm_min / fz_mm in ‹process› process.toml)",
                     req.file.display()
                 ),
             });

@@ -88,12 +88,12 @@ pub fn options(req: &ResampleRequest) -> miette::Result<Options> {
         (true, None, None) => (1.0, 1, req.rpm.is_none()),
         (false, _, _) => {
             return Err(miette!(
-                "--mode fz spaces the samples every feed per tooth: give --fz-mm and --teeth"
+                "‹mode› fz spaces the samples every feed per tooth: give ‹fz_mm› and ‹teeth›"
             ));
         }
         (true, _, _) => {
             return Err(miette!(
-                "--fz-mm and --teeth go together (they derive the spindle speed from the feed); give both, or neither to take --rpm or the file's SPINDL"
+                "‹fz_mm› and ‹teeth› go together (they derive the spindle speed from the feed); give both, or neither to take ‹rpm› or the file's SPINDL"
             ));
         }
     };
@@ -115,7 +115,7 @@ fn reading(req: &ResampleRequest) -> miette::Result<(InputKind, ReadOptions, boo
     let gcode = kind == InputKind::Gcode;
     if !gcode && req.machine.is_some() && req.feed_mm_min.is_some() {
         return Err(miette!(
-            "--machine (the predicted feed) cannot be used with --feed-mm-min"
+            "‹machine› (the predicted feed) cannot be used with ‹feed_mm_min›"
         ));
     }
     let machine = match (gcode, &req.machine) {
@@ -216,7 +216,7 @@ pub fn resample_to_csv(
     let (kind, read, in_memory) = reading(req)?;
     if !(max_output_gb.is_finite() && max_output_gb > 0.0) {
         return Err(miette!(
-            "--max-output-gb must be positive, got {max_output_gb}"
+            "‹max_output_gb› must be positive, got {max_output_gb}"
         ));
     }
     // The budget: estimate the samples (one pass over the file) before any work.

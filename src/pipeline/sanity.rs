@@ -124,14 +124,14 @@ pub fn check(f: &Facts<'_>) -> Vec<String> {
             && width < s
         {
             out.push(format!(
-                "the patch is {width} mm wide across the feed, narrower than the local stepover {s:.4} mm: its areal parameters (Sa, Sq, Sz) do not cover one scallop period; widen --patch-mm to at least {s:.3} mm across"
+                "the patch is {width} mm wide across the feed, narrower than the local stepover {s:.4} mm: its areal parameters (Sa, Sq, Sz) do not cover one scallop period; widen ‹patch_mm› to at least {s:.3} mm across"
             ));
         }
         if let Some(p) = feed_period_mm(f.cutter, f.model, f.fz_mm)
             && length < p
         {
             out.push(format!(
-                "the patch is {length} mm long along the feed, shorter than the feed-mark period {p:.4} mm: its areal parameters (Sa, Sq, Sz) do not cover one period; lengthen --patch-mm to at least {p:.4} mm along"
+                "the patch is {length} mm long along the feed, shorter than the feed-mark period {p:.4} mm: its areal parameters (Sa, Sq, Sz) do not cover one period; lengthen ‹patch_mm› to at least {p:.4} mm along"
             ));
         }
     }
@@ -144,7 +144,7 @@ pub fn check(f: &Facts<'_>) -> Vec<String> {
         let scallop = scallop_mm(s, r_eff);
         if scallop > f.ap_mm {
             out.push(format!(
-                "{unreached} of {} nodes ({:.1} %) are not reached: the scallop of the stepover {s:.4} mm with R_eff {r_eff} mm is {:.1} µm, more than the depth of cut --ap-mm {} mm, so the crests above it are clipped; raise --ap-mm above {:.3} mm",
+                "{unreached} of {} nodes ({:.1} %) are not reached: the scallop of the stepover {s:.4} mm with R_eff {r_eff} mm is {:.1} µm, more than the depth of cut ‹ap_mm› {} mm, so the crests above it are clipped; raise ‹ap_mm› above {:.3} mm",
                 f.heights_um.len(),
                 100.0 * unreached as f64 / f.heights_um.len().max(1) as f64,
                 scallop * 1e3,
@@ -161,7 +161,7 @@ pub fn check(f: &Facts<'_>) -> Vec<String> {
             .is_some_and(|c| c < WALL_DEG.to_radians().sin());
         if !wall {
             out.push(format!(
-                "the {} tool (diameter {} mm) has no corner radius: on a floor its flat end face cuts, and the map shows the end face's marks, not a finishing roughness (use a ball or bull-nose tool, or --tool with its corner radius)",
+                "the {} tool (diameter {} mm) has no corner radius: on a floor its flat end face cuts, and the map shows the end face's marks, not a finishing roughness (use a ball or bull-nose tool, or ‹tool› with its corner radius)",
                 f.cutter.shape.name(),
                 2.0 * f.cutter.radius_mm
             ));

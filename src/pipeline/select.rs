@@ -181,7 +181,7 @@ fn nothing_in_reach(req: &SimulateRequest, prep: &Prepared, margin: f64) -> miet
         let is_cut = |pi: usize, i: usize| prep.is_cut(pi, i);
         if let Some(n) = super::air::nearest(&prep.program, &prep.paths, &q, far, true, is_cut) {
             return miette!(
-                "{file}: --patch-near {},{},{} is {:.3} mm from the surface the {} moves define (nearest point {:.4},{:.4},{:.4}): no cutting move comes within reach of the patch; pick a point on a finishing region (`crest inspect --regions` lists them)",
+                "{file}: ‹patch_near› {},{},{} is {:.3} mm from the surface the {} moves define (nearest point {:.4},{:.4},{:.4}): no cutting move comes within reach of the patch; pick a point on a finishing region (`crest inspect ‹regions›` lists them)",
                 point[0],
                 point[1],
                 point[2],
@@ -198,6 +198,6 @@ fn nothing_in_reach(req: &SimulateRequest, prep: &Prepared, margin: f64) -> miet
         }
     }
     miette!(
-        "{file}: no cutting move comes within reach of the grid (tool radius + depth of cut {margin:.3} mm); check the coordinates and the frame (--absolute applies MSYS)"
+        "{file}: no cutting move comes within reach of the grid (tool radius + depth of cut {margin:.3} mm); check the coordinates and the frame (‹absolute› applies MSYS)"
     )
 }

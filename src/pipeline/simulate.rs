@@ -87,7 +87,7 @@ pub fn simulate_shard(
 ) -> miette::Result<SimulateRun> {
     if shard.is_some() && !matches!(req.grid, GridRequest::Map { .. }) {
         return Err(miette!(
-            "--shard splits a part map (--map-mm) into its cells; a window or patch is one task"
+            "‹shard› splits a part map (‹map_mm›) into its cells; a window or patch is one task"
         ));
     }
     let prepared = prepare(req, progress)?;
@@ -250,7 +250,7 @@ pub fn simulate_prepared(
             let last = samples.last().map_or(0.0, |s| s.s_mm);
             if !(0.0..=last + 1e-9).contains(&s_mm) {
                 return Err(miette!(
-                    "--patch-at {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
+                    "‹patch_at› {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
                 ));
             }
             progress.phase("simulating", "tiles");

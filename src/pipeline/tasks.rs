@@ -402,7 +402,7 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
     if let Some(r) = results.iter().find(|r| r.monte_carlo != monte_carlo) {
         let say = |m: Option<MonteCarlo>| {
             m.map_or("no Monte Carlo".to_string(), |m| {
-                format!("--monte-carlo {} --seed {}", m.samples, m.seed)
+                format!("‹monte_carlo› {} ‹seed› {}", m.samples, m.seed)
             })
         };
         return Err(miette!(

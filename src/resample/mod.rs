@@ -366,12 +366,12 @@ pub enum ResampleError {
     /// Neither a feed nor a spindle speed is known.
     #[error(
         "no feed and no spindle speed: the path has no FEDRAT or SPINDL; set a feed \
-         (Options::feed_mm_min, --feed-mm-min) or a spindle speed (Options::rpm, --rpm)"
+         (Options::feed_mm_min, ‹feed_mm_min›) or a spindle speed (Options::rpm, ‹rpm›)"
     )]
     MissingFeedAndSpindle,
     /// The spindle speed must come from the path, which has no SPINDL.
     #[error(
-        "no spindle speed: the path has no SPINDL; give --rpm (or --fz-mm and --teeth to \
+        "no spindle speed: the path has no SPINDL; give ‹rpm› (or ‹fz_mm› and ‹teeth› to \
          derive it from the feed)"
     )]
     MissingSpindle,

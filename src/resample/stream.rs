@@ -613,7 +613,7 @@ mod tests {
         assert_eq!(err, ResampleError::MissingFeedAndSpindle);
         let msg = err.to_string();
         assert!(
-            msg.contains("--feed-mm-min") && msg.contains("--rpm"),
+            msg.contains("‹feed_mm_min›") && msg.contains("‹rpm›"),
             "{msg}"
         );
         assert!(resample(&path, &dtheta.clone().with_feed_mm_min(600.0)).is_ok());

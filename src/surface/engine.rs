@@ -164,7 +164,7 @@ pub fn simulate_with(
             length_mm,
             width_mm,
         } => {
-            let frame = patch_frame(samples, s_mm)?;
+            let frame = GridFrame::patch(samples, s_mm)?;
             let nx = count(0.0, length_mm, d);
             let ny = count(0.0, width_mm, d);
             (frame, nx, ny, -0.5 * length_mm, -0.5 * width_mm, true)
@@ -458,27 +458,6 @@ fn count(a: f64, b: f64, d: f64) -> usize {
     } else {
         0
     }
-}
-
-/// The patch frame at the contact point of the sample nearest `s_mm`: origin C, u = f on
-/// the tangent plane, v = n × f, w = n.
-fn patch_frame(samples: &[Sample], s_mm: f64) -> Result<GridFrame, SurfaceError> {
-    let best = samples
-        .iter()
-        .filter(|s| s.contact.is_some() && s.normal.is_some())
-        .min_by(|a, b| (a.s_mm - s_mm).abs().total_cmp(&(b.s_mm - s_mm).abs()))
-        .ok_or(SurfaceError::NoContactData)?;
-    let (Some(c), Some(n)) = (best.contact, best.normal) else {
-        return Err(SurfaceError::NoContactData);
-    };
-    let w = crate::math::normalize_or_none(&n, 1e-12).ok_or(SurfaceError::NoContactData)?;
-    let f = Frame::tool(&w, &best.feed_dir);
-    Ok(GridFrame {
-        origin: c,
-        u: f.x,
-        v: f.y,
-        w: f.z,
-    })
 }
 
 impl Setup<'_> {

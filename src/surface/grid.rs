@@ -12,6 +12,7 @@
 //! nearest points and to the slopes their normals give. Heights are then bilinear in the
 //! coarse grid, which is far below the chord tolerance for any smooth surface.
 
+use super::SurfaceError;
 use crate::math::{Point3, Vec3, ceil_fast, floor_fast};
 use crate::resample::Sample;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -340,6 +341,29 @@ pub(crate) fn grid_contacts(
         }
     }
     out
+}
+
+impl GridFrame {
+    /// The patch frame at the contact point of the sample nearest `s_mm`: origin C, u = f on
+    /// the tangent plane, v = n × f, w = n.
+    pub(crate) fn patch(samples: &[Sample], s_mm: f64) -> Result<GridFrame, SurfaceError> {
+        let best = samples
+            .iter()
+            .filter(|s| s.contact.is_some() && s.normal.is_some())
+            .min_by(|a, b| (a.s_mm - s_mm).abs().total_cmp(&(b.s_mm - s_mm).abs()))
+            .ok_or(SurfaceError::NoContactData)?;
+        let (Some(c), Some(n)) = (best.contact, best.normal) else {
+            return Err(SurfaceError::NoContactData);
+        };
+        let w = crate::math::normalize_or_none(&n, 1e-12).ok_or(SurfaceError::NoContactData)?;
+        let f = crate::math::Frame::tool(&w, &best.feed_dir);
+        Ok(GridFrame {
+            origin: c,
+            u: f.x,
+            v: f.y,
+            w: f.z,
+        })
+    }
 }
 
 #[cfg(test)]

@@ -473,7 +473,7 @@ pub fn generate(spec: &PathSpec) -> Result<Synthetic, SynthError> {
             let st = station(&spec.surface, u, v, &du, &dv, sign);
             if !spec.surface.covers(st.cc.x, st.cc.y) {
                 return Err(SynthError::Invalid(format!(
-                    "the field reaches ({:.3}, {:.3}), beyond the {} (radius {} mm): choose a smaller --size-mm",
+                    "the field reaches ({:.3}, {:.3}), beyond the {} (radius {} mm): choose a smaller ‹size_mm›",
                     st.cc.x,
                     st.cc.y,
                     spec.surface.name(),

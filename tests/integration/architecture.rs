@@ -886,3 +886,34 @@ fn no_function_in_the_pipeline_is_over_150_lines() {
         "functions over 150 lines in pipeline/: {long:?}"
     );
 }
+
+/// Library messages name request fields (`‹grid_um›`), which each front end spells its own
+/// way (`pipeline::fields`); a command-line option (`--grid-um`) in a library string would
+/// reach Python users as it is. Reports and plots (documents the command line writes) may
+/// name options.
+#[test]
+fn library_messages_name_fields_not_options() {
+    let mut bad = Vec::new();
+    for (path, stage) in library_files() {
+        if matches!(stage, "report" | "plot") {
+            continue;
+        }
+        for line in code(&path).lines() {
+            let b = line.as_bytes();
+            let found = (0..b.len().saturating_sub(2)).any(|k| {
+                b[k] == b'-'
+                    && b[k + 1] == b'-'
+                    && b[k + 2].is_ascii_lowercase()
+                    && (k == 0 || !(b[k - 1].is_ascii_alphanumeric() || b"-_".contains(&b[k - 1])))
+            });
+            if found {
+                bad.push(format!("{}: {}", path.display(), line.trim()));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "options named in library strings (write ‹field›):\n{}",
+        bad.join("\n")
+    );
+}

@@ -483,7 +483,7 @@ fn gwy_first_height_channel_named_channel_mask_and_units() {
     );
     // --channel on another format is refused.
     let e = parse_heightmap(&sur_simple(false, 16), HeightMapFormat::Sur, &opts).unwrap_err();
-    assert!(e.message.contains("--channel"), "{e}");
+    assert!(e.message.contains("‹channel›"), "{e}");
 }
 
 #[test]

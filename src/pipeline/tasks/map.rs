@@ -64,7 +64,7 @@ pub struct MapResult {
 fn check_map(req: &SimulateRequest) -> miette::Result<()> {
     if !matches!(req.grid, GridRequest::Map { .. }) {
         return Err(miette!(
-            "only a part map (--map-mm) splits into tile tasks; a window or patch is one task"
+            "only a part map (‹map_mm›) splits into tile tasks; a window or patch is one task"
         ));
     }
     Ok(())
