@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use crest::pipeline::ToolSource;
-use crest::pipeline::simulate::{FeedSource, GridRequest, Output, SimulateRequest};
+use crest::pipeline::simulate::{FeedSource, Output, SimulateRequest};
 use pyo3::prelude::*;
 
 use crate::cutter::Cutter;
@@ -60,46 +60,16 @@ pub(crate) fn request_of(
     absolute: bool,
 ) -> PyResult<SimulateRequest> {
     let bad = |m: &str| crate::crest_error(m);
-    let given = [
-        window.is_some(),
-        patch_at.is_some(),
-        patch_near.is_some(),
-        map_mm.is_some(),
-    ]
-    .iter()
-    .filter(|b| **b)
-    .count();
-    if given != 1 {
-        return Err(bad(
-            "give exactly one of window=(X0,Y0,X1,Y1), patch_at=S_MM or patch_near=(X,Y,Z) with patch_mm=(L,W), or map_mm=SPACING",
-        ));
+    let grid = crest::pipeline::simulate::GridChoice {
+        window,
+        patch_at,
+        patch_near,
+        patch_mm,
+        map_mm,
+        region,
     }
-    let grid = if let Some([x0_mm, y0_mm, x1_mm, y1_mm]) = window {
-        GridRequest::Window {
-            x0_mm,
-            y0_mm,
-            x1_mm,
-            y1_mm,
-        }
-    } else if let Some(spacing_mm) = map_mm {
-        GridRequest::Map { spacing_mm, region }
-    } else {
-        let [length_mm, width_mm] =
-            patch_mm.ok_or_else(|| bad("a patch needs patch_mm=(LENGTH, WIDTH)"))?;
-        match (patch_near, patch_at) {
-            (Some(point), _) => GridRequest::PatchNear {
-                point,
-                length_mm,
-                width_mm,
-            },
-            (None, Some(s_mm)) => GridRequest::PatchAt {
-                s_mm,
-                length_mm,
-                width_mm,
-            },
-            (None, None) => unreachable!("one grid was given"),
-        }
-    };
+    .resolve()
+    .map_err(|e| bad(&e.to_string()))?;
     let model = match model {
         "ice" => crest::surface::ModelKind::Ice,
         "dome" => crest::surface::ModelKind::Dome,

@@ -261,56 +261,22 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     let grid_um = args.grid_um.or(like.map(|l| l.1));
     let grid = if let Some((g, _)) = like {
         g
-    } else if let Some(w) = &args.window {
-        let v = numbers(w, 4, "window")?;
-        GridRequest::Window {
-            x0_mm: v[0],
-            y0_mm: v[1],
-            x1_mm: v[2],
-            y1_mm: v[3],
-        }
-    } else if let Some(spacing) = args.map_mm {
-        if !(spacing.is_finite() && spacing > 0.0) {
-            return Err(miette!("--map-mm must be positive, got {spacing}"));
-        }
-        let region = match &args.region {
-            Some(r) => {
-                let v = numbers(r, 6, "region")?;
-                Some([v[0], v[1], v[2], v[3], v[4], v[5]])
-            }
-            None => None,
-        };
-        GridRequest::Map {
-            spacing_mm: spacing,
-            region,
-        }
     } else {
-        let Some(lw) = &args.patch_mm else {
-            return Err(miette!(
-                "give --window X0,Y0,X1,Y1, --patch-near X,Y,Z --patch-mm L,W, --patch-at S_MM --patch-mm L,W or --map-mm SPACING"
-            ));
+        let fixed =
+            |v: Option<&String>, n: usize, flag: &str| -> miette::Result<Option<Vec<f64>>> {
+                v.map(|t| numbers(t, n, flag)).transpose()
+            };
+        let choice = crest::pipeline::simulate::GridChoice {
+            window: fixed(args.window.as_ref(), 4, "window")?.map(|v| [v[0], v[1], v[2], v[3]]),
+            patch_at: args.patch_at,
+            patch_near: fixed(args.patch_near.as_ref(), 3, "patch-near")?
+                .map(|v| [v[0], v[1], v[2]]),
+            patch_mm: fixed(args.patch_mm.as_ref(), 2, "patch-mm")?.map(|v| [v[0], v[1]]),
+            map_mm: args.map_mm,
+            region: fixed(args.region.as_ref(), 6, "region")?
+                .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]]),
         };
-        let v = numbers(lw, 2, "patch-mm")?;
-        match (&args.patch_near, args.patch_at) {
-            (Some(p), _) => {
-                let q = numbers(p, 3, "patch-near")?;
-                GridRequest::PatchNear {
-                    point: [q[0], q[1], q[2]],
-                    length_mm: v[0],
-                    width_mm: v[1],
-                }
-            }
-            (None, Some(s)) => GridRequest::PatchAt {
-                s_mm: s,
-                length_mm: v[0],
-                width_mm: v[1],
-            },
-            (None, None) => {
-                return Err(miette!(
-                    "--patch-mm needs --patch-near X,Y,Z or --patch-at S_MM"
-                ));
-            }
-        }
+        choice.resolve().map_err(|e| miette!("{e}"))?
     };
     let map = matches!(grid, GridRequest::Map { .. });
     let ext_ok = if args.shard.is_some() {

@@ -59,6 +59,102 @@ pub fn resolve_feed_source(
     }
 }
 
+/// The placement options as both front ends take them (the command line's `--window`,
+/// `--patch-near`, `--patch-at`, `--patch-mm`, `--map-mm`, `--region`; Python's keywords of
+/// the same names): exactly one placement, resolved by [`GridChoice::resolve`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GridChoice {
+    /// X0, Y0, X1, Y1 of a window of the WCS xy plane, mm.
+    pub window: Option<[f64; 4]>,
+    /// Arc length of a patch's contact point, mm.
+    pub patch_at: Option<f64>,
+    /// A point near which a patch is centred, mm.
+    pub patch_near: Option<[f64; 3]>,
+    /// Length along the feed and width across of a patch, mm.
+    pub patch_mm: Option<[f64; 2]>,
+    /// Node spacing of a part map, mm.
+    pub map_mm: Option<f64>,
+    /// X0, Y0, Z0, X1, Y1, Z1 of a part map's region, mm.
+    pub region: Option<[f64; 6]>,
+}
+
+/// Placement options that give no one grid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
+pub enum GridChoiceError {
+    /// None or several of the placements.
+    #[error(
+        "give exactly one of ‹window› X0,Y0,X1,Y1, ‹patch_near› X,Y,Z or ‹patch_at› S_MM with ‹patch_mm› L,W, or ‹map_mm› SPACING"
+    )]
+    NotOne,
+    /// A patch without its size.
+    #[error("a patch needs its size: give ‹patch_mm› LENGTH,WIDTH")]
+    NoSize,
+    /// A size without a patch.
+    #[error("‹patch_mm› needs ‹patch_near› X,Y,Z or ‹patch_at› S_MM")]
+    SizeWithoutPatch,
+    /// A region without a part map.
+    #[error("‹region› bounds a part map: give ‹map_mm› with it")]
+    RegionWithoutMap,
+    /// A map spacing that is not a positive number.
+    #[error("‹map_mm› must be positive, got {0}")]
+    MapSpacing(f64),
+}
+
+impl GridChoice {
+    /// The one grid the options give.
+    pub fn resolve(self) -> Result<GridRequest, GridChoiceError> {
+        let placements = [
+            self.window.is_some(),
+            self.patch_at.is_some(),
+            self.patch_near.is_some(),
+            self.map_mm.is_some(),
+        ];
+        if placements.iter().filter(|b| **b).count() != 1 {
+            return Err(
+                if self.patch_mm.is_some() && !placements.iter().any(|b| *b) {
+                    GridChoiceError::SizeWithoutPatch
+                } else {
+                    GridChoiceError::NotOne
+                },
+            );
+        }
+        if self.region.is_some() && self.map_mm.is_none() {
+            return Err(GridChoiceError::RegionWithoutMap);
+        }
+        let patch = |size: Option<[f64; 2]>| size.ok_or(GridChoiceError::NoSize);
+        Ok(if let Some([x0_mm, y0_mm, x1_mm, y1_mm]) = self.window {
+            GridRequest::Window {
+                x0_mm,
+                y0_mm,
+                x1_mm,
+                y1_mm,
+            }
+        } else if let Some(spacing_mm) = self.map_mm {
+            if !(spacing_mm.is_finite() && spacing_mm > 0.0) {
+                return Err(GridChoiceError::MapSpacing(spacing_mm));
+            }
+            GridRequest::Map {
+                spacing_mm,
+                region: self.region,
+            }
+        } else if let Some(point) = self.patch_near {
+            let [length_mm, width_mm] = patch(self.patch_mm)?;
+            GridRequest::PatchNear {
+                point,
+                length_mm,
+                width_mm,
+            }
+        } else {
+            let [length_mm, width_mm] = patch(self.patch_mm)?;
+            GridRequest::PatchAt {
+                s_mm: self.patch_at.unwrap_or_default(),
+                length_mm,
+                width_mm,
+            }
+        })
+    }
+}
+
 /// Where to simulate.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
@@ -308,4 +404,68 @@ pub fn default_grid_um(fz_mm: f64) -> f64 {
         1.0
     };
     nice * decade
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_grid_choice_gives_one_grid_or_says_what_is_missing() {
+        let none = GridChoice::default();
+        assert_eq!(none.resolve(), Err(GridChoiceError::NotOne));
+        let size = GridChoice {
+            patch_mm: Some([1.0, 2.0]),
+            ..none
+        };
+        assert_eq!(size.resolve(), Err(GridChoiceError::SizeWithoutPatch));
+        let near = GridChoice {
+            patch_near: Some([1.0, 2.0, 3.0]),
+            ..size
+        };
+        assert_eq!(
+            near.resolve(),
+            Ok(GridRequest::PatchNear {
+                point: [1.0, 2.0, 3.0],
+                length_mm: 1.0,
+                width_mm: 2.0
+            })
+        );
+        let at = GridChoice {
+            patch_at: Some(7.5),
+            ..none
+        };
+        assert_eq!(at.resolve(), Err(GridChoiceError::NoSize));
+        let two = GridChoice {
+            window: Some([0.0, 0.0, 1.0, 1.0]),
+            ..near
+        };
+        assert_eq!(two.resolve(), Err(GridChoiceError::NotOne));
+        let map = GridChoice {
+            map_mm: Some(0.5),
+            region: Some([0.0, 0.0, 0.0, 1.0, 1.0, 1.0]),
+            ..none
+        };
+        assert!(matches!(
+            map.resolve(),
+            Ok(GridRequest::Map { spacing_mm, region: Some(_) }) if spacing_mm == 0.5
+        ));
+        for bad in [0.0, -1.0, f64::NAN] {
+            let m = GridChoice {
+                map_mm: Some(bad),
+                ..none
+            };
+            assert!(matches!(m.resolve(), Err(GridChoiceError::MapSpacing(_))));
+        }
+        let stray = GridChoice {
+            window: Some([0.0, 0.0, 1.0, 1.0]),
+            region: Some([0.0; 6]),
+            ..none
+        };
+        assert_eq!(stray.resolve(), Err(GridChoiceError::RegionWithoutMap));
+        // The messages name fields, each front end spells them.
+        let text = GridChoiceError::NotOne.to_string();
+        assert!(super::super::fields::for_cli(&text).contains("--patch-near X,Y,Z"));
+        assert!(super::super::fields::for_python(&text).contains("patch_near X,Y,Z"));
+    }
 }

@@ -5,8 +5,9 @@
 
 use super::prepare::{Prepared, prepare};
 pub use super::request::{
-    CHORD_TOL_UM, Cutting, FeedSource, GridRequest, ReferenceSource, RequestError, SimulateRequest,
-    default_grid_um, predicted_feed, resolve_cutting, resolve_feed_source,
+    CHORD_TOL_UM, Cutting, FeedSource, GridChoice, GridChoiceError, GridRequest, ReferenceSource,
+    RequestError, SimulateRequest, default_grid_um, predicted_feed, resolve_cutting,
+    resolve_feed_source,
 };
 use super::select::Selected;
 use crate::math::Point3;
