@@ -153,29 +153,39 @@ fn rss(h: &[f64], zs: &[f64], levels: &[f64], active: &[bool]) -> f64 {
         .sum()
 }
 
-/// The starting levels: for each tooth the least level that keeps all its marks on or above
-/// the samples.
-fn start_levels(h: &[f64], zs: &[f64], nt: usize) -> Vec<f64> {
-    let mut levels = vec![f64::NEG_INFINITY; nt];
-    for (i, z) in zs.iter().enumerate() {
-        for j in 0..nt {
-            let v = h[i * nt + j];
-            if v.is_finite() {
-                levels[j] = levels[j].max(z - v);
-            }
-        }
-    }
+/// The starting levels: for each tooth the median of (z − h) over the samples within a
+/// quarter of the nearest mark spacing of its marks' lowest points (its own level when it
+/// cuts there; higher when it does not), or the highest sample where it has none.
+fn start_levels(marks: &Marks, h: &[f64], xs: &[f64], zs: &[f64], x0: f64) -> Vec<f64> {
+    let nt = marks.teeth();
+    let p = marks.period_mm;
+    let near = 0.25 * marks.span_mm.min(p / nt as f64);
     let top = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    levels
-        .into_iter()
-        .map(|l| if l.is_finite() { l } else { top })
+    (0..nt)
+        .map(|j| {
+            let mut v: Vec<f64> = xs
+                .iter()
+                .enumerate()
+                .filter(|(_, x)| {
+                    let u = (*x - x0 - marks.pos_mm[j]).rem_euclid(p);
+                    u.min(p - u) <= near
+                })
+                .map(|(i, _)| zs[i] - h[i * nt + j])
+                .filter(|v| v.is_finite())
+                .collect();
+            if v.is_empty() {
+                return top;
+            }
+            let m = v.len() / 2;
+            *v.select_nth_unstable_by(m, f64::total_cmp).1
+        })
         .collect()
 }
 
 /// The residual sum of squares of the best levels for the grid at `x0` (all teeth active).
 fn trial(marks: &Marks, xs: &[f64], zs: &[f64], x0: f64) -> f64 {
     let h = heights(marks, xs, x0);
-    let mut levels = start_levels(&h, zs, marks.teeth());
+    let mut levels = start_levels(marks, &h, xs, zs, x0);
     alternate(&h, zs, &mut levels, &vec![true; marks.teeth()])
 }
 
@@ -209,36 +219,74 @@ pub fn fit_profile(marks: &Marks, xs: &[f64], zs: &[f64]) -> ProfileFit {
         best.1
     };
     let h = heights(marks, xs, x0);
-    let mut levels = start_levels(&h, zs, nt);
+    let mut levels = start_levels(marks, &h, xs, zs, x0);
     let mut active = vec![true; nt];
     let mut total = alternate(&h, zs, &mut levels, &active);
     // A tooth that owns nothing may still cut by a little: tried just below its bound, it
     // stays when the fit improves.
     for _ in 0..nt {
         let owned = owners(&h, &levels, &active, zs.len());
-        let var = total / zs.len().saturating_sub(nt + 1).max(1) as f64;
+        let var = variance(total, zs.len(), nt);
         let mut improved = false;
         for j in (0..nt).filter(|&j| owned[j] == 0) {
             let cutting: Vec<bool> = owned.iter().map(|n| *n > 0).collect();
             let b = bounds(marks, &levels, &cutting)[j];
-            let mut trial_levels = levels.clone();
-            trial_levels[j] = b - var.sqrt();
-            let r = alternate(&h, zs, &mut trial_levels, &active);
-            if r < total - CUT_CHI2 * var {
-                levels = trial_levels;
-                total = r;
-                improved = true;
+            for depth in [1.0, 4.0, 16.0] {
+                let mut trial_levels = levels.clone();
+                trial_levels[j] = b - depth * var.sqrt();
+                let r = alternate(&h, zs, &mut trial_levels, &active);
+                if r < total - CUT_CHI2 * var {
+                    levels = trial_levels;
+                    total = r;
+                    improved = true;
+                    break;
+                }
             }
         }
         if !improved {
             break;
         }
     }
+    // Swap a tooth that cuts for one that does not, when that fits better (two patterns of
+    // marks can be close; the alternation keeps the one it started from).
+    for _ in 0..nt {
+        let owned = owners(&h, &levels, &active, zs.len());
+        let var = variance(total, zs.len(), nt);
+        let top = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 1.0;
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        for i in (0..nt).filter(|&i| owned[i] > 0) {
+            for j in (0..nt).filter(|&j| owned[j] == 0) {
+                let mut base = levels.clone();
+                base[i] = top;
+                let mut cutting: Vec<bool> = owned.iter().map(|n| *n > 0).collect();
+                cutting[i] = false;
+                if !cutting.iter().any(|c| *c) {
+                    continue;
+                }
+                let b = bounds(marks, &base, &cutting)[j];
+                for depth in [1.0, 4.0, 16.0] {
+                    let mut trial_levels = base.clone();
+                    trial_levels[j] = b - depth * var.sqrt();
+                    let r = alternate(&h, zs, &mut trial_levels, &active);
+                    if r < total - var && best.as_ref().is_none_or(|(rb, _)| r < *rb) {
+                        best = Some((r, trial_levels));
+                    }
+                }
+            }
+        }
+        match best {
+            Some((r, l)) => {
+                total = r;
+                levels = l;
+            }
+            None => break,
+        }
+    }
     // Take out, one at a time, the tooth whose marks explain least.
     loop {
         let owned = owners(&h, &levels, &active, zs.len());
         let left = active.iter().filter(|a| **a).count();
-        let var = total / zs.len().saturating_sub(left + 1).max(1) as f64;
+        let var = variance(total, zs.len(), left);
         let gain = |j: usize| -> f64 {
             let mut without = active.clone();
             without[j] = false;
@@ -249,7 +297,7 @@ pub fn fit_profile(marks: &Marks, xs: &[f64], zs: &[f64]) -> ProfileFit {
             .map(|j| (j, if owned[j] == 0 { 0.0 } else { gain(j) }))
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match weakest {
-            Some((j, g)) if left > 1 && g <= CUT_CHI2 * var.max(f64::MIN_POSITIVE) => {
+            Some((j, g)) if left > 1 && g <= CUT_CHI2 * var => {
                 active[j] = false;
                 total = alternate(&h, zs, &mut levels, &active);
             }
@@ -267,6 +315,17 @@ pub fn fit_profile(marks: &Marks, xs: &[f64], zs: &[f64]) -> ProfileFit {
         rss_mm2: total,
         samples: zs.len(),
     }
+}
+
+/// Smallest residual standard deviation taken for the tests of [`CUT_CHI2`], mm: the model's
+/// own approximations (a tooth's arc of radius R where it cuts with R + Δ) leave about a
+/// nanometre on a profile without noise, which a tooth trimming the cusps could otherwise
+/// "explain".
+const SIGMA_FLOOR_MM: f64 = 2e-6;
+
+/// The residual variance of a fit with `levels` free levels, never below the floor.
+fn variance(rss: f64, n: usize, levels: usize) -> f64 {
+    (rss / n.saturating_sub(levels + 1).max(1) as f64).max(SIGMA_FLOOR_MM * SIGMA_FLOOR_MM)
 }
 
 fn owners(h: &[f64], levels: &[f64], active: &[bool], n: usize) -> Vec<usize> {

@@ -8,12 +8,17 @@
 //! What is asserted, and when ("identifiable", decided from the truth, not from the
 //! identification):
 //!
-//! * always: the re-simulated Rz (`crest_model`, exact rule) within 5 % of the profile's;
+//! * always: the re-simulated Rz within 5 % of the profile's, both noise-free and evaluated
+//!   alike (five sampling lengths of the profile's λc as `crest_model` chooses it, averaged
+//!   over where the sections start);
 //! * the teeth that cut, exactly (as a pattern in cutting order: a profile cannot tell which
-//!   physical tooth is tooth 1), when every tooth's margin is at least [`MARGIN_OF_RZ`] of
-//!   Rz: a cutting tooth reaches that far below the envelope of the others, a silent one
-//!   stays that far above it (a tooth that cuts by a hair under noise of 5 % of Rz is not
-//!   told from one that touches);
+//!   physical tooth is tooth 1), and the written tool cutting with the same teeth, when
+//!   every tooth's margin is at least [`MARGIN_OF_RZ`] of Rz (a cutting tooth reaches that
+//!   far below the envelope of the others, a silent one stays that far above it: a tooth
+//!   that cuts by a hair under noise of 5 % of Rz is not told from one that touches), unless
+//!   the identified pattern explains the noisy profile at least as well as the true run-out
+//!   does (then the profile cannot tell the two apart: a shallow tooth trimming the crest of
+//!   a wide gap from one mark position or the next);
 //! * offset within 5 % and phase within 5° when, besides, at least three teeth cut at a lead
 //!   of 15° or more (with fewer, the levels cannot separate an offset from per-tooth
 //!   deviations; at lead 0 a radial offset does not move the surface).
@@ -32,6 +37,8 @@ const R: f64 = 5.0;
 const FZ: f64 = 0.05;
 /// Margin of every tooth, as a fraction of Rz, for the cutting teeth to be identifiable.
 const MARGIN_OF_RZ: f64 = 0.05;
+/// Length of a profile, mm.
+const LENGTH_MM: f64 = 8.0;
 
 struct Truth {
     cutter: Cutter,
@@ -40,6 +47,8 @@ struct Truth {
     pos: Vec<f64>,
     cuts: Vec<bool>,
     rz_um: f64,
+    /// The sampling length crest_model evaluates Rz over (ISO 4288 from the marks' RSm), mm.
+    lambda_c_mm: f64,
     lead_deg: f64,
     /// Smallest margin over the teeth, mm (infinite when one tooth cuts alone and no other
     /// comes near).
@@ -50,6 +59,12 @@ fn truth(teeth: usize, e_um: f64, phase_deg: f64, lead_deg: f64) -> Truth {
     let mut cutter = Cutter::new(Shape::Ball, R, teeth, 0.0);
     cutter.runout.offset_mm = e_um * 1e-3;
     cutter.runout.offset_phase_rad = phase_deg.to_radians();
+    surface_of(cutter, lead_deg)
+}
+
+/// The marks, the teeth that cut and Rz of `cutter` at `lead_deg`.
+fn surface_of(cutter: Cutter, lead_deg: f64) -> Truth {
+    let teeth = cutter.teeth();
     let lead = lead_deg.to_radians();
     let zc = generating_height_mm(&cutter, lead);
     let dev: Vec<f64> = (0..teeth)
@@ -58,9 +73,8 @@ fn truth(teeth: usize, e_um: f64, phase_deg: f64, lead_deg: f64) -> Truth {
     let pos = mark_positions_mm(&cutter, FZ);
     let a = crest::tool::analyse(&cutter, lead_deg, 0.4, FZ, Rule::Exact).unwrap();
     let cuts: Vec<bool> = a.teeth.iter().map(|t| t.participates_exact).collect();
-    let rz_um = crest_model(&cutter, lead_deg, 0.4, FZ, Rule::Exact, Side::Plane, None)
-        .unwrap()
-        .rz_um;
+    let model = crest_model(&cutter, lead_deg, 0.4, FZ, Rule::Exact, Side::Plane, None).unwrap();
+    let (rz_um, lambda_c_mm) = (model.rz_um, model.sampling_length_mm);
     let marks = Marks {
         profile: FeedProfile::Circle { radius_mm: R },
         pos_mm: pos.clone(),
@@ -78,6 +92,7 @@ fn truth(teeth: usize, e_um: f64, phase_deg: f64, lead_deg: f64) -> Truth {
         pos,
         cuts,
         rz_um,
+        lambda_c_mm,
         lead_deg,
         margin_mm,
     }
@@ -102,6 +117,28 @@ fn height_mm(t: &Truth, x: f64) -> f64 {
     best
 }
 
+/// Rz (µm) of the surface `t` over five sampling lengths of `lambda_c_mm`, sampled every
+/// 0.25 µm, averaged over 12 starts across one revolution's feed. The profile and its
+/// re-simulation are judged over the same evaluation: with crest_model's own choice a tooth
+/// more or less changes the mark spacing and so λc, and a sampling length shorter than the
+/// revolution makes Rz depend on where the sections start against the marks (the written
+/// tool puts its tooth 1 elsewhere than the truth's).
+fn rz_over(t: &Truth, lambda_c_mm: f64) -> f64 {
+    let p = t.pos.len() as f64 * FZ;
+    let n = (5.0 * lambda_c_mm / 0.00025).round() as usize;
+    let starts = 12;
+    (0..starts)
+        .map(|s| {
+            let x0 = p * s as f64 / starts as f64;
+            let h: Vec<f64> = (0..=n)
+                .map(|i| height_mm(t, x0 + i as f64 * 0.00025) * 1e3)
+                .collect();
+            crest::metrics::rz_ra(&h).0
+        })
+        .sum::<f64>()
+        / starts as f64
+}
+
 /// A profile of `revs` revolutions from `x_start`, at irregular 2-6 µm steps, with white
 /// noise of 5 % of Rz.
 fn profile(t: &Truth, rng: &mut Rng, x_start: f64, revs: f64) -> (Vec<f64>, Vec<f64>) {
@@ -115,6 +152,16 @@ fn profile(t: &Truth, rng: &mut Rng, x_start: f64, revs: f64) -> (Vec<f64>, Vec<
         x += 0.002 + 0.004 * rng.uniform();
     }
     (xs, zs)
+}
+
+/// RMS of the noisy profile about the true surface, µm.
+fn residual_of(t: &Truth, xs: &[f64], zs: &[f64]) -> f64 {
+    let s: f64 = xs
+        .iter()
+        .zip(zs)
+        .map(|(x, z)| (z - height_mm(t, *x) * 1e3).powi(2))
+        .sum();
+    (s / xs.len() as f64).sqrt()
 }
 
 /// The tool written by `--write-tool` for `id`, read back.
@@ -157,17 +204,16 @@ struct Seen {
     offset_asserted: usize,
 }
 
-/// Check one case; returns (teeth asserted, offset asserted).
-fn check(t: &Truth, id: &Identification, what: &str) -> (bool, bool) {
+/// Check one case whose true run-out leaves the residual `residual_true_um` on the noisy
+/// profile; returns (teeth asserted, offset asserted).
+fn check(t: &Truth, id: &Identification, residual_true_um: f64, what: &str) -> (bool, bool) {
     let nt = t.dev.len();
     let re = written(id, nt);
-    let rz_re = crest_model(&re, t.lead_deg, 0.4, FZ, Rule::Exact, Side::Plane, None)
-        .unwrap()
-        .rz_um;
+    let rz_re = rz_over(&surface_of(re.clone(), t.lead_deg), t.lambda_c_mm);
+    let rz = rz_over(t, t.lambda_c_mm);
     assert!(
-        (rz_re / t.rz_um - 1.0).abs() < 0.05,
-        "{what}: re-simulated Rz {rz_re} against the profile's {} (margin {} µm)\n{id:#?}",
-        t.rz_um,
+        (rz_re / rz - 1.0).abs() < 0.05,
+        "{what}: re-simulated Rz {rz_re} against the profile's {rz} (margin {} µm)\n{id:#?}",
         t.margin_mm * 1e3
     );
     let teeth_ok = t.margin_mm >= MARGIN_OF_RZ * t.rz_um * 1e-3;
@@ -176,6 +222,12 @@ fn check(t: &Truth, id: &Identification, what: &str) -> (bool, bool) {
     }
     let r = rotation(t, id);
     let want: Vec<bool> = (0..nt).map(|k| t.cuts[(r + k) % nt]).collect();
+    if id.identifiable.tooth_deviation != want && id.residual_um <= residual_true_um {
+        // Another pattern explains the profile at least as well as the truth: the profile
+        // cannot tell them apart (a shallow tooth trimming the crest of a wide gap from one
+        // mark position or the next), so the teeth are not identifiable here.
+        return (false, false);
+    }
     assert_eq!(
         id.identifiable.tooth_deviation, want,
         "{what}: teeth that cut (margin {} µm)\n{id:#?}",
@@ -212,7 +264,7 @@ fn check(t: &Truth, id: &Identification, what: &str) -> (bool, bool) {
 /// and 30°; irregular sampling and noise of 5 % of Rz.
 #[test]
 fn identification_reproduces_itself_over_the_grid() {
-    let mut rng = Rng::new(34);
+    let mut rng = Rng::new(std::env::var("RUNOUT_GRID_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(34));
     let mut seen = std::collections::BTreeMap::<usize, Seen>::new();
     let mut failed = Vec::new();
     for teeth in [2usize, 3, 4, 6] {
@@ -222,14 +274,17 @@ fn identification_reproduces_itself_over_the_grid() {
                     let phase_deg = 360.0 * rng.uniform();
                     let t = truth(teeth, e_um, phase_deg, lead_deg);
                     let start = 0.1 + rng.uniform();
-                    let (xs, zs) = profile(&t, &mut rng, start, 10.0);
+                    let (xs, zs) = profile(&t, &mut rng, start, LENGTH_MM / (teeth as f64 * FZ));
                     let id = identify(&xs, &zs, &Cutter::new(Shape::Ball, R, teeth, 0.0), FZ, lead_deg)
                         .unwrap();
                     let what = format!(
                         "Z {teeth}, e {e_um} µm at {phase_deg:.1}°, lead {lead_deg}° (cut {:?})",
                         t.cuts
                     );
-                    let Ok((a, b)) = std::panic::catch_unwind(|| check(&t, &id, &what)) else {
+                    let residual_true = residual_of(&t, &xs, &zs);
+                    let Ok((a, b)) =
+                        std::panic::catch_unwind(|| check(&t, &id, residual_true, &what))
+                    else {
                         failed.push(what);
                         continue;
                     };
@@ -260,10 +315,10 @@ fn the_issue_cases_reproduce_themselves() {
     for (e_um, ncut) in [(10.0, 1usize), (0.6, 4)] {
         let t = truth(4, e_um, 20.0, 15.0);
         assert_eq!(t.cuts.iter().filter(|c| **c).count(), ncut);
-        let (xs, zs) = profile(&t, &mut rng, 0.0, 10.0);
+        let (xs, zs) = profile(&t, &mut rng, 0.0, 20.0);
         let id = identify(&xs, &zs, &Cutter::new(Shape::Ball, R, 4, 0.0), FZ, 15.0).unwrap();
         let what = format!("e {e_um}");
-        check(&t, &id, &what);
+        check(&t, &id, residual_of(&t, &xs, &zs), &what);
         assert_eq!(id.teeth_cutting.len(), ncut, "{id:#?}");
         assert!((id.revolution_mm - 0.2).abs() < 1e-12);
         assert!(
@@ -289,6 +344,6 @@ fn several_profiles_are_averaged() {
     let id = identify_profiles(&refs, &Cutter::new(Shape::Ball, R, 6, 0.0), FZ, 30.0, false)
         .unwrap();
     assert_eq!(id.profiles, 5);
-    let (teeth, offset) = check(&t, &id, "six teeth, five profiles");
+    let (teeth, offset) = check(&t, &id, f64::INFINITY, "six teeth, five profiles");
     assert!(teeth && offset, "{id:#?}");
 }
