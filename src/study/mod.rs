@@ -14,6 +14,7 @@ pub mod compare;
 pub mod design;
 pub mod identify;
 pub mod identify_fit;
+pub mod identify_map;
 pub mod measured;
 pub mod montecarlo;
 pub mod regression;

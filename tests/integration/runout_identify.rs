@@ -347,3 +347,131 @@ fn several_profiles_are_averaged() {
     let (teeth, offset) = check(&t, &id, f64::INFINITY, "six teeth, five profiles");
     assert!(teeth && offset, "{id:#?}");
 }
+
+/// Stepover of the passes across the feed, mm (scallops of 1 µm: stronger than the marks, so
+/// that the spectrum's strongest peak lies across the feed).
+const STEPOVER_MM: f64 = 0.2;
+
+/// A measured map of the surface `t`: the marks along the feed direction `feed_deg`, the
+/// scallops of parallel passes across it, white noise of 5 % of Rz; 2 µm nodes over
+/// 1.2 mm square.
+fn map_of(t: &Truth, feed_deg: f64, rng: &mut Rng) -> crest::surface::HeightMap {
+    let (n, d) = (601usize, 2.0);
+    let mut map = crest::surface::HeightMap::new_nan(n, n, d, d);
+    let (s, c) = feed_deg.to_radians().sin_cos();
+    let half = 0.5 * (n - 1) as f64 * d;
+    let sigma = 0.05 * t.rz_um;
+    for i in 0..n {
+        for j in 0..n {
+            let (x, y) = (j as f64 * d - half, i as f64 * d - half);
+            // Along the feed u, across v, mm.
+            let (u, v) = ((x * c + y * s) * 1e-3, (-x * s + y * c) * 1e-3);
+            let w = v - STEPOVER_MM * (v / STEPOVER_MM).round();
+            let scallop = w * w / (2.0 * R);
+            map.z_um[i * n + j] =
+                (height_mm(t, u + 1.0) + scallop) * 1e3 + sigma * rng.normal();
+        }
+    }
+    map
+}
+
+const TOOL_Z4: &str = "shape = \"ball\"\nradius_mm = 5\nteeth = 4\nhelix_deg = 0\n";
+
+/// `crest runout identify --map`: a map of a known run-out, written as .x3p along x and as
+/// .sdf rotated by 30°, gives back the feed direction, the teeth that cut, the offset and
+/// phase, and a tool that reproduces Rz.
+#[test]
+fn a_map_of_a_known_runout_is_identified_along_its_feed() {
+    let dir = crate::util::tempdir();
+    let tool = crate::util::write(dir.path(), "tool.toml", TOOL_Z4);
+    let mut rng = Rng::new(21);
+    for (feed_deg, name) in [(0.0, "m.x3p"), (30.0, "m.sdf"), (-60.0, "m2.x3p")] {
+        let t = truth(4, 0.6, 20.0, 15.0);
+        let map = map_of(&t, feed_deg, &mut rng);
+        let path = dir.path().join(name);
+        crest::io::write_heightmap(&path, &map).unwrap();
+        let out = dir.path().join(format!("{name}.toml"));
+        let v = crate::util::success_json(crate::util::crest().args([
+            "runout",
+            "identify",
+            "--map",
+            path.to_str().unwrap(),
+            "--tool",
+            tool.to_str().unwrap(),
+            "--fz-mm",
+            "0.05",
+            "--lead-deg",
+            "15",
+            "--json",
+            "--write-tool",
+            out.to_str().unwrap(),
+        ]));
+        let what = format!("{name} at {feed_deg}°: {v}");
+        let found = v["feed_deg"].as_f64().unwrap();
+        assert!((found - feed_deg).abs() < 0.5, "{what}");
+        assert!(v["profiles"].as_u64().unwrap() >= 5, "{what}");
+        for key in ["mark_spacing_mm", "period_mm", "revolution_mm", "runout"] {
+            assert!(v.get(key).is_some(), "no {key}: {what}");
+        }
+        assert_eq!(v["teeth_cutting"], serde_json::json!([1, 2, 3, 4]), "{what}");
+        assert!((v["mark_spacing_mm"].as_f64().unwrap() - 0.05).abs() < 1e-12, "{what}");
+        assert!((v["period_mm"].as_f64().unwrap() - 0.2).abs() < 1e-12, "{what}");
+        // The written tool reproduces the marks.
+        let re = crest::config::tool::load_tool_toml(&crate::util::read(&out)).unwrap();
+        let rz_re = rz_over(&surface_of(re, 15.0), t.lambda_c_mm);
+        let rz = rz_over(&t, t.lambda_c_mm);
+        assert!((rz_re / rz - 1.0).abs() < 0.05, "Rz {rz_re} against {rz}: {what}");
+        // Offset and phase (tooth 1 = the deepest: the true tooth 1 here, phase 20°).
+        let e = v["offset_um"].as_f64().unwrap();
+        assert!((e / 0.6 - 1.0).abs() < 0.05, "offset {e}: {what}");
+        let phase = v["phase_deg"].as_f64().unwrap();
+        let diff = (phase - 20.0 + 540.0).rem_euclid(360.0) - 180.0;
+        assert!(diff.abs() < 5.0, "phase {phase}: {what}");
+    }
+}
+
+/// Bad input exits 2 and writes nothing: a missing map, a map in an unknown format, a
+/// profile and a map at once, a lead beyond 90°, a map too small to hold two revolutions.
+#[test]
+fn bad_map_input_exits_2_and_writes_nothing() {
+    let dir = crate::util::tempdir();
+    let tool = crate::util::write(dir.path(), "tool.toml", TOOL_Z4);
+    let out = dir.path().join("out.toml");
+    let small = dir.path().join("small.sdf");
+    let mut map = crest::surface::HeightMap::new_nan(40, 40, 1.0, 1.0);
+    for (k, z) in map.z_um.iter_mut().enumerate() {
+        *z = ((k % 40) as f64 * 0.7).sin();
+    }
+    crest::io::write_heightmap(&small, &map).unwrap();
+    let unknown = crate::util::write(dir.path(), "m.abc", "1 2 3\n");
+    let missing = dir.path().join("nothing.x3p");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--map", missing.to_str().unwrap()], "nothing.x3p"),
+        (vec!["--map", unknown.to_str().unwrap()], "m.abc"),
+        (vec!["--map", small.to_str().unwrap()], "small.sdf"),
+        (
+            vec!["--map", small.to_str().unwrap(), "--profile", "p.csv"],
+            "cannot be used with",
+        ),
+    ];
+    for (args, says) in cases {
+        let assert = crate::util::crest()
+            .args(["runout", "identify", "--tool", tool.to_str().unwrap()])
+            .args(["--fz-mm", "0.05", "--lead-deg", "15"])
+            .args(["--write-tool", out.to_str().unwrap()])
+            .args(&args)
+            .assert()
+            .code(2);
+        let err = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+    let assert = crate::util::crest()
+        .args(["runout", "identify", "--tool", tool.to_str().unwrap()])
+        .args(["--fz-mm", "0.05", "--lead-deg", "95"])
+        .args(["--map", small.to_str().unwrap()])
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    assert!(err.contains("--lead-deg"), "{err}");
+}
