@@ -50,7 +50,12 @@ pub enum Sub {
 #[derive(Debug, clap::Args)]
 pub struct IdentifyArgs {
     /// Profile along the feed (CSV `x_mm,z_um`, any spacing).
-    #[arg(long, value_name = "PROFILE.csv", required_unless_present = "map", conflicts_with = "map")]
+    #[arg(
+        long,
+        value_name = "PROFILE.csv",
+        required_unless_present = "map",
+        conflicts_with = "map"
+    )]
     pub profile: Option<PathBuf>,
     /// A measured height map, in any format `crest metrics` reads: the feed direction is
     /// found from its spectrum and the run-out identified from several profiles along it.

@@ -124,7 +124,12 @@ pub fn identify(
     identify_profiles(&[(x_mm, z_um)], cutter, fz_mm, lead_deg, true)
 }
 
-/// The points of a profile that can be fitted: finite, sorted by x, heights in mm.
+/// Most samples fitted per profile: a longer profile is thinned evenly (every k-th point),
+/// which keeps the fit's cost bounded whatever the instrument's sampling.
+pub const MAX_SAMPLES: usize = 50_000;
+
+/// The points of a profile that can be fitted: finite, sorted by x, heights in mm, at most
+/// [`MAX_SAMPLES`].
 fn prepared(x_mm: &[f64], z_um: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let mut pts: Vec<(f64, f64)> = x_mm
         .iter()
@@ -133,7 +138,8 @@ fn prepared(x_mm: &[f64], z_um: &[f64]) -> (Vec<f64>, Vec<f64>) {
         .map(|(x, z)| (*x, z * 1e-3))
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    pts.into_iter().unzip()
+    let k = pts.len().div_ceil(MAX_SAMPLES).max(1);
+    pts.into_iter().step_by(k).unzip()
 }
 
 /// Whether the pitch is even (teeth every 2π/Z).
@@ -285,13 +291,15 @@ pub fn identify_profiles(
             (0..nt).all(|i| {
                 let q = (i + k) % nt;
                 cuts[i] == cuts[q]
-                    && (!cuts[i]
-                        || (dev[i] - dev[q]).abs() <= 4.0 * se(i).hypot(se(q)) + 1e-6)
+                    && (!cuts[i] || (dev[i] - dev[q]).abs() <= 4.0 * se(i).hypot(se(q)) + 1e-6)
             })
         })
         .unwrap_or(nt);
     let zc = generating_height_mm(cutter, lead);
-    let (sl, mut notes) = (lead.abs().min(std::f64::consts::FRAC_PI_2).sin(), Vec::new());
+    let (sl, mut notes) = (
+        lead.abs().min(std::f64::consts::FRAC_PI_2).sin(),
+        Vec::new(),
+    );
     let offset = fit_offset(cutter, &dev, &cuts, sl, &se, nt);
     match offset {
         Some(_) => {}

@@ -24,6 +24,9 @@ pub const CUT_CHI2: f64 = 12.0;
 /// Trials of x0 over the span before the golden-section refinement.
 const TRIALS: usize = 96;
 
+/// Most teeth for which patterns are searched by swapping a cutting tooth for a silent one.
+const SWAP_TEETH: usize = 16;
+
 /// Alternations of ownership and levels per trial.
 const ALTERNATIONS: usize = 30;
 
@@ -248,8 +251,9 @@ pub fn fit_profile(marks: &Marks, xs: &[f64], zs: &[f64]) -> ProfileFit {
         }
     }
     // Swap a tooth that cuts for one that does not, when that fits better (two patterns of
-    // marks can be close; the alternation keeps the one it started from).
-    for _ in 0..nt {
+    // marks can be close; the alternation keeps the one it started from). Up to
+    // [`SWAP_TEETH`] teeth: the search grows with the square of their number.
+    for _ in 0..if nt <= SWAP_TEETH { nt } else { 0 } {
         let owned = owners(&h, &levels, &active, zs.len());
         let var = variance(total, zs.len(), nt);
         let top = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max) + 1.0;

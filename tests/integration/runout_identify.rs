@@ -29,8 +29,7 @@ use crest::study::identify_fit::{Marks, margins};
 use crest::study::measured::Side;
 use crest::study::regression::crest_model;
 use crest::tool::{
-    Cutter, FeedProfile, Rule, Shape, generating_height_mm, mark_positions_mm,
-    normal_deviation_mm,
+    Cutter, FeedProfile, Rule, Shape, generating_height_mm, mark_positions_mm, normal_deviation_mm,
 };
 
 const R: f64 = 5.0;
@@ -168,7 +167,8 @@ fn residual_of(t: &Truth, xs: &[f64], zs: &[f64]) -> f64 {
 fn written(id: &Identification, teeth: usize) -> Cutter {
     let base = format!("shape = \"ball\"\nradius_mm = {R}\nteeth = {teeth}\nhelix_deg = 0\n");
     let offset = id.runout.offset_um.zip(id.runout.offset_phase_deg);
-    let text = crest::config::tool::with_runout(&base, offset, &id.runout.tooth_radius_deviation_um);
+    let text =
+        crest::config::tool::with_runout(&base, offset, &id.runout.tooth_radius_deviation_um);
     crest::config::tool::load_tool_toml(&text).unwrap_or_else(|e| panic!("{e}\n{text}"))
 }
 
@@ -229,14 +229,18 @@ fn check(t: &Truth, id: &Identification, residual_true_um: f64, what: &str) -> (
         return (false, false);
     }
     assert_eq!(
-        id.identifiable.tooth_deviation, want,
+        id.identifiable.tooth_deviation,
+        want,
         "{what}: teeth that cut (margin {} µm)\n{id:#?}",
         t.margin_mm * 1e3
     );
     // The written tool cuts with the same teeth.
     let a = crest::tool::analyse(&re, t.lead_deg, 0.4, FZ, Rule::Exact).unwrap();
     let re_cuts: Vec<bool> = a.teeth.iter().map(|t| t.participates_exact).collect();
-    assert_eq!(re_cuts, want, "{what}: the written tool's cutting teeth\n{id:#?}");
+    assert_eq!(
+        re_cuts, want,
+        "{what}: the written tool's cutting teeth\n{id:#?}"
+    );
     let ncut = t.cuts.iter().filter(|c| **c).count();
     if ncut < 3 || t.lead_deg < 15.0 {
         return (true, false);
@@ -264,7 +268,12 @@ fn check(t: &Truth, id: &Identification, residual_true_um: f64, what: &str) -> (
 /// and 30°; irregular sampling and noise of 5 % of Rz.
 #[test]
 fn identification_reproduces_itself_over_the_grid() {
-    let mut rng = Rng::new(std::env::var("RUNOUT_GRID_SEED").ok().and_then(|s| s.parse().ok()).unwrap_or(34));
+    let mut rng = Rng::new(
+        std::env::var("RUNOUT_GRID_SEED")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(34),
+    );
     let mut seen = std::collections::BTreeMap::<usize, Seen>::new();
     let mut failed = Vec::new();
     for teeth in [2usize, 3, 4, 6] {
@@ -275,8 +284,14 @@ fn identification_reproduces_itself_over_the_grid() {
                     let t = truth(teeth, e_um, phase_deg, lead_deg);
                     let start = 0.1 + rng.uniform();
                     let (xs, zs) = profile(&t, &mut rng, start, LENGTH_MM / (teeth as f64 * FZ));
-                    let id = identify(&xs, &zs, &Cutter::new(Shape::Ball, R, teeth, 0.0), FZ, lead_deg)
-                        .unwrap();
+                    let id = identify(
+                        &xs,
+                        &zs,
+                        &Cutter::new(Shape::Ball, R, teeth, 0.0),
+                        FZ,
+                        lead_deg,
+                    )
+                    .unwrap();
                     let what = format!(
                         "Z {teeth}, e {e_um} µm at {phase_deg:.1}°, lead {lead_deg}° (cut {:?})",
                         t.cuts
@@ -297,7 +312,12 @@ fn identification_reproduces_itself_over_the_grid() {
         }
     }
     eprintln!("{seen:?}");
-    assert!(failed.is_empty(), "{} cases failed:\n{}", failed.len(), failed.join("\n"));
+    assert!(
+        failed.is_empty(),
+        "{} cases failed:\n{}",
+        failed.len(),
+        failed.join("\n")
+    );
     for teeth in [2usize, 3, 4, 6] {
         let s = &seen[&teeth];
         assert!(s.teeth_asserted * 2 >= s.cases, "Z {teeth}: {s:?}");
@@ -341,8 +361,8 @@ fn several_profiles_are_averaged() {
         .iter()
         .map(|(x, z)| (x.as_slice(), z.as_slice()))
         .collect();
-    let id = identify_profiles(&refs, &Cutter::new(Shape::Ball, R, 6, 0.0), FZ, 30.0, false)
-        .unwrap();
+    let id =
+        identify_profiles(&refs, &Cutter::new(Shape::Ball, R, 6, 0.0), FZ, 30.0, false).unwrap();
     assert_eq!(id.profiles, 5);
     let (teeth, offset) = check(&t, &id, f64::INFINITY, "six teeth, five profiles");
     assert!(teeth && offset, "{id:#?}");
@@ -368,8 +388,7 @@ fn map_of(t: &Truth, feed_deg: f64, rng: &mut Rng) -> crest::surface::HeightMap 
             let (u, v) = ((x * c + y * s) * 1e-3, (-x * s + y * c) * 1e-3);
             let w = v - STEPOVER_MM * (v / STEPOVER_MM).round();
             let scallop = w * w / (2.0 * R);
-            map.z_um[i * n + j] =
-                (height_mm(t, u + 1.0) + scallop) * 1e3 + sigma * rng.normal();
+            map.z_um[i * n + j] = (height_mm(t, u + 1.0) + scallop) * 1e3 + sigma * rng.normal();
         }
     }
     map
@@ -413,14 +432,27 @@ fn a_map_of_a_known_runout_is_identified_along_its_feed() {
         for key in ["mark_spacing_mm", "period_mm", "revolution_mm", "runout"] {
             assert!(v.get(key).is_some(), "no {key}: {what}");
         }
-        assert_eq!(v["teeth_cutting"], serde_json::json!([1, 2, 3, 4]), "{what}");
-        assert!((v["mark_spacing_mm"].as_f64().unwrap() - 0.05).abs() < 1e-12, "{what}");
-        assert!((v["period_mm"].as_f64().unwrap() - 0.2).abs() < 1e-12, "{what}");
+        assert_eq!(
+            v["teeth_cutting"],
+            serde_json::json!([1, 2, 3, 4]),
+            "{what}"
+        );
+        assert!(
+            (v["mark_spacing_mm"].as_f64().unwrap() - 0.05).abs() < 1e-12,
+            "{what}"
+        );
+        assert!(
+            (v["period_mm"].as_f64().unwrap() - 0.2).abs() < 1e-12,
+            "{what}"
+        );
         // The written tool reproduces the marks.
         let re = crest::config::tool::load_tool_toml(&crate::util::read(&out)).unwrap();
         let rz_re = rz_over(&surface_of(re, 15.0), t.lambda_c_mm);
         let rz = rz_over(&t, t.lambda_c_mm);
-        assert!((rz_re / rz - 1.0).abs() < 0.05, "Rz {rz_re} against {rz}: {what}");
+        assert!(
+            (rz_re / rz - 1.0).abs() < 0.05,
+            "Rz {rz_re} against {rz}: {what}"
+        );
         // Offset and phase (tooth 1 = the deepest: the true tooth 1 here, phase 20°).
         let e = v["offset_um"].as_f64().unwrap();
         assert!((e / 0.6 - 1.0).abs() < 0.05, "offset {e}: {what}");
