@@ -164,8 +164,9 @@ fn residual_of(t: &Truth, xs: &[f64], zs: &[f64]) -> f64 {
 }
 
 /// The tool written by `--write-tool` for `id`, read back.
-fn written(id: &Identification, teeth: usize) -> Cutter {
-    let base = format!("shape = \"ball\"\nradius_mm = {R}\nteeth = {teeth}\nhelix_deg = 0\n");
+fn written(id: &Identification, teeth: usize, helix_deg: f64) -> Cutter {
+    let base =
+        format!("shape = \"ball\"\nradius_mm = {R}\nteeth = {teeth}\nhelix_deg = {helix_deg}\n");
     let offset = id.runout.offset_um.zip(id.runout.offset_phase_deg);
     let text =
         crest::config::tool::with_runout(&base, offset, &id.runout.tooth_radius_deviation_um);
@@ -208,7 +209,7 @@ struct Seen {
 /// profile; returns (teeth asserted, offset asserted).
 fn check(t: &Truth, id: &Identification, residual_true_um: f64, what: &str) -> (bool, bool) {
     let nt = t.dev.len();
-    let re = written(id, nt);
+    let re = written(id, nt, t.cutter.helix_rad.to_degrees());
     let rz_re = rz_over(&surface_of(re.clone(), t.lead_deg), t.lambda_c_mm);
     let rz = rz_over(t, t.lambda_c_mm);
     assert!(
@@ -346,6 +347,34 @@ fn the_issue_cases_reproduce_themselves() {
             "{id:#?}"
         );
         assert!((id.period_mm - 0.2).abs() < 1e-12, "{id:#?}");
+    }
+}
+
+/// With a helix the phase is still `offset_phase_deg`'s: the helix lag at the generating
+/// height is taken out, so the written tool (with the same helix) gives the same marks.
+#[test]
+fn the_phase_takes_the_helix_lag_out() {
+    let mut rng = Rng::new(5);
+    for (helix_deg, lead_deg) in [(30.0f64, 15.0), (45.0, 30.0)] {
+        let mut cutter = Cutter::new(Shape::Ball, R, 4, helix_deg.to_radians());
+        cutter.runout.offset_mm = 0.6e-3;
+        cutter.runout.offset_phase_rad = 20f64.to_radians();
+        let t = surface_of(cutter, lead_deg);
+        let (xs, zs) = profile(&t, &mut rng, 0.2, 40.0);
+        let tool = Cutter::new(Shape::Ball, R, 4, helix_deg.to_radians());
+        let id = identify(&xs, &zs, &tool, FZ, lead_deg).unwrap();
+        let what = format!("helix {helix_deg}°, lead {lead_deg}°");
+        check(&t, &id, residual_of(&t, &xs, &zs), &what);
+        let e = id.offset_um.expect("offset identified");
+        assert!((e / 0.6 - 1.0).abs() < 0.05, "{what}: offset {e}");
+        let r = rotation(&t, &id);
+        let phase_true = (20f64.to_radians() + t.cutter.pitch_rad[r]).to_degrees();
+        let diff = (id.phase_deg.unwrap() - phase_true + 540.0).rem_euclid(360.0) - 180.0;
+        assert!(
+            diff.abs() < 5.0,
+            "{what}: phase {:?} against {phase_true}",
+            id.phase_deg
+        );
     }
 }
 
@@ -498,6 +527,14 @@ fn bad_map_input_exits_2_and_writes_nothing() {
         assert!(err.contains(says), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
+    let assert = crate::util::crest()
+        .args(["runout", "identify", "--tool", tool.to_str().unwrap()])
+        .args(["--fz-mm", "0.05", "--channel", "Height"])
+        .args(["--map", small.to_str().unwrap()])
+        .assert()
+        .code(2);
+    let err = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
+    assert!(err.contains("small.sdf"), "--channel on an .sdf: {err}");
     let assert = crate::util::crest()
         .args(["runout", "identify", "--tool", tool.to_str().unwrap()])
         .args(["--fz-mm", "0.05", "--lead-deg", "95"])
