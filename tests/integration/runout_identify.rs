@@ -544,3 +544,62 @@ fn bad_map_input_exits_2_and_writes_nothing() {
     let err = String::from_utf8_lossy(&assert.get_output().stderr).to_string();
     assert!(err.contains("--lead-deg"), "{err}");
 }
+
+/// A Gwyddion `.gwy` with two height channels, "Form" (a plane) first and "Topography" (the
+/// map of a known run-out, fed along 20°): `--channel Topography` identifies from the second.
+#[test]
+fn a_gwy_channel_is_read_by_its_title() {
+    use crate::instruments::{gwy_comp, gwy_field, gwy_obj, gwy_str};
+    let dir = crate::util::tempdir();
+    let tool = crate::util::write(dir.path(), "tool.toml", TOOL_Z4);
+    let mut rng = Rng::new(8);
+    let t = truth(4, 0.6, 20.0, 15.0);
+    let map = map_of(&t, 20.0, &mut rng);
+    let n = map.nx as i32;
+    let real = (
+        map.nx as f64 * map.dx_um * 1e-6,
+        map.ny as f64 * map.dy_um * 1e-6,
+    );
+    let topo: Vec<f64> = map.z_um.iter().map(|z| z * 1e-6).collect();
+    let form: Vec<f64> = (0..map.z_um.len())
+        .map(|k| (k % map.nx) as f64 * 1e-9)
+        .collect();
+    let mut bytes = b"GWYP".to_vec();
+    bytes.extend_from_slice(&gwy_obj(
+        "GwyContainer",
+        &[
+            gwy_comp(
+                "/0/data",
+                b'o',
+                &gwy_field(n, n, real, 0.0, ("m", "m"), &form),
+            ),
+            gwy_comp("/0/data/title", b's', &gwy_str("Form")),
+            gwy_comp(
+                "/1/data",
+                b'o',
+                &gwy_field(n, n, real, 0.0, ("m", "m"), &topo),
+            ),
+            gwy_comp("/1/data/title", b's', &gwy_str("Topography")),
+        ],
+    ));
+    let path = crate::util::write(dir.path(), "m.gwy", bytes);
+    let v = crate::util::success_json(crate::util::crest().args([
+        "runout",
+        "identify",
+        "--map",
+        path.to_str().unwrap(),
+        "--channel",
+        "Topography",
+        "--tool",
+        tool.to_str().unwrap(),
+        "--fz-mm",
+        "0.05",
+        "--lead-deg",
+        "15",
+        "--json",
+    ]));
+    assert!((v["feed_deg"].as_f64().unwrap() - 20.0).abs() < 0.5, "{v}");
+    assert_eq!(v["teeth_cutting"], serde_json::json!([1, 2, 3, 4]), "{v}");
+    let e = v["offset_um"].as_f64().unwrap();
+    assert!((e / 0.6 - 1.0).abs() < 0.05, "{v}");
+}
