@@ -13,7 +13,8 @@
 //!
 //! Conventions (those of `tool.toml`, model.md §3.1): tooth 1 is the deepest tooth (for an
 //! even pitch; with an uneven pitch the teeth keep the tool's order, found from the spacing
-//! of the marks), the others follow in cutting order; the phase is `offset_phase_deg`'s
+//! of the marks, tooth 1 the deepest of the teeth the pitch pattern cannot tell from the
+//! tool's tooth 1), the others follow in cutting order; the phase is `offset_phase_deg`'s
 //! (ρ_j = e0·cos(ψ_j − φ_e), ψ_j = −pitch_j − helix lag at the generating height). A
 //! profile is taken in the feed direction: read backwards, the cutting order reverses.
 
@@ -152,6 +153,22 @@ fn even_pitch(cutter: &Cutter) -> bool {
         .all(|(j, p)| (p.rem_euclid(TAU) - TAU * j as f64 / nt).abs() < 1e-9)
 }
 
+/// The shifts r of the teeth's labels (tooth k + r called tooth k) that leave the pitch
+/// pattern as it is: every r for an even pitch, 0 alone for most uneven ones. The profile
+/// cannot tell such labellings apart; tooth 1 is the deepest of them.
+fn symmetries(cutter: &Cutter) -> Vec<usize> {
+    let nt = cutter.teeth();
+    let p = &cutter.pitch_rad;
+    (0..nt)
+        .filter(|&r| {
+            (0..nt).all(|k| {
+                let d = (p[(r + k) % nt] - p[r] - p[k]).rem_euclid(TAU);
+                d.min(TAU - d) < 1e-9
+            })
+        })
+        .collect()
+}
+
 /// Identify from several profiles along the feed (each `(x mm, z µm)`), averaged. With
 /// `strict`, a profile too short is an error; otherwise it is left out (an error only when
 /// none is left).
@@ -172,6 +189,7 @@ pub fn identify_profiles(
     let lead = lead_deg.to_radians();
     let period = nt as f64 * fz_mm;
     let even = even_pitch(cutter);
+    let sym = symmetries(cutter);
     let marks = Marks {
         profile: match cutter.shape {
             Shape::Ball => FeedProfile::Circle {
@@ -206,11 +224,16 @@ pub fn identify_profiles(
     if fits.is_empty() {
         return Err(short.unwrap_or(IdentifyError::NoProfile));
     }
-    // Labels: tooth 0 the deepest (even pitch), every fit rotated onto the first's.
-    let deepest = |f: &ProfileFit| {
-        (0..nt)
-            .filter(|&j| f.cuts[j])
-            .min_by(|&p, &q| f.levels_mm[p].total_cmp(&f.levels_mm[q]))
+    // Labels: tooth 0 the deepest of the labellings the pitch allows (the cutting teeth
+    // first), every fit rotated onto the first's.
+    let deepest = |levels: &[f64], cuts: &[bool]| {
+        sym.iter()
+            .copied()
+            .min_by(|&p, &q| {
+                (!cuts[p], levels[p])
+                    .partial_cmp(&(!cuts[q], levels[q]))
+                    .unwrap_or(std::cmp::Ordering::Equal)
+            })
             .unwrap_or(0)
     };
     let rotated = |f: &ProfileFit, r: usize| -> (Vec<f64>, Vec<bool>, Vec<usize>) {
@@ -221,14 +244,10 @@ pub fn identify_profiles(
             (0..nt).map(|k| f.owned[(r + k) % nt]).collect(),
         )
     };
-    let first_rot = if even { deepest(&fits[0].0) } else { 0 };
+    let first_rot = deepest(&fits[0].0.levels_mm, &fits[0].0.cuts);
     let reference = rotated(&fits[0].0, first_rot);
     let mut aligned = vec![reference.clone()];
     for (f, _) in &fits[1..] {
-        if !even {
-            aligned.push(rotated(f, 0));
-            continue;
-        }
         let cost = |r: usize| {
             let (l, c, _) = rotated(f, r);
             (0..nt)
@@ -238,7 +257,9 @@ pub fn identify_profiles(
                 })
                 .sum::<f64>()
         };
-        let r = (0..nt)
+        let r = sym
+            .iter()
+            .copied()
             .min_by(|&p, &q| cost(p).total_cmp(&cost(q)))
             .unwrap_or(0);
         aligned.push(rotated(f, r));
@@ -264,15 +285,8 @@ pub fn identify_profiles(
         levels[k] = s / w;
     }
     let levels = bounds(&marks, &levels, &cuts);
-    // Relabel so that tooth 0 is the deepest of the averaged levels (even pitch).
-    let r = if even {
-        (0..nt)
-            .filter(|&k| cuts[k])
-            .min_by(|&p, &q| levels[p].total_cmp(&levels[q]))
-            .unwrap_or(0)
-    } else {
-        0
-    };
+    // Relabel so that tooth 0 is the deepest of the averaged levels.
+    let r = deepest(&levels, &cuts);
     let levels: Vec<f64> = (0..nt).map(|k| levels[(r + k) % nt] - levels[r]).collect();
     let cuts: Vec<bool> = (0..nt).map(|k| cuts[(r + k) % nt]).collect();
     let owned: Vec<usize> = (0..nt).map(|k| owned[(r + k) % nt]).collect();
@@ -286,7 +300,7 @@ pub fn identify_profiles(
     let cutting: Vec<usize> = (0..nt).filter(|&k| cuts[k]).map(|k| k + 1).collect();
     // Period: the smallest shift k (dividing Z) that maps the pattern onto itself.
     let k_period = (1..=nt)
-        .filter(|k| nt.is_multiple_of(*k) && (even || *k == nt))
+        .filter(|k| *k == nt || (nt.is_multiple_of(*k) && sym.contains(k)))
         .find(|&k| {
             (0..nt).all(|i| {
                 let q = (i + k) % nt;
@@ -328,7 +342,7 @@ pub fn identify_profiles(
     }
     if !even {
         notes.push(
-            "Uneven pitch: the teeth keep the tool's order (tooth 1 = the tool's tooth 1, placed by the spacing of the marks)."
+            "Uneven pitch: the teeth keep the tool's order, placed by the spacing of the marks (tooth 1 = the tool's tooth 1, or the deepest of the teeth the pitch cannot tell from it)."
                 .to_string(),
         );
     }
@@ -372,7 +386,11 @@ pub fn identify_profiles(
     let x1 = fit0.x0_mm + marks.pos_mm[tooth1];
     let first_mark_mm = x1 + ((a0 - x1) / period).ceil() * period;
     Ok(Identification {
-        period_mm: k_period as f64 * if even { fz_mm } else { period / nt as f64 },
+        period_mm: if k_period == nt {
+            period
+        } else {
+            cutter.pitch_rad[k_period].rem_euclid(TAU) / TAU * period
+        },
         mark_spacing_mm: period / cutting.len().max(1) as f64,
         revolution_mm: period,
         teeth_cutting: cutting,

@@ -603,3 +603,58 @@ fn a_gwy_channel_is_read_by_its_title() {
     let e = v["offset_um"].as_f64().unwrap();
     assert!((e / 0.6 - 1.0).abs() < 0.05, "{v}");
 }
+
+/// An uneven pitch: the teeth keep the tool's order (x0 is searched over the revolution) and
+/// the written tool, with the same pitch, gives the profile's Rz.
+#[test]
+fn an_uneven_pitch_keeps_the_tools_order() {
+    let mut rng = Rng::new(12);
+    let pitch = [0.0, 85.0, 180.0, 265.0];
+    for (e_um, phase_deg) in [(0.6, 20.0), (3.0, 200.0)] {
+        let mut cutter = Cutter::with_pitch_deg(Shape::Ball, R, &pitch, 0.0);
+        cutter.runout.offset_mm = e_um * 1e-3;
+        cutter.runout.offset_phase_rad = f64::to_radians(phase_deg);
+        let t = surface_of(cutter, 15.0);
+        let (xs, zs) = profile(&t, &mut rng, 0.35, 40.0);
+        let tool = Cutter::with_pitch_deg(Shape::Ball, R, &pitch, 0.0);
+        let id = identify(&xs, &zs, &tool, FZ, 15.0).unwrap();
+        let base = format!(
+            "shape = \"ball\"\nradius_mm = {R}\nteeth = 4\nhelix_deg = 0\ntooth_pitch_deg = [0, 85, 180, 265]\n"
+        );
+        let r = &id.runout;
+        let text = crest::config::tool::with_runout(
+            &base,
+            r.offset_um.zip(r.offset_phase_deg),
+            &r.tooth_radius_deviation_um,
+        );
+        let re = crest::config::tool::load_tool_toml(&text).unwrap();
+        let (rz_re, rz) = (
+            rz_over(&surface_of(re, 15.0), t.lambda_c_mm),
+            rz_over(&t, t.lambda_c_mm),
+        );
+        let what = format!("e {e_um} at {phase_deg}°: {id:#?}");
+        assert!(
+            (rz_re / rz - 1.0).abs() < 0.05,
+            "Rz {rz_re} against {rz}, {what}"
+        );
+        // This pitch looks the same from tooth 3 (180° on): tooth 1 is the deeper of 1 and 3.
+        let r = [0usize, 2]
+            .into_iter()
+            .find(|&r| {
+                (0..4).all(|k| id.identifiable.tooth_deviation[k] == t.cuts[(r + k) % 4])
+                    && (0..4).all(|k| {
+                        !t.cuts[(r + k) % 4]
+                            || ((t.dev[(r + k) % 4] - t.dev[r]) * 1e3 - id.tooth_deviation_um[k])
+                                .abs()
+                                < 0.05
+                    })
+            })
+            .unwrap_or_else(|| panic!("teeth that cut {:?}, {what}", t.cuts));
+        if let (Some(e), true) = (id.offset_um, t.cuts.iter().filter(|c| **c).count() >= 3) {
+            assert!((e / e_um - 1.0).abs() < 0.05, "{what}");
+            let want = phase_deg + pitch[r];
+            let diff = (id.phase_deg.unwrap() - want + 540.0).rem_euclid(360.0) - 180.0;
+            assert!(diff.abs() < 5.0, "{what}");
+        }
+    }
+}
