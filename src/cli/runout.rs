@@ -8,9 +8,10 @@
 //! `DIR/shard-K-of-N.jsonl`; `crest merge` assembles the shards into the outputs above,
 //! byte for byte.
 //!
-//! `crest runout identify --profile PROFILE.csv --tool TOOL.toml --fz-mm F [--lead-deg L]
-//! [--json] [--write-tool FILE]`: the run-out identified from a measured profile
-//! (`crest::study::identify`).
+//! `crest runout identify (--profile PROFILE.csv | --map MEASURED [--channel NAME])
+//! --tool TOOL.toml --fz-mm F [--lead-deg L] [--json] [--write-tool FILE]`: the run-out
+//! identified from a measured profile (`crest::study::identify`) or from several profiles
+//! along the feed of a height map (`crest::study::identify_map`).
 
 use super::Outcome;
 use miette::{IntoDiagnostic, WrapErr, miette};
@@ -49,8 +50,26 @@ pub enum Sub {
 #[derive(Debug, clap::Args)]
 pub struct IdentifyArgs {
     /// Profile along the feed (CSV `x_mm,z_um`, any spacing).
-    #[arg(long, value_name = "PROFILE.csv")]
-    pub profile: PathBuf,
+    #[arg(
+        long,
+        value_name = "PROFILE.csv",
+        required_unless_present = "map",
+        conflicts_with = "map"
+    )]
+    pub profile: Option<PathBuf>,
+    /// A measured height map, in any format `crest metrics` reads: the feed direction is
+    /// found from its spectrum and the run-out identified from several profiles along it.
+    #[arg(long, value_name = "MEASURED")]
+    pub map: Option<PathBuf>,
+    /// The channel of a Gwyddion `.gwy` map to read, by its title.
+    #[arg(long, value_name = "NAME", requires = "map")]
+    pub channel: Option<String>,
+    /// Spacing along x of a grid-CSV map, µm (checked against the other formats).
+    #[arg(long, value_name = "D", requires = "map")]
+    pub dx_um: Option<f64>,
+    /// Spacing along y of a grid-CSV map, µm (default: --dx-um).
+    #[arg(long, value_name = "D", requires = "map")]
+    pub dy_um: Option<f64>,
     /// The tool (shape, radius, teeth, pitch; its run-out is ignored).
     #[arg(long, value_name = "TOOL.toml")]
     pub tool: PathBuf,
@@ -63,7 +82,8 @@ pub struct IdentifyArgs {
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
-    /// Write the tool with the identified deviations as this tool.toml.
+    /// Write the tool with the identified run-out (`offset_um`, `offset_phase_deg` when
+    /// identified, `tooth_radius_deviation_um`) as this tool.toml.
     #[arg(long, value_name = "FILE")]
     pub write_tool: Option<PathBuf>,
 }
@@ -169,31 +189,80 @@ pub(crate) fn write_outputs(
     Ok(Outcome::Ok)
 }
 
+/// A library error as the command line says it: the options it names, the file it is about.
+fn identify_error(e: &crest::study::identify::IdentifyError, file: &Path) -> miette::Report {
+    use crest::study::identify::IdentifyError;
+    match e {
+        IdentifyError::Feed(v) => miette!("--fz-mm must be positive, got {v}"),
+        IdentifyError::Lead(v) => miette!("--lead-deg must lie within ±90 degrees, got {v}"),
+        e => miette!("{}: {e}", file.display()),
+    }
+}
+
 fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
-    let (xs, zs) = crest::io::profile_csv::read_profile_csv(&a.profile)?;
+    use crest::study::identify_map::MapIdentifyError;
+    if let Some(out) = &a.write_tool {
+        super::check_outputs([out.as_path()])?;
+    }
     let tool_text = crest::io::text::read_text(&a.tool, "tool file", crest::io::input::CONFIG)?;
     let cutter = crest::pipeline::tool_from_text(&tool_text, &a.tool.display().to_string())?;
-    let id =
-        crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg).map_err(|e| {
-            match e {
-                crest::study::identify::IdentifyError::Feed(v) => {
-                    miette!("--fz-mm must be positive, got {v}")
-                }
-                e => miette!("{}: {e}", a.profile.display()),
-            }
-        })?;
+    let (id, feed_deg) = match (&a.profile, &a.map) {
+        (Some(profile), _) => {
+            let (xs, zs) = crest::io::profile_csv::read_profile_csv(profile)?;
+            let id = crest::study::identify::identify(&xs, &zs, &cutter, a.fz_mm, a.lead_deg)
+                .map_err(|e| identify_error(&e, profile))?;
+            (id, None)
+        }
+        (None, Some(path)) => {
+            let opts = crest::io::ReadOptions {
+                dx_um: a.dx_um,
+                dy_um: a.dy_um,
+                channel: a.channel.clone(),
+            };
+            let map = crest::io::read_heightmap(path, &opts).map_err(|e| miette!("{e}"))?;
+            let m = crest::study::identify_map::identify_map(&map, &cutter, a.fz_mm, a.lead_deg)
+                .map_err(|e| match e {
+                    MapIdentifyError::Profiles { source, feed_deg } => {
+                        identify_error(&source, path).wrap_err(format!(
+                            "{}: the profiles along the feed at {feed_deg:.2}°",
+                            path.display()
+                        ))
+                    }
+                    e => miette!("{}: {e}", path.display()),
+                })?;
+            (m.identification, Some(m.feed_deg))
+        }
+        (None, None) => return Err(miette!("crest runout identify needs --profile or --map")),
+    };
     if let Some(out) = &a.write_tool {
-        let text = crest::config::tool::with_tooth_deviations(&tool_text, &id.tooth_deviation_um);
+        let r = &id.runout;
+        let text = crest::config::tool::with_runout(
+            &tool_text,
+            r.offset_um.zip(r.offset_phase_deg),
+            &r.tooth_radius_deviation_um,
+        );
         crest::io::write_atomic(out, |w| w.write_all(text.as_bytes()))
             .into_diagnostic()
             .wrap_err_with(|| format!("cannot write {}", out.display()))?;
     }
     if a.json {
-        outln!("{}", serde_json::to_string(&id).into_diagnostic()?);
+        let mut v = serde_json::to_value(&id).into_diagnostic()?;
+        if let (Some(f), Some(obj)) = (feed_deg, v.as_object_mut()) {
+            obj.insert("feed_deg".into(), crest::io::tables::json_number(f));
+        }
+        outln!("{v}");
     } else {
+        if let Some(f) = feed_deg {
+            outln!(
+                "feed direction {f:.2}° (from +x); {} profiles along it",
+                id.profiles
+            );
+        }
         outln!(
-            "period {:.4} mm; teeth cutting {:?} of {}; residual {:.3} µm",
+            "marks {:.4} mm apart, pattern period {:.4} mm (revolution {:.4} mm); teeth cutting {:?} of {}; residual {:.3} µm",
+            id.mark_spacing_mm,
             id.period_mm,
+            id.revolution_mm,
             id.teeth_cutting,
             cutter.teeth(),
             id.residual_um
@@ -208,7 +277,7 @@ fn identify(a: IdentifyArgs) -> miette::Result<Outcome> {
             devs.join(" / ")
         );
         match (id.offset_um, id.phase_deg) {
-            (Some(e), Some(p)) => outln!("offset {e:.3} µm at {p:.1}°"),
+            (Some(e), Some(p)) => outln!("offset {e:.3} µm at offset_phase_deg {p:.1}°"),
             _ => outln!("offset and phase: not identifiable from this profile"),
         }
         for n in &id.identifiable.notes {

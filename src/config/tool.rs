@@ -809,6 +809,13 @@ impl ToolConfig {
 /// The `tool.toml` document `text` with its `[runout]` table replaced by one holding only
 /// `tooth_radius_deviation_um = devs_um` (an identified run-out, ready to re-simulate).
 pub fn with_tooth_deviations(text: &str, devs_um: &[f64]) -> String {
+    with_runout(text, None, devs_um)
+}
+
+/// The `tool.toml` document `text` with its `[runout]` table replaced by one holding
+/// `offset_um` and `offset_phase_deg` (when `offset` = (µm, degrees) is given) and
+/// `tooth_radius_deviation_um = devs_um`: an identified run-out, ready to re-simulate.
+pub fn with_runout(text: &str, offset: Option<(f64, f64)>, devs_um: &[f64]) -> String {
     let mut out = String::new();
     let mut skip = false;
     for line in text.lines() {
@@ -825,8 +832,16 @@ pub fn with_tooth_deviations(text: &str, devs_um: &[f64]) -> String {
         .iter()
         .map(|d| crate::math::trim_decimals(*d, 4))
         .collect();
+    out.push_str("\n[runout]\n");
+    if let Some((e, phase)) = offset {
+        out.push_str(&format!(
+            "offset_um = {}\noffset_phase_deg = {}\n",
+            crate::math::trim_decimals(e, 5),
+            crate::math::trim_decimals(phase, 4)
+        ));
+    }
     out.push_str(&format!(
-        "\n[runout]\ntooth_radius_deviation_um = [{}]\n",
+        "tooth_radius_deviation_um = [{}]\n",
         list.join(", ")
     ));
     out

@@ -13,6 +13,8 @@ pub mod calibrate;
 pub mod compare;
 pub mod design;
 pub mod identify;
+pub mod identify_fit;
+pub mod identify_map;
 pub mod measured;
 pub mod montecarlo;
 pub mod regression;

@@ -139,7 +139,7 @@ fn al3d(nx: usize, ny: usize, depths: &[f32], invalid: Option<&str>) -> Vec<u8> 
     out
 }
 
-fn gwy_comp(name: &str, ty: u8, payload: &[u8]) -> Vec<u8> {
+pub(crate) fn gwy_comp(name: &str, ty: u8, payload: &[u8]) -> Vec<u8> {
     let mut c = name.as_bytes().to_vec();
     c.push(0);
     c.push(ty);
@@ -147,7 +147,7 @@ fn gwy_comp(name: &str, ty: u8, payload: &[u8]) -> Vec<u8> {
     c
 }
 
-fn gwy_obj(name: &str, comps: &[Vec<u8>]) -> Vec<u8> {
+pub(crate) fn gwy_obj(name: &str, comps: &[Vec<u8>]) -> Vec<u8> {
     let body: Vec<u8> = comps.concat();
     let mut o = name.as_bytes().to_vec();
     o.push(0);
@@ -156,13 +156,13 @@ fn gwy_obj(name: &str, comps: &[Vec<u8>]) -> Vec<u8> {
     o
 }
 
-fn gwy_str(s: &str) -> Vec<u8> {
+pub(crate) fn gwy_str(s: &str) -> Vec<u8> {
     let mut v = s.as_bytes().to_vec();
     v.push(0);
     v
 }
 
-fn gwy_field(
+pub(crate) fn gwy_field(
     nx: i32,
     ny: i32,
     real: (f64, f64),

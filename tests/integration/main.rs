@@ -28,6 +28,7 @@ mod profile_metrics; // `crest metrics PROFILE.csv` (issue 34): a measured x_mm,
 mod real_parts; // design surfaces: meshes, contact data from the part or the path, N-buffer, maps, real exports
 mod report; // `crest report`: 002 Table 2, the crest and simulate models, committed reports
 mod resample; // even feed per tooth and constant Δθ: properties, streaming, `crest resample`
+mod runout_identify; // run-out identification that reproduces itself (issue 34 §4): a grid of teeth, offsets, phases, leads, noise; maps
 mod sanity; // loud sanity checks (issue 33): heights beyond the bound, narrow patches, ap clipping the scallop, tools without corner, contradictory units
 mod shard; // `crest study --shard K/N` in separate processes and `crest merge`: the single-process bytes
 mod study; // `crest study`: designed experiments through the whole pipeline, their effects

@@ -389,9 +389,9 @@ fn calibrate_json_has_the_documented_keys() {
     assert!(out.join("calibration.csv").is_file());
 }
 
-/// `crest runout identify --json` carries period_mm, teeth_cutting, offset_um, phase_deg,
-/// tooth_deviation_um, residual_um and identifiable; `--write-tool` writes a tool that reads
-/// back with the identified deviations.
+/// `crest runout identify --json` carries period_mm, mark_spacing_mm, revolution_mm,
+/// teeth_cutting, offset_um, phase_deg, tooth_deviation_um, residual_um, runout and
+/// identifiable; `--write-tool` writes the `runout` table, which cuts with the same tooth.
 #[test]
 fn runout_identify_json_has_the_documented_keys() {
     let dir = crate::util::tempdir();
@@ -428,6 +428,9 @@ fn runout_identify_json_has_the_documented_keys() {
     ]));
     for key in [
         "period_mm",
+        "mark_spacing_mm",
+        "revolution_mm",
+        "runout",
         "teeth_cutting",
         "offset_um",
         "phase_deg",
@@ -448,14 +451,35 @@ fn runout_identify_json_has_the_documented_keys() {
     let text = crate::util::read(&tool_out);
     let cutter = crest::config::tool::load_tool_toml(&text).unwrap();
     assert_eq!(cutter.teeth(), 4);
-    let devs: Vec<f64> = v["tooth_deviation_um"]
-        .as_array()
-        .unwrap()
+    let list = |key: &serde_json::Value| -> Vec<f64> {
+        key.as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_f64().unwrap() * 1e-3)
+            .collect()
+    };
+    // The tool holds the `runout` table of the JSON (to 0.1 nm): the cutting tooth at its
+    // level, the silent ones set back beyond their bounds (issue 34 §4: at the bound they
+    // tie with the envelope and cut when re-simulated).
+    let written = list(&v["runout"]["tooth_radius_deviation_um"]);
+    let bounds = list(&v["tooth_deviation_um"]);
+    for (k, (a, b)) in cutter
+        .runout
+        .tooth_radius_dev_mm
         .iter()
-        .map(|d| d.as_f64().unwrap() * 1e-3)
-        .collect();
-    for (a, b) in cutter.runout.tooth_radius_dev_mm.iter().zip(&devs) {
-        // tool.toml holds the deviations to 0.1 nm.
+        .zip(&written)
+        .enumerate()
+    {
         assert!((a - b).abs() <= 1e-7, "{a} {b}");
+        if k > 0 {
+            assert!(
+                *a < bounds[k] - 5e-6,
+                "tooth {}: {a} against the bound {}",
+                k + 1,
+                bounds[k]
+            );
+        }
     }
+    let a = crest::tool::analyse(&cutter, 15.0, 0.4, 0.05, crest::tool::Rule::Exact).unwrap();
+    assert_eq!(a.zc_exact, 1, "the written tool cuts with one tooth");
 }
