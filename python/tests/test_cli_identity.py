@@ -339,3 +339,28 @@ def test_swept_model_and_mesh_options_are_the_cli_bytes(cli, tmp_path):
     # The keyword is named, as Python spells it (the command line names its flag).
     with pytest.raises(crest.CrestError, match="^chord_tol_um must be between"):
         crest.simulate(cls, tool=str(ball), model="dome", window=(0, 0, 0.1, 0.1), chord_tol_um=0.0)
+
+
+def test_messages_name_keywords_where_the_cli_names_options(cli, tmp_path):
+    """The library names request fields; Python shows its keywords, the command line its
+    options, for the same mistakes (no grid; a tool without its tooth count)."""
+    ball = ROOT / "samples" / "synth" / "ball-r5.toml"
+    cls = tmp_path / "raster.cls"
+    p = cli(
+        "synth", "plane", "--tool", ball, "--stepover-mm", "0.4", "--size-mm", "3,3",
+        "--point-step-mm", "0.05", "--feed-mm-min", "1000", "--rpm", "20000", "-o", cls,
+    )
+    assert p.returncode == 0, p.stderr
+    with pytest.raises(crest.CrestError) as e:
+        crest.simulate(cls, tool=str(ball), patch_mm=(1.0, 1.0))
+    msg = str(e.value)
+    assert "patch_near X,Y,Z or patch_at S_MM" in msg, msg
+    assert "‹" not in msg and "--" not in msg, msg
+    with pytest.raises(crest.CrestError) as e:
+        crest.simulate(cls, tool=str(ball), window=(0, 0, 1, 1), region=(0, 0, 0, 1, 1, 1))
+    assert "region bounds a part map: give map_mm" in str(e.value), str(e.value)
+    p = cli("simulate", cls, "--tool", ball, "--map-mm=-1", "--part", tmp_path / "no.stl",
+            "-o", tmp_path / "x.ply")
+    assert p.returncode == 2
+    assert "--map-mm must be positive, got -1" in p.stderr, p.stderr
+    assert "‹" not in p.stderr, p.stderr
