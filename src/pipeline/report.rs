@@ -57,11 +57,11 @@ pub fn measure_files(
         };
         let map = crate::io::read_heightmap(&dir.join(&file), &crate::io::ReadOptions::default())
             .map_err(|source| MeasuredFileError::Read {
-                table: name.clone(),
-                line: row.line,
-                file: file.clone(),
-                source,
-            })?;
+            table: name.clone(),
+            line: row.line,
+            file: file.clone(),
+            source,
+        })?;
         let values = crate::study::measured::measure_map(&map).map_err(|source| {
             MeasuredFileError::Measure {
                 table: name.clone(),

@@ -169,10 +169,10 @@ impl Draw for Figure<'_> {
         let fx = move |v: &f64| tick_label(*v, dx_ticks);
         let fy = move |v: &f64| tick_label(*v, dy_ticks);
         let y_desc = if parameter == "Sdq" {
-        "Sdq (µm/µm)".to_string()
-    } else {
-        format!("{parameter} (µm)")
-    };
+            "Sdq (µm/µm)".to_string()
+        } else {
+            format!("{parameter} (µm)")
+        };
         style_mesh(
             chart
                 .configure_mesh()

@@ -385,8 +385,8 @@ pub fn measure_map(
     map: &crate::surface::HeightMap,
 ) -> Result<[f64; 6], crate::metrics::MetricsError> {
     use crate::metrics::{
-        Level, MetricsError, ParamSet, Preprocess, ProfileSpec, areal_parameters,
-        extract_profile, preprocess_map, preprocess_profile, profile_parameters,
+        Level, MetricsError, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
+        preprocess_map, preprocess_profile, profile_parameters,
     };
     let pp = Preprocess {
         level: Level::Plane,

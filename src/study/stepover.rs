@@ -127,14 +127,9 @@ pub fn predict(
         .flat_map(|g| feed_profile_um.iter().map(move |f| f + g))
         .collect();
     let stats = crate::metrics::height_stats(&z).ok_or(AcrossError::NoHeight)?;
-    let sdq = crate::surface::HeightMap::from_rows(
-        nx,
-        scallop.len(),
-        feed_step_mm * 1e3,
-        dy * 1e3,
-        z,
-    )
-    .map_or(f64::NAN, |map| crate::metrics::sdq(&map));
+    let sdq =
+        crate::surface::HeightMap::from_rows(nx, scallop.len(), feed_step_mm * 1e3, dy * 1e3, z)
+            .map_or(f64::NAN, |map| crate::metrics::sdq(&map));
     Ok(Across {
         rz_um: rz,
         ra_um: ra,
