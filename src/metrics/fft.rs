@@ -13,6 +13,26 @@ const BLOCK: usize = 16;
 /// held at once to this many blocks).
 const BLOCKS_AT_ONCE: usize = 16;
 
+/// The smallest length at least `n` whose only prime factors are 2, 3 and 5 (rustfft's
+/// fast sizes; a zero padding to it gives the same linear correlation as any other).
+pub(crate) fn fast_len(n: usize) -> usize {
+    let mut best = usize::MAX;
+    let mut p2 = 1usize;
+    while p2 < 2 * n.max(1) {
+        let mut p3 = p2;
+        while p3 < 2 * n.max(1) {
+            let mut p5 = p3;
+            while p5 < n {
+                p5 *= 5;
+            }
+            best = best.min(p5);
+            p3 *= 3;
+        }
+        p2 *= 2;
+    }
+    best
+}
+
 /// The 1-D FFTs of one direction over a `rows × cols` row-major buffer.
 pub(crate) struct Fft2 {
     f_row: std::sync::Arc<dyn Fft<f64>>,
@@ -93,6 +113,15 @@ impl Fft2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_lengths_are_5_smooth_and_least() {
+        assert_eq!(fast_len(1), 1);
+        assert_eq!(fast_len(1334), 1350);
+        assert_eq!(fast_len(15200), 15360);
+        assert_eq!(fast_len(4000), 4000);
+        assert_eq!(fast_len(17), 18);
+    }
 
     /// The previous form: rows, a transpose into a second buffer, rows again.
     fn transposed_fft2(data: &mut [Complex64], rows: usize, cols: usize, dir: FftDirection) {

@@ -373,7 +373,7 @@ fn whole_lag(measured: &HeightMap, placed: &HeightMap) -> Option<(i64, i64)> {
     let (nx, ny) = (measured.nx, measured.ny);
     let a = centred(measured, false);
     let b = centred(placed, false);
-    let (px, py) = (2 * nx, 2 * ny);
+    let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
     let fa = fft2_padded(&a, nx, ny, px, py);
     let mut fb = fft2_padded(&b, nx, ny, px, py);
     for (x, y) in fb.iter_mut().zip(&fa) {
@@ -576,26 +576,28 @@ fn rotated_square(map: &HeightMap, feed_deg: f64) -> Option<(Vec<f64>, usize, f6
         return None;
     }
     let half = (n - 1) as f64 * d / 2.0;
-    let mut z = Vec::with_capacity(n * n);
-    for iv in 0..n {
+    let mut z = vec![0.0; n * n];
+    use rayon::prelude::*;
+    z.par_chunks_exact_mut(n).enumerate().for_each(|(iv, row)| {
         let v = iv as f64 * d - half;
-        for iu in 0..n {
+        for (iu, out) in row.iter_mut().enumerate() {
             let u = iu as f64 * d - half;
             let (x, y) = (ax + u * c - v * s, ay + u * s + v * c);
-            z.push(bilinear(map, x / map.dx_um, y / map.dy_um));
+            *out = bilinear(map, x / map.dx_um, y / map.dy_um);
         }
-    }
+    });
     Some((z, n, d))
 }
 
 /// Mean power spectrum of lines (each mean-removed, missing values as its mean, Hann window,
-/// padded [`PAD_1D`] times).
+/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5).
 fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
     let n = lines.first().map_or(0, Vec::len);
-    let m = PAD_1D * n.max(1);
+    let m = super::fft::fast_len(PAD_1D * n.max(1));
     let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(m);
     let mut power = vec![0.0; m / 2 + 1];
     let mut used = 0usize;
+    let window: Vec<f64> = (0..n).map(|k| hann(k, n)).collect();
     // The lines' spectra in parallel, a few at a time, summed in line order.
     let spectrum = |line: &Vec<f64>| -> Option<Vec<Complex64>> {
         let valid = line.iter().filter(|v| v.is_finite()).count();
@@ -604,9 +606,9 @@ fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
         }
         let mean = finite_mean(line);
         let mut buf = vec![Complex64::default(); m];
-        for (k, v) in line.iter().enumerate() {
+        for ((k, v), w) in line.iter().enumerate().zip(&window) {
             let v = if v.is_finite() { v - mean } else { 0.0 };
-            buf[k] = Complex64::new(v * hann(k, n), 0.0);
+            buf[k] = Complex64::new(v * w, 0.0);
         }
         fft.process(&mut buf);
         buf.truncate(m / 2 + 1);
@@ -627,7 +629,7 @@ fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
     }
     let df = 1.0 / (m as f64 * d);
     let freq: Vec<f64> = (0..power.len()).map(|k| k as f64 * df).collect();
-    let k0 = ((MIN_CYCLES * PAD_1D as f64).ceil() as usize).max(1);
+    let k0 = ((MIN_CYCLES * m as f64 / n.max(1) as f64).ceil() as usize).max(1);
     let mut peak = f64::NAN;
     if used > 0 && power.len() > k0 + 2 {
         let k = (k0..power.len() - 1).fold(k0, |b, k| if power[k] > power[b] { k } else { b });

@@ -127,7 +127,8 @@ fn linear_autocorr_pair(
 /// `(ny−1, nx−1)`.
 pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
     let (nx, ny) = (map.nx, map.ny);
-    let (px, py) = (2 * nx, 2 * ny);
+    // Any padding to 2n − 1 or more gives the linear ACF; lengths of factors 2, 3, 5 are fast.
+    let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
     let (e, missing) = centred(map);
     let (raw, counts) = if missing {
         let mask: Vec<f64> = map

@@ -76,7 +76,14 @@ fn write_measurements(dir: &Path, study: &Path) -> String {
 }
 
 fn metrics_json(args: &[&str]) -> serde_json::Value {
-    stdout_json(&crest().arg("metrics").args(args).arg("--json").assert().success())
+    stdout_json(
+        &crest()
+            .arg("metrics")
+            .args(args)
+            .arg("--json")
+            .assert()
+            .success(),
+    )
 }
 
 /// What `crest metrics` gives for `file` with the predictions' filters: (Rz, Ra) along x as
@@ -88,7 +95,13 @@ fn metrics_of(file: &Path) -> [f64; 6] {
     for k in 0..ROWS {
         let row = format!("row:{k}");
         let v = metrics_json(&[
-            f, "--level", "plane", "--profile", &row, "--params", "Rz,Ra",
+            f,
+            "--level",
+            "plane",
+            "--profile",
+            &row,
+            "--params",
+            "Rz,Ra",
         ]);
         rz += v["Rz"].as_f64().unwrap();
         ra += v["Ra"].as_f64().unwrap();
@@ -146,7 +159,10 @@ fn calibrate_on_a_table_that_names_files() {
         extra(5),
     ];
     for (g, w) in got.iter().zip(&want) {
-        assert!((g - w).abs() <= 1e-9 * w.abs().max(1.0), "{got:?} vs {want:?}");
+        assert!(
+            (g - w).abs() <= 1e-9 * w.abs().max(1.0),
+            "{got:?} vs {want:?}"
+        );
     }
     // Every case compares Rz, Ra and the areal parameters; the measurement is K times the
     // prediction (the mean of 0.98 K and 1.02 K), up to the rows' levelling and the map's
