@@ -25,7 +25,7 @@ pub enum MeasuredFileError {
         file: String,
         /// The reader's error (it names the path relative to the working directory).
         #[source]
-        source: crate::io::HeightMapError,
+        source: Box<crate::io::HeightMapError>,
     },
     /// The map was read but its parameters cannot be computed.
     #[error("{table}:{line}: measured_file `{file}` cannot be measured")]
@@ -60,7 +60,7 @@ pub fn measure_files(
             table: name.clone(),
             line: row.line,
             file: file.clone(),
-            source,
+            source: Box::new(source),
         })?;
         let values = crate::study::measured::measure_map(&map).map_err(|source| {
             MeasuredFileError::Measure {
