@@ -31,6 +31,9 @@ sh reports/cutters/regenerate.sh
 # surf-topo's own maps in $SURFTOPO_MAPS (the user's step), skipped otherwise.
 sh reports/surf-topo/regenerate.sh
 
+# A worked `crest compare` (issue 34 §2): a prediction against a perturbed simulation as .x3p.
+sh reports/compare/regenerate.sh
+
 # The 3-D viewer (issue 21): a screenshot of the demo's view.html (needs chromium).
 sh reports/viewer/regenerate.sh
 # Process effects (issue 16): the engine's ploughing against Brammertz's closed form, and 002

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 /// Options of `crest calibrate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Measured table (CSV): lead_deg,side,sample,Ra_um,Rz_um.
+    /// Measured table (CSV): lead_deg,side,sample,Ra_um,Rz_um, or measured_file (a height map
+    /// relative to the table whose Rz and Ra along x are measured as `crest report` does).
     #[arg(long, value_name = "TABLE.csv")]
     pub measured: PathBuf,
     /// Study (TOML) whose [process] and run-out are the starting point.
@@ -73,6 +74,16 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "leave-one-out RMS {:.1} % (a constant offset on the geometric model: {:.1} %)",
             cal.loo_rms_pct,
             cal.constant_loo_rms_pct
+        );
+        let factors: Vec<String> = cal
+            .factors
+            .iter()
+            .map(|(n, v)| format!("{n} × {v:.4}"))
+            .collect();
+        outln!(
+            "constant factor on the geometric model (all cases): {}; its leave-one-out RMS {:.1} %",
+            factors.join(", "),
+            cal.factor_loo_rms_pct
         );
     }
     Ok(Outcome::Ok)

@@ -14,7 +14,9 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Measured table (CSV): lead_deg,side,sample,Ra_um,Rz_um (one row per case and sample);
-    /// optional Sa_um, Sz_um, Ra_stepover_um, Rz_stepover_um (docs/config.md).
+    /// optional Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um, and measured_file (a
+    /// height map relative to the table, measured with the predictions' filters: Rz, Ra along
+    /// x, Sz, Sa, Sq, Sdq) (docs/config.md).
     #[arg(long, value_name = "TABLE.csv")]
     pub measured: PathBuf,
     /// Study (TOML): tool file, run-out, fz, cases (lead, side) and model.
@@ -100,8 +102,9 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         None => {
             for c in &reg.cases {
                 for k in &c.comparisons {
+                    let unit = if k.parameter == "Sdq" { "" } else { " µm" };
                     outln!(
-                        "lead {:>5}° {:<8} {}: measured {} µm, simulated {:.4} µm, ratio {:.3}, {}",
+                        "lead {:>5}° {:<8} {}: measured {}{unit}, simulated {:.4}{unit}, ratio {:.3}, {}",
                         c.lead_deg,
                         c.side.name(),
                         k.parameter,

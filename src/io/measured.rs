@@ -1,6 +1,7 @@
 //! The measured-table reader: CSV with one row per case and sample (`lead_deg,side,sample,
-//! Ra_um,Rz_um`, like 002 Table 2; optionally `Sa_um`, `Sz_um`, `Ra_stepover_um`,
-//! `Rz_stepover_um`), every bad cell named by file, line and column.
+//! Ra_um,Rz_um`, like 002 Table 2; optionally `Sa_um`, `Sz_um`, `Sq_um`, `Sdq`,
+//! `Ra_stepover_um`, `Rz_stepover_um`, and `measured_file`, a height map to measure), every
+//! bad cell named by file, line and column.
 
 use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Param, Side};
 use std::collections::BTreeMap;
@@ -34,7 +35,7 @@ pub enum MeasuredError {
     },
     /// The header lacks required columns.
     #[error(
-        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and at least one of Ra_um, Rz_um, Sa_um, Sz_um, Ra_stepover_um, Rz_stepover_um"
+        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um"
     )]
     MissingColumns {
         /// File name as given.
@@ -46,7 +47,7 @@ pub enum MeasuredError {
     },
 }
 
-const KNOWN_COLUMNS: [&str; 9] = [
+const KNOWN_COLUMNS: [&str; 12] = [
     "lead_deg",
     "side",
     "sample",
@@ -54,8 +55,11 @@ const KNOWN_COLUMNS: [&str; 9] = [
     "Rz_um",
     "Sa_um",
     "Sz_um",
+    "Sq_um",
+    "Sdq",
     "Ra_stepover_um",
     "Rz_stepover_um",
+    "measured_file",
 ];
 
 /// The 1-based line where a record starts: the csv crate may place a record that follows
@@ -101,9 +105,11 @@ fn field_column(raw: &str, index: usize) -> usize {
 /// Parse a measured table from CSV text. `file` names the file in error messages.
 ///
 /// Lines starting with `#` are comments. The header must hold `lead_deg`, `side`,
-/// `sample` and at least one of `Ra_um`, `Rz_um` (feed-direction profile), `Sa_um`, `Sz_um`
-/// (areal), `Ra_stepover_um`, `Rz_stepover_um` (stepover-direction profile), in any order;
-/// other columns are errors (a misspelt unit must not be ignored). `side` is `concave`, `convex` or `plane` (these
+/// `sample` and at least one of `Ra_um`, `Rz_um` (feed-direction profile), `Sa_um`, `Sz_um`,
+/// `Sq_um`, `Sdq` (areal), `Ra_stepover_um`, `Rz_stepover_um` (stepover-direction profile)
+/// or `measured_file` (a height map, relative to the table, measured by the pipeline), in
+/// any order; other columns are errors (a misspelt unit must not be ignored). A row that
+/// names a measured file may leave its numbers empty (the file gives them). `side` is `concave`, `convex` or `plane` (these
 /// carry curvature) or any other non-empty label (a plain grouping label).
 /// Roughness values must be finite and non-negative; each (lead, side, sample) appears once.
 pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredError> {
@@ -171,11 +177,11 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     let columns = Columns {
         ra: index.contains_key("Ra_um"),
         rz: index.contains_key("Rz_um"),
-        extra: [Param::Sz, Param::Sa, Param::RzStepover, Param::RaStepover]
-            .map(|p| index.contains_key(p.column())),
+        extra: Param::EXTRA.map(|p| index.contains_key(p.column())),
+        file: index.contains_key("measured_file"),
     };
-    if !Param::ALL.into_iter().any(|p| columns.has(p)) {
-        missing.push("Ra_um or Rz_um");
+    if !columns.file && !Param::ALL.into_iter().any(|p| columns.has(p)) {
+        missing.push("Ra_um or Rz_um (or measured_file)");
     }
     if !missing.is_empty() {
         return Err(MeasuredError::MissingColumns {
@@ -216,6 +222,12 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
             column: field_column(raw_line(line), i),
             name: name.to_string(),
             message,
+        };
+        let measured_file = if columns.file {
+            let (_, f) = cell("measured_file");
+            (!f.is_empty()).then(|| f.to_string())
+        } else {
+            None
         };
         let number = |name: &str, nonneg: bool| -> Result<f64, MeasuredError> {
             let (i, s) = cell(name);
@@ -261,25 +273,19 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         if sample.is_empty() {
             return Err(bad("sample", pi, "empty sample label".to_string()));
         }
-        let ra_um = if columns.ra {
-            Some(number("Ra_um", true)?)
-        } else {
-            None
-        };
-        let rz_um = if columns.rz {
-            Some(number("Rz_um", true)?)
-        } else {
-            None
-        };
-        let mut extra_um = [None; 4];
-        for (v, p) in
-            extra_um
-                .iter_mut()
-                .zip([Param::Sz, Param::Sa, Param::RzStepover, Param::RaStepover])
-        {
-            if columns.has(p) {
-                *v = Some(number(p.column(), true)?);
+        // A roughness cell: required unless the row names a measured file (which gives the
+        // value when the cell is empty).
+        let value = |p: Param| -> Result<Option<f64>, MeasuredError> {
+            if !columns.has(p) || (measured_file.is_some() && cell(p.column()).1.is_empty()) {
+                return Ok(None);
             }
+            number(p.column(), true).map(Some)
+        };
+        let ra_um = value(Param::Ra)?;
+        let rz_um = value(Param::Rz)?;
+        let mut extra_um = [None; 6];
+        for (v, p) in extra_um.iter_mut().zip(Param::EXTRA) {
+            *v = value(p)?;
         }
         if let Some(prev) = rows
             .iter()
@@ -302,6 +308,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
             ra_um,
             rz_um,
             extra_um,
+            measured_file,
             line,
         });
     }

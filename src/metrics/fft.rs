@@ -1,6 +1,7 @@
 //! Two-dimensional complex FFTs on row-major buffers, in place: rustfft along rows, and
 //! along columns a few at a time through a small gathered block (no second buffer of the
-//! whole field).
+//! whole field). The rows, and the column blocks, are transformed in parallel (rayon); each
+//! 1-D FFT is the same whichever thread runs it, so the result is too.
 
 use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftDirection, FftPlanner};
@@ -8,11 +9,34 @@ use rustfft::{Fft, FftDirection, FftPlanner};
 /// Columns gathered into one contiguous block for their FFTs.
 const BLOCK: usize = 16;
 
+/// Column blocks transformed in parallel before they are written back (bounds the memory
+/// held at once to this many blocks).
+const BLOCKS_AT_ONCE: usize = 16;
+
+/// The smallest length at least `n` whose only prime factors are 2, 3 and 5 (rustfft's
+/// fast sizes; a zero padding to it gives the same linear correlation as any other).
+pub(crate) fn fast_len(n: usize) -> usize {
+    let mut best = usize::MAX;
+    let mut p2 = 1usize;
+    while p2 < 2 * n.max(1) {
+        let mut p3 = p2;
+        while p3 < 2 * n.max(1) {
+            let mut p5 = p3;
+            while p5 < n {
+                p5 *= 5;
+            }
+            best = best.min(p5);
+            p3 *= 3;
+        }
+        p2 *= 2;
+    }
+    best
+}
+
 /// The 1-D FFTs of one direction over a `rows × cols` row-major buffer.
 pub(crate) struct Fft2 {
     f_row: std::sync::Arc<dyn Fft<f64>>,
     f_col: std::sync::Arc<dyn Fft<f64>>,
-    scratch: Vec<Complex64>,
     rows: usize,
     cols: usize,
 }
@@ -23,16 +47,9 @@ impl Fft2 {
         let mut planner = FftPlanner::<f64>::new();
         let f_row = planner.plan_fft(cols, dir);
         let f_col = planner.plan_fft(rows, dir);
-        let scratch = vec![
-            Complex64::default();
-            f_row
-                .get_inplace_scratch_len()
-                .max(f_col.get_inplace_scratch_len())
-        ];
         Fft2 {
             f_row,
             f_col,
-            scratch,
             rows,
             cols,
         }
@@ -40,31 +57,53 @@ impl Fft2 {
 
     /// The FFT of every row, in place.
     pub(crate) fn rows(&mut self, data: &mut [Complex64]) {
-        for r in data.chunks_exact_mut(self.cols) {
-            self.f_row.process_with_scratch(r, &mut self.scratch);
-        }
+        use rayon::prelude::*;
+        let f = &self.f_row;
+        let len = f.get_inplace_scratch_len();
+        data.par_chunks_exact_mut(self.cols).for_each_init(
+            || vec![Complex64::default(); len],
+            |scratch, r| f.process_with_scratch(r, scratch),
+        );
     }
 
     /// The FFT of every column, in place (each column is copied out, transformed and copied
     /// back, so it gets the values a transposed buffer would give it, bit for bit).
     pub(crate) fn columns(&mut self, data: &mut [Complex64]) {
+        use rayon::prelude::*;
         let (rows, cols) = (self.rows, self.cols);
-        let mut block = vec![Complex64::default(); BLOCK.min(cols) * rows];
-        for c0 in (0..cols).step_by(BLOCK) {
-            let w = BLOCK.min(cols - c0);
-            for r in 0..rows {
-                let row = &data[r * cols + c0..r * cols + c0 + w];
-                for (k, v) in row.iter().enumerate() {
-                    block[k * rows + r] = *v;
-                }
-            }
-            for col in block[..w * rows].chunks_exact_mut(rows) {
-                self.f_col.process_with_scratch(col, &mut self.scratch);
-            }
-            for r in 0..rows {
-                let row = &mut data[r * cols + c0..r * cols + c0 + w];
-                for (k, v) in row.iter_mut().enumerate() {
-                    *v = block[k * rows + r];
+        let f = &self.f_col;
+        let len = f.get_inplace_scratch_len();
+        let starts: Vec<usize> = (0..cols).step_by(BLOCK).collect();
+        for group in starts.chunks(BLOCKS_AT_ONCE) {
+            let blocks: Vec<(usize, usize, Vec<Complex64>)> = {
+                let data = &*data;
+                group
+                    .par_iter()
+                    .map_init(
+                        || vec![Complex64::default(); len],
+                        |scratch, &c0| {
+                            let w = BLOCK.min(cols - c0);
+                            let mut block = vec![Complex64::default(); w * rows];
+                            for r in 0..rows {
+                                let row = &data[r * cols + c0..r * cols + c0 + w];
+                                for (k, v) in row.iter().enumerate() {
+                                    block[k * rows + r] = *v;
+                                }
+                            }
+                            for col in block.chunks_exact_mut(rows) {
+                                f.process_with_scratch(col, scratch);
+                            }
+                            (c0, w, block)
+                        },
+                    )
+                    .collect()
+            };
+            for (c0, w, block) in blocks {
+                for r in 0..rows {
+                    let row = &mut data[r * cols + c0..r * cols + c0 + w];
+                    for (k, v) in row.iter_mut().enumerate() {
+                        *v = block[k * rows + r];
+                    }
                 }
             }
         }
@@ -74,6 +113,15 @@ impl Fft2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn fast_lengths_are_5_smooth_and_least() {
+        assert_eq!(fast_len(1), 1);
+        assert_eq!(fast_len(1334), 1350);
+        assert_eq!(fast_len(15200), 15360);
+        assert_eq!(fast_len(4000), 4000);
+        assert_eq!(fast_len(17), 18);
+    }
 
     /// The previous form: rows, a transpose into a second buffer, rows again.
     fn transposed_fft2(data: &mut [Complex64], rows: usize, cols: usize, dir: FftDirection) {

@@ -23,6 +23,51 @@ const FOURIER_REFINE_MAX: usize = 1 << 21;
 /// Zero-padding factor of the 1-D spectra.
 const PAD_1D: usize = 8;
 
+/// Maps of more nodes than this are searched on block means (the spectral peak, the
+/// whole-lag correlation peak) before the correlation is refined at full resolution: 724 ×
+/// 724 nodes, whose padded correlation field is [`FOURIER_REFINE_MAX`].
+const COARSE_NODES: usize = FOURIER_REFINE_MAX / 4;
+
+/// Lines of a 1-D spectrum transformed in parallel before they are summed (in order).
+const LINES_AT_ONCE: usize = 64;
+
+/// The block size that brings a map within [`COARSE_NODES`] (1 when it is).
+fn decimation(map: &HeightMap) -> usize {
+    let n = map.nx * map.ny;
+    if n <= COARSE_NODES {
+        1
+    } else {
+        ((n as f64 / COARSE_NODES as f64).sqrt().ceil() as usize).max(2)
+    }
+}
+
+/// Block means of `d × d` nodes (missing nodes left out; a block without a valid node is
+/// missing), spacing `d` times the map's; the last blocks may be partial.
+fn block_means(map: &HeightMap, d: usize) -> HeightMap {
+    let (cx, cy) = (map.nx.div_ceil(d), map.ny.div_ceil(d));
+    let mut z = vec![f64::NAN; cx * cy];
+    for (j, out) in z.chunks_exact_mut(cx).enumerate() {
+        let mut sum = vec![(0.0, 0usize); cx];
+        for r in j * d..((j + 1) * d).min(map.ny) {
+            for (c, v) in map.z_um[r * map.nx..(r + 1) * map.nx].iter().enumerate() {
+                if v.is_finite() {
+                    let s = &mut sum[c / d];
+                    s.0 += v;
+                    s.1 += 1;
+                }
+            }
+        }
+        for (o, (s, n)) in out.iter_mut().zip(sum) {
+            if n > 0 {
+                *o = s / n as f64;
+            }
+        }
+    }
+    let mut m = HeightMap::new_nan(cx, cy, map.dx_um * d as f64, map.dy_um * d as f64);
+    m.z_um = z;
+    m
+}
+
 fn hann(i: usize, n: usize) -> f64 {
     if n <= 1 {
         1.0
@@ -114,9 +159,17 @@ fn vertex(fm: f64, f0: f64, fp: f64) -> f64 {
 
 /// The frequency (fx, fy) of the strongest spectral peak of a map, cycles/µm, refined to a
 /// small fraction of a bin on the continuous spectrum of the Hann-windowed heights.
+///
+/// A map of more than [`COARSE_NODES`] nodes is searched on its block means (the same
+/// extent, so the same frequency resolution; a texture of fewer than 2 blocks per period is
+/// then out of reach).
 pub fn spectral_peak(map: &HeightMap) -> Option<(f64, f64)> {
     if map.nx < 8 || map.ny < 8 {
         return None;
+    }
+    let d = decimation(map);
+    if d > 1 {
+        return spectral_peak(&block_means(map, d));
     }
     let w = centred(map, true);
     let (px, py) = (2 * map.nx, 2 * map.ny);
@@ -221,16 +274,19 @@ pub fn place(pred: &HeightMap, grid: &HeightMap, pl: &Placement) -> HeightMap {
         (pred.nx - 1) as f64 * pred.dx_um / 2.0,
         (pred.ny - 1) as f64 * pred.dy_um / 2.0,
     );
-    for r in 0..grid.ny {
-        for col in 0..grid.nx {
-            let mx = col as f64 * grid.dx_um - gcx - pl.shift_um[0];
-            let my = r as f64 * grid.dy_um - gcy - pl.shift_um[1];
-            // Rotate back by −rotation.
-            let (px, py) = (c * mx + s * my, -s * mx + c * my);
-            out.z_um[r * grid.nx + col] =
-                bilinear(pred, (px + pcx) / pred.dx_um, (py + pcy) / pred.dy_um);
-        }
-    }
+    use rayon::prelude::*;
+    out.z_um
+        .par_chunks_exact_mut(grid.nx)
+        .enumerate()
+        .for_each(|(r, row)| {
+            for (col, z) in row.iter_mut().enumerate() {
+                let mx = col as f64 * grid.dx_um - gcx - pl.shift_um[0];
+                let my = r as f64 * grid.dy_um - gcy - pl.shift_um[1];
+                // Rotate back by −rotation.
+                let (px, py) = (c * mx + s * my, -s * mx + c * my);
+                *z = bilinear(pred, (px + pcx) / pred.dx_um, (py + pcy) / pred.dy_um);
+            }
+        });
     out
 }
 
@@ -241,6 +297,9 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
     let (nx, ny) = (measured.nx, measured.ny);
     if placed.nx != nx || placed.ny != ny || nx < 2 || ny < 2 {
         return None;
+    }
+    if nx * ny > COARSE_NODES {
+        return coarse_to_fine(measured, placed);
     }
     let a = centred(measured, false);
     let b = centred(placed, false);
@@ -293,32 +352,163 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         }
     };
     let (mut tx, mut ty) = (lag(kx, px) + ox, lag(ky, py) + oy);
-    if px * py <= FOURIER_REFINE_MAX {
-        // Refine on the band-limited interpolation of the unbiased correlation (its
-        // Fourier series).
-        let mut h = 0.25;
-        for _ in 0..10 {
-            tx = parabolic_step(|t| unbiased(t, ty), tx, h);
-            ty = parabolic_step(|t| unbiased(tx, t), ty, h);
-            h *= 0.5;
-        }
-    } else {
-        // Large maps: a parabola through the unbiased correlation at whole lags.
-        let mut m = overlap.clone();
-        f.rows(&mut m);
-        f.columns(&mut m);
-        let u = |y: usize, x: usize| {
-            let k = (y % py) * px + (x % px);
-            r[k] / (m[k].re / scale).max(1.0)
-        };
-        let u0 = u(ky, kx);
-        tx = lag(kx, px) + vertex(u(ky, kx + px - 1), u0, u(ky, kx + 1));
-        ty = lag(ky, py) + vertex(u(ky + py - 1, kx), u0, u(ky + 1, kx));
+    // Refine on the band-limited interpolation of the unbiased correlation (its Fourier
+    // series); larger maps go through `coarse_to_fine`.
+    let mut h = 0.25;
+    for _ in 0..10 {
+        tx = parabolic_step(|t| unbiased(t, ty), tx, h);
+        ty = parabolic_step(|t| unbiased(tx, t), ty, h);
+        h *= 0.5;
     }
     let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };
     Some((
         [snap(tx) * measured.dx_um, snap(ty) * measured.dy_um],
         peak / norm,
+    ))
+}
+
+/// The whole lag (columns, rows) of the peak of the linear cross-correlation
+/// `Σ a[n + t]·b[n]` of two maps on one grid (mean removed, missing nodes as 0).
+fn whole_lag(measured: &HeightMap, placed: &HeightMap) -> Option<(i64, i64)> {
+    let (nx, ny) = (measured.nx, measured.ny);
+    let a = centred(measured, false);
+    let b = centred(placed, false);
+    let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
+    let fa = fft2_padded(&a, nx, ny, px, py);
+    let mut fb = fft2_padded(&b, nx, ny, px, py);
+    for (x, y) in fb.iter_mut().zip(&fa) {
+        *x = y * x.conj();
+    }
+    let mut f = Fft2::new(py, px, FftDirection::Inverse);
+    f.rows(&mut fb);
+    f.columns(&mut fb);
+    let (k, peak) = fb
+        .iter()
+        .enumerate()
+        .fold((0, f64::NEG_INFINITY), |b, (k, v)| {
+            if v.re > b.1 { (k, v.re) } else { b }
+        });
+    if !(peak.is_finite() && peak > 0.0) {
+        return None;
+    }
+    let lag = |k: usize, n: usize| {
+        if k < n / 2 {
+            k as i64
+        } else {
+            k as i64 - n as i64
+        }
+    };
+    Some((lag(k % px, px), lag(k / px, py)))
+}
+
+/// The sums of a whole lag t = (tx, ty) over the nodes valid in both maps (`a`, `b`
+/// mean-removed with missing nodes as 0, `va`, `vb` 1 where valid), `a` taken at n + t:
+/// [Σ a·b, Σ a, Σ b, Σ a², Σ b², count].
+fn lagged_sums(
+    (a, va): (&[f64], &[f64]),
+    (b, vb): (&[f64], &[f64]),
+    (nx, ny): (usize, usize),
+    (tx, ty): (i64, i64),
+) -> [f64; 6] {
+    let (ax, ay) = (tx.unsigned_abs() as usize, ty.unsigned_abs() as usize);
+    if ax >= nx || ay >= ny {
+        return [0.0; 6];
+    }
+    let w = nx - ax;
+    let (ca, cb) = if tx >= 0 { (ax, 0) } else { (0, ax) };
+    let mut s = [0.0; 6];
+    let (ra0, rb0) = if ty >= 0 { (ay, 0) } else { (0, ay) };
+    for i in 0..ny - ay {
+        let (ka, kb) = ((ra0 + i) * nx + ca, (rb0 + i) * nx + cb);
+        let mut t = [0.0; 6];
+        for l in 0..w {
+            let (x, y, p, q) = (a[ka + l], b[kb + l], va[ka + l], vb[kb + l]);
+            t[0] += x * y;
+            t[1] += x * q;
+            t[2] += y * p;
+            t[3] += x * x * q;
+            t[4] += y * y * p;
+            t[5] += p * q;
+        }
+        for (s, t) in s.iter_mut().zip(t) {
+            *s += t;
+        }
+    }
+    s
+}
+
+/// The correlation coefficient of the two maps over their common valid nodes at a lag,
+/// from its [`lagged_sums`] (`NaN` below 64 nodes).
+fn zncc(s: [f64; 6]) -> f64 {
+    let n = s[5];
+    if n < 64.0 {
+        return f64::NAN;
+    }
+    let cov = s[0] - s[1] * s[2] / n;
+    let (va, vb) = (s[3] - s[1] * s[1] / n, s[4] - s[2] * s[2] / n);
+    cov / (va * vb).sqrt()
+}
+
+/// [`correlation_shift`] of maps over [`COARSE_NODES`]: the whole-lag peak of the
+/// correlation of their block means, then the full-resolution correlation coefficient over
+/// the nodes both maps cover (zero-mean normalised, so neither the size of the overlap nor
+/// its local mean leans it) climbed from it to its highest whole lag, and refined by a
+/// parabola through its neighbours in each axis; the peak returned is that coefficient.
+fn coarse_to_fine(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2], f64)> {
+    use rayon::prelude::*;
+    let (nx, ny) = (measured.nx, measured.ny);
+    let d = decimation(measured);
+    let (lx, ly) = whole_lag(&block_means(measured, d), &block_means(placed, d))?;
+    let a = centred(measured, false);
+    let b = centred(placed, false);
+    let norm = (a.iter().map(|v| v * v).sum::<f64>() * b.iter().map(|v| v * v).sum::<f64>()).sqrt();
+    if norm.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let valid = |m: &HeightMap| -> Vec<f64> {
+        m.z_um
+            .iter()
+            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
+            .collect()
+    };
+    let (va, vb) = (valid(measured), valid(placed));
+    let at = |t: (i64, i64)| lagged_sums((&a, &va), (&b, &vb), (nx, ny), t);
+    // Climb the unbiased correlation (sum over count) from the coarse peak, a 3 × 3
+    // neighbourhood at a time (in parallel), until its centre is the highest.
+    let mut seen: std::collections::BTreeMap<(i64, i64), f64> = Default::default();
+    let (mut tx, mut ty) = (lx * d as i64, ly * d as i64);
+    for _ in 0..4 * d + 8 {
+        let around: Vec<(i64, i64)> = (ty - 1..=ty + 1)
+            .flat_map(|y| (tx - 1..=tx + 1).map(move |x| (x, y)))
+            .filter(|t| !seen.contains_key(t))
+            .collect();
+        let r: Vec<f64> = around.par_iter().map(|&t| zncc(at(t))).collect();
+        seen.extend(around.into_iter().zip(r));
+        let best = (ty - 1..=ty + 1)
+            .flat_map(|y| (tx - 1..=tx + 1).map(move |x| (x, y)))
+            .fold(((tx, ty), f64::NEG_INFINITY), |b, t| {
+                let v = seen[&t];
+                if v > b.1 { (t, v) } else { b }
+            });
+        if best.0 == (tx, ty) {
+            break;
+        }
+        (tx, ty) = best.0;
+    }
+    let u = |t: (i64, i64)| seen.get(&t).copied().unwrap_or(f64::NAN);
+    let peak = u((tx, ty));
+    if !peak.is_finite() {
+        return None;
+    }
+    let ox = vertex(u((tx - 1, ty)), peak, u((tx + 1, ty)));
+    let oy = vertex(u((tx, ty - 1)), peak, u((tx, ty + 1)));
+    let snap = |t: f64| if t.abs() < 1e-6 { 0.0 } else { t };
+    Some((
+        [
+            snap(tx as f64 + ox) * measured.dx_um,
+            snap(ty as f64 + oy) * measured.dy_um,
+        ],
+        peak,
     ))
 }
 
@@ -386,49 +576,60 @@ fn rotated_square(map: &HeightMap, feed_deg: f64) -> Option<(Vec<f64>, usize, f6
         return None;
     }
     let half = (n - 1) as f64 * d / 2.0;
-    let mut z = Vec::with_capacity(n * n);
-    for iv in 0..n {
+    let mut z = vec![0.0; n * n];
+    use rayon::prelude::*;
+    z.par_chunks_exact_mut(n).enumerate().for_each(|(iv, row)| {
         let v = iv as f64 * d - half;
-        for iu in 0..n {
+        for (iu, out) in row.iter_mut().enumerate() {
             let u = iu as f64 * d - half;
             let (x, y) = (ax + u * c - v * s, ay + u * s + v * c);
-            z.push(bilinear(map, x / map.dx_um, y / map.dy_um));
+            *out = bilinear(map, x / map.dx_um, y / map.dy_um);
         }
-    }
+    });
     Some((z, n, d))
 }
 
 /// Mean power spectrum of lines (each mean-removed, missing values as its mean, Hann window,
-/// padded [`PAD_1D`] times).
+/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5).
 fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
     let n = lines.first().map_or(0, Vec::len);
-    let m = PAD_1D * n.max(1);
+    let m = super::fft::fast_len(PAD_1D * n.max(1));
     let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(m);
     let mut power = vec![0.0; m / 2 + 1];
     let mut used = 0usize;
-    for line in lines {
+    let window: Vec<f64> = (0..n).map(|k| hann(k, n)).collect();
+    // The lines' spectra in parallel, a few at a time, summed in line order.
+    let spectrum = |line: &Vec<f64>| -> Option<Vec<Complex64>> {
         let valid = line.iter().filter(|v| v.is_finite()).count();
         if 2 * valid < n {
-            continue;
+            return None;
         }
         let mean = finite_mean(line);
         let mut buf = vec![Complex64::default(); m];
-        for (k, v) in line.iter().enumerate() {
+        for ((k, v), w) in line.iter().enumerate().zip(&window) {
             let v = if v.is_finite() { v - mean } else { 0.0 };
-            buf[k] = Complex64::new(v * hann(k, n), 0.0);
+            buf[k] = Complex64::new(v * w, 0.0);
         }
         fft.process(&mut buf);
-        for (p, b) in power.iter_mut().zip(&buf) {
-            *p += b.norm_sqr() / (n as f64).powi(2);
+        buf.truncate(m / 2 + 1);
+        Some(buf)
+    };
+    for group in lines.chunks(LINES_AT_ONCE) {
+        use rayon::prelude::*;
+        let spectra: Vec<Option<Vec<Complex64>>> = group.par_iter().map(spectrum).collect();
+        for buf in spectra.into_iter().flatten() {
+            for (p, b) in power.iter_mut().zip(&buf) {
+                *p += b.norm_sqr() / (n as f64).powi(2);
+            }
+            used += 1;
         }
-        used += 1;
     }
     for p in power.iter_mut() {
         *p /= used.max(1) as f64;
     }
     let df = 1.0 / (m as f64 * d);
     let freq: Vec<f64> = (0..power.len()).map(|k| k as f64 * df).collect();
-    let k0 = ((MIN_CYCLES * PAD_1D as f64).ceil() as usize).max(1);
+    let k0 = ((MIN_CYCLES * m as f64 / n.max(1) as f64).ceil() as usize).max(1);
     let mut peak = f64::NAN;
     if used > 0 && power.len() > k0 + 2 {
         let k = (k0..power.len() - 1).fold(k0, |b, k| if power[k] > power[b] { k } else { b });
@@ -662,5 +863,41 @@ mod tests {
         // Flat or too short profiles do not align.
         assert!(align_profile((&px, &vec![1.0; 1000]), (&mx, &mz)).is_none());
         assert!(align_profile((&px[..2], &pz[..2]), (&mx, &mz)).is_none());
+    }
+
+    /// A map over `COARSE_NODES` goes through the block means and the climb at full
+    /// resolution: a smooth bump field moved by a known fractional shift, with missing
+    /// nodes, is found to a small fraction of a node, and its lay is found on block means.
+    #[test]
+    fn large_maps_are_registered_coarse_to_fine() {
+        let n = 800;
+        assert!(n * n > COARSE_NODES);
+        let f = |x: f64, y: f64| {
+            (x / 37.0).sin() * (y / 23.0).cos() + 0.5 * ((x + 2.0 * y) / 61.0).sin()
+        };
+        let (sx, sy) = (13.3, -7.6);
+        let mut a = Vec::with_capacity(n * n);
+        let mut b = Vec::with_capacity(n * n);
+        for r in 0..n {
+            for c in 0..n {
+                let (x, y) = (c as f64, r as f64);
+                // measured(n + t) = placed(n): measured is placed moved by (sx, sy).
+                a.push(if (r * 7 + c * 13) % 97 == 0 {
+                    f64::NAN
+                } else {
+                    f(x - sx, y - sy)
+                });
+                b.push(f(x, y));
+            }
+        }
+        let meas = HeightMap::from_rows(n, n, 1.0, 1.0, a).unwrap();
+        let placed = HeightMap::from_rows(n, n, 1.0, 1.0, b).unwrap();
+        let (shift, peak) = correlation_shift(&meas, &placed).unwrap();
+        assert!((shift[0] - sx).abs() < 0.2, "{shift:?}");
+        assert!((shift[1] - sy).abs() < 0.2, "{shift:?}");
+        assert!(peak > 0.9, "{peak}");
+        let big = stripes(800, 800, 30.0, 40.0);
+        let d = feed_direction_deg(&big).unwrap();
+        assert!((d - 30.0).abs() < 0.1, "{d}");
     }
 }

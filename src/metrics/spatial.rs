@@ -75,22 +75,71 @@ fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) 
     buf.iter().map(|v| v.re * scale).collect()
 }
 
+/// [`linear_autocorr`] of two real fields at once: one complex field `a + i·b`, whose
+/// spectrum gives both power spectra by its conjugate symmetry, and one inverse transform of
+/// `|A|² + i·|B|²` (both even and real, so the real and imaginary parts of the result are
+/// the two autocorrelations). Half the transforms of two separate calls.
+fn linear_autocorr_pair(
+    a: &[f64],
+    b: &[f64],
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut buf = vec![Complex64::default(); px * py];
+    for r in 0..ny {
+        for c in 0..nx {
+            buf[r * px + c] = Complex64::new(a[r * nx + c], b[r * nx + c]);
+        }
+    }
+    let mut fwd = Fft2::new(py, px, FftDirection::Forward);
+    fwd.rows(&mut buf);
+    fwd.columns(&mut buf);
+    // A = (Z[k] + conj Z[−k]) / 2, B = (Z[k] − conj Z[−k]) / 2i: |A|² and |B|² at k and −k
+    // (the same values), written in place pair by pair.
+    for ky in 0..py {
+        let my = (py - ky) % py;
+        for kx in 0..px {
+            let mx = (px - kx) % px;
+            let (k, m) = (ky * px + kx, my * px + mx);
+            if m < k {
+                continue;
+            }
+            let (z, zm) = (buf[k], buf[m].conj());
+            let pa = (z + zm).norm_sqr() / 4.0;
+            let pb = (z - zm).norm_sqr() / 4.0;
+            buf[k] = Complex64::new(pa, pb);
+            buf[m] = Complex64::new(pa, pb);
+        }
+    }
+    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
+    inv.columns(&mut buf);
+    inv.rows(&mut buf);
+    let scale = 1.0 / (px * py) as f64;
+    (
+        buf.iter().map(|v| v.re * scale).collect(),
+        buf.iter().map(|v| v.im * scale).collect(),
+    )
+}
+
 /// The normalised ACF on the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
 /// `(ny−1, nx−1)`.
 pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
     let (nx, ny) = (map.nx, map.ny);
-    let (px, py) = (2 * nx, 2 * ny);
+    // Any padding to 2n − 1 or more gives the linear ACF; lengths of factors 2, 3, 5 are fast.
+    let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
     let (e, missing) = centred(map);
-    let raw = linear_autocorr(e, nx, ny, px, py);
-    let counts = if missing {
+    let (raw, counts) = if missing {
         let mask: Vec<f64> = map
             .z_um
             .iter()
             .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
             .collect();
-        Some(linear_autocorr(mask, nx, ny, px, py))
+        let (raw, counts) = linear_autocorr_pair(&e, &mask, nx, ny, px, py);
+        (raw, Some(counts))
     } else {
-        None
+        (linear_autocorr(e, nx, ny, px, py), None)
     };
     let (wy, wx) = (2 * ny - 1, 2 * nx - 1);
     let mut out = vec![f64::NAN; wy * wx];

@@ -1,5 +1,6 @@
-//! `crest report`: a regression study and its measured table read from disk, the study's
-//! tool loaded (relative to the study file) with the study's run-out, and every case
+//! `crest report`: a regression study and its measured table read from disk (the height
+//! maps its rows name in `measured_file` read and measured, relative to the table), the
+//! study's tool loaded (relative to the study file) with the study's run-out, and every case
 //! predicted and held against its measurement.
 
 use crate::io::text::read_text;
@@ -7,6 +8,73 @@ use crate::study::calibrate::{Calibration, Free};
 use crate::study::compare::{Provenance, Regression, regress};
 use miette::{WrapErr, miette};
 use std::path::Path;
+
+/// Why a measured file a table names cannot be used: the table, the row's line and the file
+/// as written, and the cause.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+#[non_exhaustive]
+pub enum MeasuredFileError {
+    /// The file is missing or cannot be read as a height map.
+    #[error("{table}:{line}: measured_file `{file}` cannot be read")]
+    Read {
+        /// The measured table, as given.
+        table: String,
+        /// 1-based line of the row.
+        line: u64,
+        /// The file as written in the table.
+        file: String,
+        /// The reader's error (it names the path relative to the working directory).
+        #[source]
+        source: Box<crate::io::HeightMapError>,
+    },
+    /// The map was read but its parameters cannot be computed.
+    #[error("{table}:{line}: measured_file `{file}` cannot be measured")]
+    Measure {
+        /// The measured table, as given.
+        table: String,
+        /// 1-based line of the row.
+        line: u64,
+        /// The file as written in the table.
+        file: String,
+        /// Why.
+        #[source]
+        source: crate::metrics::MetricsError,
+    },
+}
+
+/// Read and measure every height map the rows of `table` name (`measured_file`, relative to
+/// the directory of `table_path`), with the predictions' filters
+/// ([`crate::study::measured::measure_map`]), and fill the values the rows leave empty.
+pub fn measure_files(
+    table: &mut crate::study::measured::MeasuredTable,
+    table_path: &Path,
+) -> Result<(), MeasuredFileError> {
+    let dir = table_path.parent().unwrap_or(Path::new("."));
+    let name = table_path.display().to_string();
+    for row in &mut table.rows {
+        let Some(file) = row.measured_file.clone() else {
+            continue;
+        };
+        let map = crate::io::read_heightmap(&dir.join(&file), &crate::io::ReadOptions::default())
+            .map_err(|source| MeasuredFileError::Read {
+            table: name.clone(),
+            line: row.line,
+            file: file.clone(),
+            source: Box::new(source),
+        })?;
+        let values = crate::study::measured::measure_map(&map).map_err(|source| {
+            MeasuredFileError::Measure {
+                table: name.clone(),
+                line: row.line,
+                file: file.clone(),
+                source,
+            }
+        })?;
+        row.fill_from_file(&values);
+    }
+    table.note_file_columns();
+    Ok(())
+}
 
 /// The inputs of a regression: the measured table, the study and its tool (run-out applied).
 pub struct Inputs {
@@ -27,10 +95,11 @@ pub struct Inputs {
 pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
     let measured_name = measured.display().to_string();
     let study_name = study_path.display().to_string();
-    let table = crate::io::measured::parse_measured(
+    let mut table = crate::io::measured::parse_measured(
         &read_text(measured, "measured table", crate::io::input::TABLE)?,
         &measured_name,
     )?;
+    measure_files(&mut table, measured)?;
     let mut study = crate::config::regression::parse_study(
         &read_text(study_path, "study", crate::io::input::CONFIG)?,
         &study_name,

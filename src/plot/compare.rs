@@ -3,7 +3,8 @@
 //! spectra along and across it, as SVG documents in memory.
 
 use super::chart::{Chart, Series, finite_range, label_font, tick_font, title_font};
-use super::heightmap::{colour_bar, viridis};
+use super::chart::{tick_decimals, tick_label};
+use super::heightmap::{colour_bar_with, diverging, viridis};
 use super::{Draw, DrawResult, Format, PlotError, render_bytes};
 use crate::metrics::LaySpectra;
 use crate::surface::HeightMap;
@@ -13,11 +14,16 @@ use plotters::prelude::*;
 /// Cells drawn along the longer side of a map at most.
 const MAX_CELLS: usize = 200;
 
+/// The colour of a cell without a valid node.
+const MISSING: RGBColor = RGBColor(80, 80, 80);
+
 struct MapFigure<'a> {
     title: &'a str,
     map: &'a HeightMap,
     range: (f64, f64),
     label: &'a str,
+    /// A signed quantity: the diverging scale, white at zero.
+    signed: bool,
 }
 
 impl Draw for MapFigure<'_> {
@@ -32,9 +38,16 @@ impl Draw for MapFigure<'_> {
             .x_label_area_size(55)
             .y_label_area_size(75)
             .build_cartesian_2d(0.0..x1, 0.0..y1)?;
+        let (dx, dy) = (tick_decimals(x1), tick_decimals(y1));
+        let (fx, fy) = (
+            move |v: &f64| tick_label(*v, dx),
+            move |v: &f64| tick_label(*v, dy),
+        );
         chart
             .configure_mesh()
             .disable_mesh()
+            .x_label_formatter(&fx)
+            .y_label_formatter(&fy)
             .x_desc("x [µm]")
             .y_desc("y [µm]")
             .axis_desc_style(label_font())
@@ -43,6 +56,7 @@ impl Draw for MapFigure<'_> {
         let b = m.nx.max(m.ny).div_ceil(MAX_CELLS).max(1);
         let (cx, cy) = (m.nx.div_ceil(b), m.ny.div_ceil(b));
         let (lo, hi) = self.range;
+        let colour: &dyn Fn(f64) -> RGBColor = if self.signed { &diverging } else { &viridis };
         let mut cells = Vec::new();
         for j in 0..cy {
             for i in 0..cx {
@@ -56,29 +70,34 @@ impl Draw for MapFigure<'_> {
                         }
                     }
                 }
-                if n > 0 {
-                    let (xa, ya) = ((i * b) as f64 * m.dx_um, (j * b) as f64 * m.dy_um);
-                    let (xb, yb) = (
-                        (xa + b as f64 * m.dx_um).min(x1),
-                        (ya + b as f64 * m.dy_um).min(y1),
-                    );
-                    let t = (s / n as f64 - lo) / (hi - lo).max(1e-300);
-                    cells.push(Rectangle::new([(xa, ya), (xb, yb)], viridis(t).filled()));
-                }
+                let (xa, ya) = ((i * b) as f64 * m.dx_um, (j * b) as f64 * m.dy_um);
+                let (xb, yb) = (
+                    (xa + b as f64 * m.dx_um).min(x1),
+                    (ya + b as f64 * m.dy_um).min(y1),
+                );
+                // A cell without a valid node is missing: dark grey on either scale.
+                let fill = if n > 0 {
+                    colour((s / n as f64 - lo) / (hi - lo).max(1e-300))
+                } else {
+                    MISSING
+                };
+                cells.push(Rectangle::new([(xa, ya), (xb, yb)], fill.filled()));
             }
         }
         chart.draw_series(cells)?;
-        colour_bar(&bar, lo, hi, self.label)?;
+        colour_bar_with(&bar, lo, hi, self.label, colour)?;
         Ok(())
     }
 }
 
-/// A height map as an SVG colour map over `range` (µm).
+/// A height map as an SVG colour map over `range` (µm); `signed` (a difference) takes a
+/// diverging scale, white at zero.
 pub fn map_svg(
     map: &HeightMap,
     title: &str,
     range: (f64, f64),
     label: &str,
+    signed: bool,
 ) -> Result<String, PlotError> {
     if map.nx == 0 || map.ny == 0 {
         return Err(PlotError::Empty(title.to_string()));
@@ -95,6 +114,7 @@ pub fn map_svg(
         map,
         range,
         label,
+        signed,
     };
     let bytes = render_bytes(Format::Svg, size, &fig)?;
     String::from_utf8(bytes).map_err(|e| PlotError::Draw(e.to_string()))

@@ -143,6 +143,38 @@ pub(super) fn colour_bar<DB: DrawingBackend>(
     hi: f64,
     label: &str,
 ) -> DrawResult<DB> {
+    colour_bar_with(bar, lo, hi, label, &viridis)
+}
+
+/// A diverging colour scale for signed values (a difference): blue below the middle, white
+/// at it, red above (ColorBrewer RdBu, reversed); `t` in [0, 1], 0.5 = zero.
+pub fn diverging(t: f64) -> RGBColor {
+    const STOPS: [(f64, [f64; 3]); 5] = [
+        (0.0, [33.0, 102.0, 172.0]),
+        (0.25, [146.0, 197.0, 222.0]),
+        (0.5, [247.0, 247.0, 247.0]),
+        (0.75, [244.0, 165.0, 130.0]),
+        (1.0, [178.0, 24.0, 43.0]),
+    ];
+    let t = if t.is_nan() { 0.5 } else { t.clamp(0.0, 1.0) };
+    let k = STOPS
+        .windows(2)
+        .position(|w| t <= w[1].0)
+        .unwrap_or(STOPS.len() - 2);
+    let ((t0, a), (t1, b)) = (STOPS[k], STOPS[k + 1]);
+    let u = (t - t0) / (t1 - t0);
+    let c = |i: usize| (a[i] + u * (b[i] - a[i])).round() as u8;
+    RGBColor(c(0), c(1), c(2))
+}
+
+/// [`colour_bar`] in the colours of `colour` (t in [0, 1] from `lo` to `hi`).
+pub(super) fn colour_bar_with<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    lo: f64,
+    hi: f64,
+    label: &str,
+    colour: &dyn Fn(f64) -> RGBColor,
+) -> DrawResult<DB> {
     let mut scale = ChartBuilder::on(bar)
         .margin_top(14)
         .margin_bottom(69)
@@ -164,7 +196,7 @@ pub(super) fn colour_bar<DB: DrawingBackend>(
     scale.draw_series((0..n).map(|i| {
         let a = lo + (hi - lo) * i as f64 / n as f64;
         let b = lo + (hi - lo) * (i + 1) as f64 / n as f64;
-        let color = viridis((i as f64 + 0.5) / n as f64);
+        let color = colour((i as f64 + 0.5) / n as f64);
         Rectangle::new([(0.0, a), (1.0, b)], color.filled())
     }))?;
     Ok(())

@@ -168,7 +168,11 @@ impl Draw for Figure<'_> {
         let (dx_ticks, dy_ticks) = (tick_decimals(x1 - x0), tick_decimals(ymax));
         let fx = move |v: &f64| tick_label(*v, dx_ticks);
         let fy = move |v: &f64| tick_label(*v, dy_ticks);
-        let y_desc = format!("{parameter} (µm)");
+        let y_desc = if parameter == "Sdq" {
+            "Sdq (µm/µm)".to_string()
+        } else {
+            format!("{parameter} (µm)")
+        };
         style_mesh(
             chart
                 .configure_mesh()

@@ -28,6 +28,7 @@ pub fn calibration_json(cal: &Calibration) -> serde_json::Value {
         "fit_rms_pct": cal.fit_rms_pct,
         "constant_loo_rms_pct": cal.constant_loo_rms_pct,
         "factor_loo_rms_pct": cal.factor_loo_rms_pct,
+        "factors": cal.factors.iter().map(|(n, v)| (n.clone(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
         "geometric_constant": cal.geometric_constant,
         "chi2": cal.chi2,
         "dof": cal.dof,
@@ -326,6 +327,7 @@ mod tests {
             fit_rms_pct: 0.0,
             constant_loo_rms_pct: 0.0,
             factor_loo_rms_pct: 0.0,
+            factors: Vec::new(),
             geometric_constant: true,
         };
         let text = calibration_csv(&cal);

@@ -246,26 +246,39 @@ fn facts(c: &Comparison) -> Vec<String> {
     ]
 }
 
-/// The figures: (file, caption, SVG).
+/// The figures: (file, caption, SVG). The height maps (`.png`) are rasterised from their SVG
+/// by [`outputs`] (a map's thousands of cells make a large SVG); the line charts stay SVG.
 fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, crate::plot::PlotError> {
     use crate::plot::compare as pc;
     let (both, diff) = pc::ranges(&c.predicted, &c.measured, &c.difference);
     let label = "height [µm]";
     let mut out = vec![
         (
-            "predicted.svg".to_string(),
+            "predicted.png".to_string(),
             "Predicted height map (processed, on the measured grid)".to_string(),
-            pc::map_svg(&c.predicted, "Predicted", both, label)?,
+            pc::map_svg(
+                &c.predicted,
+                "Predicted (processed, placed on the measured grid)",
+                both,
+                label,
+                false,
+            )?,
         ),
         (
-            "measured.svg".to_string(),
-            "Measured height map (processed), same colour scale".to_string(),
-            pc::map_svg(&c.measured, "Measured", both, label)?,
+            "measured.png".to_string(),
+            "Measured height map (processed), same colour scale (dark grey = missing)".to_string(),
+            pc::map_svg(&c.measured, "Measured (processed)", both, label, false)?,
         ),
         (
-            "difference.svg".to_string(),
-            "Difference predicted − measured".to_string(),
-            pc::map_svg(&c.difference, "Predicted − measured", diff, label)?,
+            "difference.png".to_string(),
+            "Difference predicted − measured (white = equal, red = prediction higher, dark grey = missing)".to_string(),
+            pc::map_svg(
+                &c.difference,
+                "Difference: predicted − measured",
+                diff,
+                "difference [µm]",
+                true,
+            )?,
         ),
     ];
     if let (Some(p), Some(m)) = (&c.lay_predicted, &c.lay_measured) {
@@ -308,7 +321,12 @@ fn render_markdown(c: &Comparison, figs: &[(String, String, String)], command: &
     s
 }
 
-fn render_html(c: &Comparison, figs: &[(String, String, String)], command: &str) -> String {
+fn render_html(
+    c: &Comparison,
+    figs: &[(String, String, String)],
+    pngs: &[Option<Vec<u8>>],
+    command: &str,
+) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -336,8 +354,21 @@ fn render_html(c: &Comparison, figs: &[(String, String, String)], command: &str)
         let _ = writeln!(s, "<tr>{cells}</tr>");
     }
     let _ = writeln!(s, "</table>");
-    for (_, caption, svg) in figs {
-        let body = svg.find("<svg").map_or(svg.as_str(), |k| &svg[k..]);
+    for ((file, caption, svg), png) in figs.iter().zip(pngs) {
+        let body = match png {
+            Some(bytes) => {
+                use base64::Engine;
+                format!(
+                    "<img alt=\"{}\" src=\"data:image/png;base64,{}\">",
+                    esc(file),
+                    base64::engine::general_purpose::STANDARD.encode(bytes)
+                )
+            }
+            None => svg
+                .find("<svg")
+                .map_or(svg.as_str(), |k| &svg[k..])
+                .to_string(),
+        };
         let _ = writeln!(
             s,
             "<figure>{body}<figcaption>{}</figcaption></figure>",
@@ -348,18 +379,32 @@ fn render_html(c: &Comparison, figs: &[(String, String, String)], command: &str)
     s
 }
 
-/// Every output file of a comparison, rendered in memory: `compare.md`, `compare.html` and
-/// the SVG figures.
+/// Every output file of a comparison, rendered in memory: `compare.md`, `compare.html` (the
+/// figures inline), the height maps as PNG (`predicted.png`, `measured.png`,
+/// `difference.png`) and the profiles and spectra as SVG.
 pub fn outputs(
     c: &Comparison,
     command: &str,
 ) -> Result<Vec<(String, Vec<u8>)>, crate::plot::PlotError> {
     let figs = figures(c)?;
+    let pngs = figs
+        .iter()
+        .map(|(f, _, svg)| {
+            if f.ends_with(".png") {
+                crate::plot::svg_to_png(svg)
+                    .map(Some)
+                    .map_err(|e| crate::plot::PlotError::Draw(e.to_string()))
+            } else {
+                Ok(None)
+            }
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let md = render_markdown(c, &figs, command);
-    let html = render_html(c, &figs, command);
+    let html = render_html(c, &figs, &pngs, command);
     let mut out: Vec<(String, Vec<u8>)> = figs
         .into_iter()
-        .map(|(f, _, svg)| (f, svg.into_bytes()))
+        .zip(pngs)
+        .map(|((f, _, svg), png)| (f, png.unwrap_or_else(|| svg.into_bytes())))
         .collect();
     out.push(("compare.md".to_string(), md.into_bytes()));
     out.push(("compare.html".to_string(), html.into_bytes()));

@@ -35,7 +35,11 @@ fn table_rows(r: &Regression) -> Vec<[String; 10]> {
             rows.push([
                 fmt_g(c.lead_deg),
                 c.side.name().to_string(),
-                cmp.parameter.clone(),
+                if cmp.parameter == "Sdq" {
+                    "Sdq (a ratio, not µm)".to_string()
+                } else {
+                    cmp.parameter.clone()
+                },
                 fmt_stat(&cmp.measured, 4),
                 format!("{:.4}", cmp.simulated_um),
                 format!("{:.3}", cmp.ratio),
@@ -353,11 +357,32 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
     let _ = writeln!(s);
 
     let _ = writeln!(s, "## Measured samples\n");
-    let _ = writeln!(s, "| lead (°) | side | sample | Ra (µm) | Rz (µm) |");
-    let _ = writeln!(s, "|---|---|---|---|---|");
+    // The measured files' column only when a row names one.
+    let with_files = r
+        .cases
+        .iter()
+        .any(|c| c.measured.files.iter().any(|f| !f.is_empty()));
+    let (file_head, file_rule) = if with_files {
+        (" measured file |", "---|")
+    } else {
+        ("", "")
+    };
+    let _ = writeln!(
+        s,
+        "| lead (°) | side | sample | Ra (µm) | Rz (µm) |{file_head}"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|{file_rule}");
     for c in &r.cases {
         let m = &c.measured;
         for (i, name) in m.samples.iter().enumerate() {
+            let file = if with_files {
+                format!(
+                    " {} |",
+                    super::md_cell(m.files.get(i).map_or("", String::as_str))
+                )
+            } else {
+                String::new()
+            };
             let ra = m
                 .ra_values_um
                 .get(i)
@@ -368,7 +393,7 @@ pub fn render_markdown(r: &Regression, plots: &[(String, String)]) -> String {
                 .map_or("".to_string(), |v| format!("{v:.3}"));
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {ra} | {rz} |",
+                "| {} | {} | {} | {ra} | {rz} |{file}",
                 fmt_g(c.lead_deg),
                 super::md_cell(c.side.name()),
                 super::md_cell(name)

@@ -264,6 +264,9 @@ pub struct Calibration {
     pub constant_loo_rms_pct: f64,
     /// The same for the constant-factor reference (geometric × one factor per parameter).
     pub factor_loo_rms_pct: f64,
+    /// The constant factor per parameter (`Rz`, `Ra`) fitted on every case: measured ≈
+    /// factor × geometric (weighted least squares).
+    pub factors: Vec<(String, f64)>,
     /// Whether the geometric prediction is the same for every case (within 0.5 %).
     pub geometric_constant: bool,
 }
@@ -639,6 +642,11 @@ pub fn calibrate(
         fit_rms_pct: rms(&calibrated),
         constant_loo_rms_pct: rms(&constant_loo),
         factor_loo_rms_pct: rms(&factor_loo),
+        factors: [(true, "Rz"), (false, "Ra")]
+            .into_iter()
+            .filter(|(rz, _)| targets.iter().any(|t| t.rz == *rz))
+            .map(|(rz, name)| (name.to_string(), factor(&|_: &Target| true, rz)))
+            .collect(),
         geometric_constant: spread(true) && spread(false),
     })
 }

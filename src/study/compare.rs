@@ -240,7 +240,7 @@ pub fn regress(
                         .join(", ")
                 )));
             };
-            let across = super::stepover::predict(cutter, ae, &p.profile_um)
+            let across = super::stepover::predict(cutter, ae, &p.profile_um, p.profile_step_mm)
                 .map_err(|e| err(format!("case {}: {e}", i + 1)))?;
             for (param, stat) in extra {
                 comparisons.push(Comparison::new(

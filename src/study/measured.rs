@@ -71,8 +71,8 @@ impl<'de> serde::Deserialize<'de> for Side {
 }
 
 /// A roughness parameter a measured table can hold: feed-direction profile Rz and Ra
-/// (`Rz_um`, `Ra_um`), areal Sz and Sa (`Sz_um`, `Sa_um`) and stepover-direction profile Rz
-/// and Ra (`Rz_stepover_um`, `Ra_stepover_um`).
+/// (`Rz_um`, `Ra_um`), areal Sz, Sa, Sq (`Sz_um`, `Sa_um`, `Sq_um`) and Sdq (`Sdq`, a
+/// ratio) and stepover-direction profile Rz and Ra (`Rz_stepover_um`, `Ra_stepover_um`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum Param {
     /// Feed-direction profile Rz.
@@ -87,18 +87,52 @@ pub enum Param {
     RzStepover,
     /// Stepover-direction profile Ra.
     RaStepover,
+    /// Areal Sq.
+    Sq,
+    /// Areal Sdq (root mean square gradient, a ratio).
+    Sdq,
 }
 
 impl Param {
     /// Every parameter, in the order reports compare them.
-    pub const ALL: [Param; 6] = [
+    pub const ALL: [Param; 8] = [
         Param::Rz,
         Param::Ra,
         Param::Sz,
         Param::Sa,
+        Param::Sq,
+        Param::Sdq,
         Param::RzStepover,
         Param::RaStepover,
     ];
+
+    /// The parameters beyond feed-direction Rz and Ra, in the order of [`Extra`].
+    pub const EXTRA: [Param; 6] = [
+        Param::Sz,
+        Param::Sa,
+        Param::RzStepover,
+        Param::RaStepover,
+        Param::Sq,
+        Param::Sdq,
+    ];
+
+    /// The parameters a measured file gives (feed-direction profile and areal).
+    pub const FROM_FILE: [Param; 6] = [
+        Param::Rz,
+        Param::Ra,
+        Param::Sz,
+        Param::Sa,
+        Param::Sq,
+        Param::Sdq,
+    ];
+
+    /// The unit of its values (`µm`, or empty for the ratio Sdq).
+    pub fn unit(self) -> &'static str {
+        match self {
+            Param::Sdq => "",
+            _ => "µm",
+        }
+    }
 
     /// The column of the measured table.
     pub fn column(self) -> &'static str {
@@ -109,6 +143,8 @@ impl Param {
             Param::Sa => "Sa_um",
             Param::RzStepover => "Rz_stepover_um",
             Param::RaStepover => "Ra_stepover_um",
+            Param::Sq => "Sq_um",
+            Param::Sdq => "Sdq",
         }
     }
 
@@ -121,6 +157,8 @@ impl Param {
             Param::Sa => "Sa",
             Param::RzStepover => "Rz stepover",
             Param::RaStepover => "Ra stepover",
+            Param::Sq => "Sq",
+            Param::Sdq => "Sdq",
         }
     }
 
@@ -138,6 +176,8 @@ impl Param {
             Param::Sa => "sa",
             Param::RzStepover => "rz-stepover",
             Param::RaStepover => "ra-stepover",
+            Param::Sq => "sq",
+            Param::Sdq => "sdq",
         }
     }
 
@@ -148,8 +188,8 @@ impl Param {
 }
 
 /// Measured values of the parameters beyond feed-direction Rz and Ra (areal, stepover
-/// direction), in [`Param::ALL`] order; absent ones are `None`.
-pub type Extra<T> = [Option<T>; 4];
+/// direction), in [`Param::EXTRA`] order; absent ones are `None`.
+pub type Extra<T> = [Option<T>; 6];
 
 fn extra_index(p: Param) -> Option<usize> {
     match p {
@@ -158,6 +198,8 @@ fn extra_index(p: Param) -> Option<usize> {
         Param::Sa => Some(1),
         Param::RzStepover => Some(2),
         Param::RaStepover => Some(3),
+        Param::Sq => Some(4),
+        Param::Sdq => Some(5),
     }
 }
 
@@ -178,9 +220,13 @@ pub struct MeasuredRow {
     pub ra_um: Option<f64>,
     /// Rz, µm (when the table has the column).
     pub rz_um: Option<f64>,
-    /// Sz, Sa, stepover Rz, stepover Ra, µm (when the table has the columns).
+    /// Sz, Sa, stepover Rz, stepover Ra, Sq (µm) and Sdq (when the table has the columns or
+    /// the row names a measured file).
     #[serde(skip_serializing_if = "no_extra")]
     pub extra_um: Extra<f64>,
+    /// The measured file the row names (`measured_file`), as written in the table.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured_file: Option<String>,
     /// 1-based line in the file.
     pub line: u64,
 }
@@ -192,12 +238,16 @@ pub struct Columns {
     pub ra: bool,
     /// The table has `Rz_um`.
     pub rz: bool,
-    /// The table has `Sz_um`, `Sa_um`, `Rz_stepover_um`, `Ra_stepover_um`.
+    /// The table has `Sz_um`, `Sa_um`, `Rz_stepover_um`, `Ra_stepover_um`, `Sq_um`, `Sdq`
+    /// (or, for those a measured file gives, a row that names one).
     #[serde(skip_serializing_if = "no_extra_columns")]
-    pub extra: [bool; 4],
+    pub extra: [bool; 6],
+    /// The table has `measured_file`.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub file: bool,
 }
 
-fn no_extra_columns(e: &[bool; 4]) -> bool {
+fn no_extra_columns(e: &[bool; 6]) -> bool {
     !e.iter().any(|b| *b)
 }
 
@@ -269,6 +319,10 @@ pub struct MeasuredCase {
     pub side: Side,
     /// Sample labels in file order.
     pub samples: Vec<String>,
+    /// The measured file of each sample as written in the table (empty when the row names
+    /// none).
+    #[serde(skip_serializing_if = "no_files")]
+    pub files: Vec<String>,
     /// Ra per sample, µm (file order).
     pub ra_values_um: Vec<f64>,
     /// Rz per sample, µm (file order).
@@ -277,15 +331,20 @@ pub struct MeasuredCase {
     pub ra: Option<Stat>,
     /// Rz statistics, µm.
     pub rz: Option<Stat>,
-    /// Per sample values of Sz, Sa, stepover Rz, stepover Ra, µm (empty when absent).
+    /// Per sample values of Sz, Sa, stepover Rz, stepover Ra, Sq (µm) and Sdq (empty when
+    /// absent).
     #[serde(skip_serializing_if = "no_extra_values")]
-    pub extra_values_um: [Vec<f64>; 4],
+    pub extra_values_um: [Vec<f64>; 6],
     /// Their statistics, µm.
     #[serde(skip_serializing_if = "no_extra")]
     pub extra: Extra<Stat>,
 }
 
-fn no_extra_values(e: &[Vec<f64>; 4]) -> bool {
+fn no_files(files: &[String]) -> bool {
+    files.iter().all(String::is_empty)
+}
+
+fn no_extra_values(e: &[Vec<f64>; 6]) -> bool {
     e.iter().all(Vec::is_empty)
 }
 
@@ -309,6 +368,112 @@ impl MeasuredCase {
     }
 }
 
+/// The sampling lengths of a measured file's feed-direction profiles (as `crest metrics
+/// --profile` by default, and as the predictions: Rz is the mean of 5 peak-to-valley heights).
+pub const FILE_SECTIONS: usize = 5;
+
+/// The parameters of a measured height map, in [`Param::FROM_FILE`] order (Rz, Ra, Sz, Sa
+/// in µm, Sq in µm, Sdq), with the predictions' filters: the least-squares plane removed
+/// (the predictions lie on a plane) and no S- or L-filter (the predictions have none).
+///
+/// * Sz, Sa, Sq, Sdq: `crest metrics FILE --level plane` (areal, missing nodes left out).
+/// * Rz, Ra along the feed (the map's x, its rows, as crest writes maps): the mean over the
+///   rows of `crest metrics FILE --level plane --profile row:K` (each row levelled by its
+///   own line, Rz over [`FILE_SECTIONS`] sampling lengths); rows without a valid value
+///   (missing nodes) are left out.
+pub fn measure_map(
+    map: &crate::surface::HeightMap,
+) -> Result<[f64; 6], crate::metrics::MetricsError> {
+    use crate::metrics::{
+        Level, MetricsError, ParamSet, Preprocess, ProfileSpec, areal_parameters, extract_profile,
+        preprocess_map, preprocess_profile, profile_parameters,
+    };
+    let pp = Preprocess {
+        level: Level::Plane,
+        ..Preprocess::default()
+    };
+    let areal = areal_parameters(
+        &preprocess_map(map, &pp)?,
+        &ParamSet::parse("Sz,Sa,Sq,Sdq", false)?,
+    )?;
+    let set = ParamSet::parse("Rz,Ra", true)?;
+    let (mut rz, mut ra, mut n) = (0.0, 0.0, 0usize);
+    for k in 0..map.ny {
+        let Ok(prof) = extract_profile(map, ProfileSpec::Row(k)) else {
+            continue;
+        };
+        let Ok(prof) = preprocess_profile(&prof, &pp) else {
+            continue;
+        };
+        let Ok(v) = profile_parameters(&prof, &set, FILE_SECTIONS) else {
+            continue;
+        };
+        let of = |symbol: &str| {
+            v.iter()
+                .find(|(p, _)| p.symbol() == symbol)
+                .map_or(f64::NAN, |(_, x)| *x)
+        };
+        let (z, a) = (of("Rz"), of("Ra"));
+        if z.is_finite() && a.is_finite() {
+            rz += z;
+            ra += a;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return Err(MetricsError::TooFew(
+            "no row of the map gives Rz and Ra along the feed (x)".to_string(),
+        ));
+    }
+    let a = |symbol: &str| {
+        areal
+            .iter()
+            .find(|(p, _)| p.symbol() == symbol)
+            .map_or(f64::NAN, |(_, v)| *v)
+    };
+    Ok([
+        rz / n as f64,
+        ra / n as f64,
+        a("Sz"),
+        a("Sa"),
+        a("Sq"),
+        a("Sdq"),
+    ])
+}
+
+impl MeasuredRow {
+    /// Fill the values a measured file gives (`values` as [`measure_map`] returns them) that
+    /// the row does not hold itself: a number written beside the file is kept as written.
+    pub fn fill_from_file(&mut self, values: &[f64; 6]) {
+        for (p, v) in Param::FROM_FILE.into_iter().zip(values) {
+            let slot = match extra_index(p) {
+                None if p == Param::Rz => &mut self.rz_um,
+                None => &mut self.ra_um,
+                Some(i) => &mut self.extra_um[i],
+            };
+            if slot.is_none() {
+                *slot = Some(*v);
+            }
+        }
+    }
+}
+
+impl MeasuredTable {
+    /// Mark the columns a measured file fills as present (after [`MeasuredRow::fill_from_file`]).
+    pub fn note_file_columns(&mut self) {
+        if !self.rows.iter().any(|r| r.measured_file.is_some()) {
+            return;
+        }
+        self.columns.ra = true;
+        self.columns.rz = true;
+        for p in Param::FROM_FILE {
+            if let Some(i) = extra_index(p) {
+                self.columns.extra[i] = true;
+            }
+        }
+    }
+}
+
 /// Group a table's rows by (lead, side) in order of first appearance and summarise them.
 pub fn summarize(table: &MeasuredTable) -> Vec<MeasuredCase> {
     let mut cases: Vec<MeasuredCase> = Vec::new();
@@ -323,18 +488,21 @@ pub fn summarize(table: &MeasuredTable) -> Vec<MeasuredCase> {
                     lead_deg: row.lead_deg,
                     side: row.side.clone(),
                     samples: Vec::new(),
+                    files: Vec::new(),
                     ra_values_um: Vec::new(),
                     rz_values_um: Vec::new(),
                     ra: None,
                     rz: None,
                     extra_values_um: Default::default(),
-                    extra: [None; 4],
+                    extra: [None; 6],
                 });
                 let last = cases.len() - 1;
                 &mut cases[last]
             }
         };
         case.samples.push(row.sample.clone());
+        case.files
+            .push(row.measured_file.clone().unwrap_or_default());
         case.ra_values_um.extend(row.ra_um);
         case.rz_values_um.extend(row.rz_um);
         for (values, v) in case.extra_values_um.iter_mut().zip(row.extra_um) {
@@ -344,8 +512,8 @@ pub fn summarize(table: &MeasuredTable) -> Vec<MeasuredCase> {
     for c in &mut cases {
         c.ra = Stat::of(&c.ra_values_um);
         c.rz = Stat::of(&c.rz_values_um);
-        for i in 0..4 {
-            c.extra[i] = Stat::of(&c.extra_values_um[i]);
+        for (stat, values) in c.extra.iter_mut().zip(&c.extra_values_um) {
+            *stat = Stat::of(values);
         }
     }
     cases

@@ -195,6 +195,9 @@ pub struct CrestPrediction {
     /// estimate of [`super::stepover`]; not printed).
     #[serde(skip)]
     pub profile_um: Vec<f64>,
+    /// The step of `profile_um`, mm.
+    #[serde(skip)]
+    pub profile_step_mm: f64,
     /// R_ef,max of the nominal tool for the lead and ap (002 Table 3), mm.
     pub effective_radius_mm: f64,
     /// Radius of the generating point (R sin β for a ball), mm.
@@ -205,7 +208,7 @@ pub struct CrestPrediction {
 
 /// A periodic feed-direction profile: period `period_mm`, one height (mm) per position in
 /// the period. Returns (Rz µm, Ra µm, λc mm, peak-to-valley over one period µm, the
-/// evaluated profile in µm).
+/// evaluated profile in µm and its step in mm).
 ///
 /// The period is sampled in an even number of steps of at most [`PROFILE_STEP_MM`] (so
 /// that the crest between two evenly spaced marks is a sample), and the profile repeated
@@ -214,7 +217,7 @@ fn periodic_roughness(
     period_mm: f64,
     rsm_mm: f64,
     height_mm: &dyn Fn(f64) -> f64,
-) -> (f64, f64, f64, f64, Vec<f64>) {
+) -> (f64, f64, f64, f64, Profile) {
     let lc = crate::metrics::sampling_length_mm(rsm_mm);
     let total = 5.0 * lc;
     let mut steps = 2.0 * (0.5 * period_mm / PROFILE_STEP_MM).ceil().max(1.0);
@@ -230,8 +233,11 @@ fn periodic_roughness(
     let n = (total / dx).round().max(1.0) as usize;
     let heights: Vec<f64> = (0..=n).map(|i| (one[i % m] - lo) * 1e3).collect();
     let (rz, ra) = crate::metrics::rz_ra(&heights);
-    (rz, ra, lc, (hi - lo) * 1e3, heights)
+    (rz, ra, lc, (hi - lo) * 1e3, (heights, dx))
 }
+
+/// An evaluated profile: heights in µm and their step in mm.
+type Profile = (Vec<f64>, f64);
 
 /// Rz and Ra (µm) of the periodic profile of circular arcs of radius `radius_mm` whose
 /// lowest points are `spacing_mm` apart, and the sampling length used (mm).
@@ -359,7 +365,7 @@ pub fn crest_model_with(
         Rule::Paper => fz_eff,
         Rule::Exact => cutter.teeth() as f64 * fz_mm,
     };
-    let (rz, ra, lc, crest_mm, profile_um) = if process.is_off() {
+    let (rz, ra, lc, crest_mm, (profile_um, profile_step_mm)) = if process.is_off() {
         geometric_roughness(rule, &profile, fz_eff, period, &marks, &a, arc_radius == r)
     } else {
         processed_roughness(&profile, fz_eff, period, &marks, process)
@@ -383,6 +389,7 @@ pub fn crest_model_with(
         ra_um: ra,
         sampling_length_mm: lc,
         profile_um,
+        profile_step_mm,
         effective_radius_mm: a.effective_radius_mm,
         contact_radius_mm: a.contact_radius_mm,
         cutting_speed_ratio: a.cutting_speed_ratio,
@@ -411,7 +418,7 @@ fn geometric_roughness(
     marks: &[(f64, f64)],
     a: &crate::tool::Analysis,
     plane: bool,
-) -> (f64, f64, f64, f64, Vec<f64>) {
+) -> (f64, f64, f64, f64, Profile) {
     match rule {
         Rule::Paper => {
             let h = |u: f64| {
@@ -460,7 +467,7 @@ fn processed_roughness(
     period: f64,
     marks: &[(f64, f64)],
     process: &Process,
-) -> (f64, f64, f64, f64, Vec<f64>) {
+) -> (f64, f64, f64, f64, Profile) {
     let lc = crate::metrics::sampling_length_mm(fz_eff);
     let total = 5.0 * lc;
     let steps_per_period = 2.0 * (0.5 * period / PROFILE_STEP_MM).ceil().max(1.0);
@@ -493,7 +500,7 @@ fn processed_roughness(
     let hi = heights.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let um: Vec<f64> = heights.iter().map(|h| (h - lo) * 1e3).collect();
     let (rz, ra) = crate::metrics::rz_ra(&um);
-    (rz, ra, lc, hi - lo, um)
+    (rz, ra, lc, hi - lo, (um, dx))
 }
 
 /// What the `simulate` model predicts for one case.
@@ -631,6 +638,8 @@ pub struct CasePrediction {
     pub ra_um: f64,
     /// The case model's evaluated feed-direction profile, µm (evenly spaced).
     pub profile_um: Vec<f64>,
+    /// The step of `profile_um`, mm.
+    pub profile_step_mm: f64,
     /// The crest model (always computed).
     pub crest: CrestPrediction,
     /// The z-map, for `model = "simulate"`.
@@ -677,14 +686,25 @@ pub fn predict_case(
             )?)
         }
     };
-    let (rz_um, ra_um, profile_um) = match &zmap {
-        Some(z) => (z.rz_um, z.ra_um, z.map.row(z.map.ny / 2).to_vec()),
-        None => (crest.rz_um, crest.ra_um, crest.profile_um.clone()),
+    let (rz_um, ra_um, profile_um, profile_step_mm) = match &zmap {
+        Some(z) => (
+            z.rz_um,
+            z.ra_um,
+            z.map.row(z.map.ny / 2).to_vec(),
+            z.map.dx_um * 1e-3,
+        ),
+        None => (
+            crest.rz_um,
+            crest.ra_um,
+            crest.profile_um.clone(),
+            crest.profile_step_mm,
+        ),
     };
     Ok(CasePrediction {
         rz_um,
         ra_um,
         profile_um,
+        profile_step_mm,
         crest,
         zmap,
     })

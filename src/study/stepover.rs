@@ -10,9 +10,9 @@
 //! (crest or simulate model), g the scallop profile. For a ball end this is the lower
 //! envelope of the tool's marks to second order (near its lowest point a sphere is the
 //! paraboloid (x² + y²)/2R, whose lower envelope over a lattice of centres separates into a
-//! sum). Sa and Sz are computed on it by [`crate::metrics::height_stats`] (mean plane removed,
-//! no filter) over the 5λc of f and one period of g (a whole period: the values over any
-//! number of periods are the same).
+//! sum). Sa, Sq and Sz are computed on it by [`crate::metrics::height_stats`] (mean plane
+//! removed, no filter) and Sdq by [`crate::metrics::sdq`] over the 5λc of f and one period of
+//! g (a whole period: the values over any number of periods are the same).
 
 use super::measured::Param;
 use super::regression::{PROFILE_STEP_MM, profile_roughness};
@@ -32,6 +32,10 @@ pub struct Across {
     pub sz_um: f64,
     /// Sa of the areal surface.
     pub sa_um: f64,
+    /// Sq of the areal surface.
+    pub sq_um: f64,
+    /// Sdq of the areal surface (a ratio).
+    pub sdq: f64,
 }
 
 impl Across {
@@ -43,6 +47,8 @@ impl Across {
             Param::RaStepover => self.ra_um,
             Param::Sz => self.sz_um,
             Param::Sa => self.sa_um,
+            Param::Sq => self.sq_um,
+            Param::Sdq => self.sdq,
             Param::Rz | Param::Ra => f64::NAN,
         }
     }
@@ -75,12 +81,14 @@ pub enum AcrossError {
     NoHeight,
 }
 
-/// The stepover-direction Rz, Ra and the areal Sz, Sa of a ball end `cutter` at stepover
-/// `stepover_mm`, with the evaluated, evenly spaced feed-direction profile `feed_profile_um`.
+/// The stepover-direction Rz, Ra and the areal Sz, Sa, Sq, Sdq of a ball end `cutter` at
+/// stepover `stepover_mm`, with the evaluated feed-direction profile `feed_profile_um`, evenly
+/// spaced `feed_step_mm` apart.
 pub fn predict(
     cutter: &Cutter,
     stepover_mm: f64,
     feed_profile_um: &[f64],
+    feed_step_mm: f64,
 ) -> Result<Across, AcrossError> {
     if !matches!(cutter.shape, Shape::Ball) {
         return Err(AcrossError::NotBall);
@@ -119,11 +127,16 @@ pub fn predict(
         .flat_map(|g| feed_profile_um.iter().map(move |f| f + g))
         .collect();
     let stats = crate::metrics::height_stats(&z).ok_or(AcrossError::NoHeight)?;
+    let sdq =
+        crate::surface::HeightMap::from_rows(nx, scallop.len(), feed_step_mm * 1e3, dy * 1e3, z)
+            .map_or(f64::NAN, |map| crate::metrics::sdq(&map));
     Ok(Across {
         rz_um: rz,
         ra_um: ra,
         sz_um: stats.sz(),
         sa_um: stats.sa,
+        sq_um: stats.sq,
+        sdq,
     })
 }
 
@@ -137,7 +150,7 @@ mod tests {
         // With no feed marks the surface is the scallop alone: Sz is its crest, Sa its Ra
         // over one period (the profile's Ra over 5λc of whole periods is the same).
         let c = Cutter::new(Shape::Ball, 5.0, 2, 0.0);
-        let a = predict(&c, 0.3, &vec![0.0; 101]).unwrap();
+        let a = predict(&c, 0.3, &vec![0.0; 101], 0.001).unwrap();
         let hc = crest_height_mm(5.0, 0.3) * 1e3;
         assert_relative_eq!(a.sz_um, hc, max_relative = 1e-9);
         assert_relative_eq!(a.rz_um, hc, max_relative = 1e-6);
@@ -148,9 +161,9 @@ mod tests {
         let f: Vec<f64> = (0..=100)
             .map(|i| if i % 2 == 0 { 0.0 } else { 0.5 })
             .collect();
-        let b = predict(&c, 0.3, &f).unwrap();
+        let b = predict(&c, 0.3, &f, 0.001).unwrap();
         assert_relative_eq!(b.sz_um, hc + 0.5, max_relative = 1e-9);
-        assert!(predict(&c, 0.0, &f).is_err());
-        assert!(predict(&c, 0.3, &[]).is_err());
+        assert!(predict(&c, 0.0, &f, 0.001).is_err());
+        assert!(predict(&c, 0.3, &[], 0.001).is_err());
     }
 }

@@ -131,8 +131,9 @@ fn registration_of_rotated_shifted_tilted_noisy_maps() {
         for f in [
             "compare.md",
             "compare.html",
-            "measured.svg",
-            "difference.svg",
+            "measured.png",
+            "difference.png",
+            "profiles-along.svg",
         ] {
             assert!(out.join(f).is_file(), "{deg}°: no {f}");
         }

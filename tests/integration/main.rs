@@ -19,6 +19,7 @@ mod hostile3; // hostile input, third round (issue 37): failed commands change n
 mod install; // the version, completions, man pages and plain error lines of an installed crest
 mod instruments; // the instruments' own height maps (issue 34): .sur, .al3d, .gwy, .plu, .plux, .opd, .vk4 written by hand, read exactly; truncations; exit 2; .datx refused
 mod kinematics; // machines and feed planning (kinematics.md §8), `crest feed`, `--feed predicted`
+mod measured_files; // studies and calibration on measured files (issue 34 §3): `measured_file` in a table, measured as `crest metrics` does, the calibration's factor
 mod metrics; // profile and ISO 25178 parameters (iso25178.md §6 vectors), `crest metrics`
 mod moves; // move kinds (issue 33): NX colours and feed changes, inspect counts and regions, patches in the air refused
 mod parse; // reading and lowering CLSF and contact12: NX samples, own samples, properties

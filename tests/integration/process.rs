@@ -276,6 +276,7 @@ proptest! {
             fit_rms_pct: 0.0,
             constant_loo_rms_pct: 0.0,
             factor_loo_rms_pct: 0.0,
+            factors: Vec::new(),
             geometric_constant: true,
         };
         let (p, c) = apply(&free, &cal.values(), &study.process, &cutter);
