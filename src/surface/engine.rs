@@ -743,6 +743,11 @@ impl Setup<'_> {
             for e in &body[lo..=hi] {
                 r_max = r_max.max(e.y);
             }
+            // The points the mesh uses (its boxes are theirs).
+            let kept: Vec<Vec3> = (lo..=hi)
+                .filter(|i| self.profile.dome_keeps(*i, lo, hi))
+                .map(|i| body[i])
+                .collect();
             let dphi = (8.0 * self.opts.chord_tol_mm / r_max.max(1e-6))
                 .sqrt()
                 .clamp(1e-4, 1f64.to_radians());
@@ -760,7 +765,7 @@ impl Setup<'_> {
             while c0 < m1 {
                 let c1 = (c0 + DOME_CHUNK).min(m1);
                 let (t0, t1) = (c0 as f64 * step, c1 as f64 * step);
-                let bb = super::envelope::dome_box(&base.m, &base.b, &body[lo..=hi], t0, t1);
+                let bb = super::envelope::dome_box(&base.m, &base.b, &kept, t0, t1);
                 strips.push(Strip {
                     k: k as u32,
                     a: c0,
@@ -893,7 +898,7 @@ impl Setup<'_> {
             self.plough_tile(&mut tile, strips, list, cull, &mut cols);
             self.opts.process.min_chip_mm
         } else {
-            // Dome strips nearest first, so that later ones meet low bounds (same minimum).
+            // Dome strips nearest first, so that later ones meet low bounds (the same minimum).
             let mut order = list.to_vec();
             if self.opts.model == Model::Dome {
                 let (cx, cy) = ((i0 + w / 2) as f64, (j0 + h / 2) as f64);
@@ -1152,8 +1157,7 @@ impl Setup<'_> {
             Model::Dome => {
                 // The end face's levels strictly between the stretch's ends lie on the
                 // segment between them: the quads they make are one plane's fan.
-                let flat = self.profile.flat;
-                let keep = |i: &usize| *i == lo || *i == hi || *i == 0 || *i >= flat;
+                let keep = |i: &usize| self.profile.dome_keeps(*i, lo, hi);
                 let body = &self.profile.body[j];
                 let base = pose(0, 1, false);
                 let step = TAU / s.n as f64;

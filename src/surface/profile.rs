@@ -167,6 +167,13 @@ impl Profile {
         ))
     }
 
+    /// Whether a dome mesh of levels `lo..=hi` uses level `i`: the end face's levels strictly
+    /// inside the stretch lie on the segment between its ends, so their quads are one
+    /// plane's fan and their points add nothing to any bound of the mesh.
+    pub fn dome_keeps(&self, i: usize, lo: usize, hi: usize) -> bool {
+        i == lo || i == hi || i == 0 || i >= self.flat
+    }
+
     fn finish(
         cutter: &Cutter,
         levels: Vec<Level>,

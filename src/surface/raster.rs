@@ -318,10 +318,18 @@ fn lower_bound(a: &[f64; 3], b: &[f64; 3], c: &[f64; 3]) -> Option<f64> {
     let gx = (e1[2] * e2[1] - e1[1] * e2[2]) / det;
     let gy = (e1[0] * e2[2] - e1[2] * e2[0]) / det;
     let low = a[2].min(b[2]).min(c[2]);
-    let margin = 1e-9 * (1.0 + low.abs()) + 1e-6 * (gx.abs() + gy.abs());
-    let v = low - margin;
+    // Nodes up to the edge tolerance outside the triangle, and the plane's rounding (a few
+    // ulp of the magnitudes: far below 1e-13 of them), then the tie allowance.
+    let margin = 1e-13 * (1.0 + low.abs()) + 1e-6 * (gx.abs() + gy.abs());
+    let v = low - margin + TIE_MM;
     v.is_finite().then_some(v)
 }
+
+/// A triangle that could lower no node by more than this is skipped, mm: on a floor that
+/// many samples' flat end faces cut at the same height (ties to the last bits), each would
+/// otherwise be rasterised to change nothing. A node ends at most 1 pm (1e-6 µm) above
+/// the plain minimum over every triangle.
+pub(crate) const TIE_MM: f64 = 1e-9;
 
 /// Node tolerance of [`cover`]'s edges.
 const EPS: f64 = 1e-9;
@@ -464,11 +472,13 @@ mod tests {
         }
     }
 
-    /// The culls (groups of quads, block bounds, row pieces) change which triangles and
-    /// nodes are looked at, never the lowest height: a grid of points rasterised with them
-    /// keeps, bit for bit, what the plain minimum over every triangle keeps, in any order.
+    /// The culls (groups of quads, block bounds, row pieces, the tie allowance) change which
+    /// triangles and nodes are looked at, not the lowest height beyond the allowance: a grid
+    /// of points rasterised with them keeps what the plain minimum over every triangle
+    /// keeps, never less and at most [`TIE_MM`] more, in any order; sheets that tie to the
+    /// last bits (a floor many flat end faces cut) included.
     #[test]
-    fn culled_rasterising_keeps_the_plain_minimum_bit_for_bit() {
+    fn culled_rasterising_keeps_the_plain_minimum_within_the_tie_allowance() {
         let mut seed = 0x2545_f491_4f6c_dd1du64;
         let mut rnd = || {
             seed ^= seed << 13;
@@ -479,20 +489,23 @@ mod tests {
         let rect = (5, 3, 40, 37);
         let mut plain = vec![f64::INFINITY; 40 * 37];
         let mut tile = Tile::new(5, 3, 40, 37);
-        for _ in 0..60 {
-            // A wavy sheet of 9 × 7 points over (and beyond) the tile, at a random height.
-            let (ox, oy, oz) = (rnd() * 60.0 - 10.0, rnd() * 60.0 - 10.0, rnd() * 0.4);
+        for sheet in 0..90 {
+            // A wavy sheet of 9 × 7 points over (and beyond) the tile, at a random height;
+            // the last 30 flat, at one height give or take a few ulp (ties).
+            let oz = if sheet < 60 {
+                rnd() * 0.4
+            } else {
+                0.1 + (rnd() - 0.5) * 1e-15
+            };
+            let (ox, oy) = (rnd() * 60.0 - 10.0, rnd() * 60.0 - 10.0);
             let (sx, sy) = (1.0 + rnd() * 6.0, 1.0 + rnd() * 6.0);
             let (ncols, nl) = (9, 7);
             let mut pts = Vec::new();
             for c in 0..ncols {
                 for i in 0..nl {
                     let (x, y) = (ox + c as f64 * sx, oy + i as f64 * sy + 0.3 * c as f64);
-                    pts.push([
-                        x,
-                        y,
-                        oz + 0.01 * ((x * 0.3).sin() + (y * 0.2).cos()) + 0.002 * x,
-                    ]);
+                    let wave = 0.01 * ((x * 0.3).sin() + (y * 0.2).cos()) + 0.002 * x;
+                    pts.push([x, y, if sheet < 60 { oz + wave } else { oz }]);
                 }
             }
             let cull = 0.3;
@@ -508,9 +521,17 @@ mod tests {
             tile.quads(&pts, ncols, nl, cull);
         }
         assert!(plain.iter().any(|z| z.is_finite()));
+        let mut exact = 0;
         for (p, t) in plain.iter().zip(&tile.z) {
-            assert_eq!(p.to_bits(), t.to_bits());
+            if p.is_finite() {
+                assert!(*t >= *p && *t - *p <= TIE_MM, "{t} against {p}");
+                exact += usize::from(p.to_bits() == t.to_bits());
+            } else {
+                assert_eq!(p.to_bits(), t.to_bits());
+            }
         }
+        // Where nothing ties, the minimum is kept bit for bit.
+        assert!(exact > plain.len() / 2, "{exact} of {}", plain.len());
     }
 
     #[test]
