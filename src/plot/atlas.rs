@@ -112,16 +112,23 @@ pub fn atlas_map(
             "no patch has a value of {column}"
         )));
     }
-    // Squares as wide as the nearest other patch is far (in x or y), at most `every_mm`.
-    let mut mark = every_mm;
-    for (i, a) in pts.iter().enumerate() {
-        for b in &pts[i + 1..] {
-            let d = (a.0 - b.0).abs().max((a.1 - b.1).abs());
-            if d > 1e-9 {
-                mark = mark.min(d);
-            }
-        }
-    }
+    // Squares as wide as a patch's nearest neighbour is far (in x or y), the median over
+    // the patches (one pair of patches that nearly coincide, on two regions or passes, must
+    // not shrink every square to nothing), at most `every_mm`.
+    let mut nearest: Vec<f64> = pts
+        .iter()
+        .map(|a| {
+            pts.iter()
+                .map(|b| (a.0 - b.0).abs().max((a.1 - b.1).abs()))
+                .filter(|d| *d > 1e-9)
+                .fold(f64::INFINITY, f64::min)
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    nearest.sort_by(f64::total_cmp);
+    let mark = nearest
+        .get(nearest.len() / 2)
+        .map_or(every_mm, |d| d.min(every_mm));
     let lo = vals.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = vals.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let m = 0.5 * every_mm;
