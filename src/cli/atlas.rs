@@ -375,8 +375,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         return Ok(Outcome::Ok);
     }
     // The request's fields named as flags.
-    crest::pipeline::prepare::check_request(&req.simulate)
-        .map_err(|e| miette::miette!("{}", e.with_flag()))?;
+    crest::pipeline::prepare::check_request(&req.simulate).map_err(|e| miette::miette!("{e}"))?;
     let atlas = pool.install(|| crest::pipeline::atlas::run(&req, None, &progress));
     progress.finish();
     let atlas = atlas?;

@@ -153,16 +153,6 @@ pub fn main() -> ExitCode {
 #[error("stdout was closed")]
 pub struct StdoutClosed;
 
-/// A library message that starts with a request field (`monte_carlo needs …`), as the
-/// command line names it: the field replaced by its option (`--monte-carlo needs …`).
-pub(crate) fn with_flag(message: impl std::fmt::Display, field: &str, flag: &str) -> String {
-    let message = message.to_string();
-    match message.strip_prefix(field) {
-        Some(rest) => format!("{flag}{rest}"),
-        None => message,
-    }
-}
-
 /// Write one line on stdout and flush it; see [`outln!`].
 pub(crate) fn print_line(args: std::fmt::Arguments<'_>) -> miette::Result<()> {
     use std::io::Write;

@@ -352,7 +352,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         return write_shard(&args, out?, started);
     }
     // The request's fields named as flags.
-    crest::pipeline::prepare::check_request(&req).map_err(|e| miette!("{}", e.with_flag()))?;
+    crest::pipeline::prepare::check_request(&req).map_err(|e| miette!("{e}"))?;
     let run = pool.install(|| crest::pipeline::simulate::simulate(&req, &progress));
     progress.finish();
     let run = run?;

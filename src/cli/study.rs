@@ -70,8 +70,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
     }
     let monte_carlo = args.monte_carlo.map(|n| (n, args.seed));
     if let Some(n) = args.monte_carlo {
-        crest::study::uncertainty::check_samples(n)
-            .map_err(|e| miette!("{}", super::with_flag(e, "monte_carlo", "--monte-carlo")))?;
+        crest::study::uncertainty::check_samples(n).map_err(|e| miette!("{e}"))?;
     }
     // A blocked output is refused before the first run, not after the last.
     let names: Vec<String> = match args.shard {

@@ -10,22 +10,15 @@ use crate::toolpath::{MotionKind, Moves, Posture, Program, Toolpath};
 use miette::miette;
 use std::path::{Path, PathBuf};
 
-/// A request whose field is out of range: the field as the request names it (`grid_um`,
-/// Python's keyword) and what is wrong with it.
+/// A request whose field is out of range: the field as the request names it (`grid_um`),
+/// marked as [`super::fields`] spells it for each front end, and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
-#[error("{field} {message}")]
+#[error("‹{field}› {message}")]
 pub struct RequestError {
     /// The field.
     pub field: &'static str,
     /// What is wrong, after the field's name.
     pub message: String,
-}
-
-impl RequestError {
-    /// The message with the field as a command-line flag (`--grid-um`).
-    pub fn with_flag(&self) -> String {
-        format!("--{} {}", self.field.replace('_', "-"), self.message)
-    }
 }
 
 /// Which feed moves the tool.

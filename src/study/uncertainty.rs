@@ -185,10 +185,10 @@ pub const MAX_SAMPLES: usize = 100_000;
 #[non_exhaustive]
 pub enum SamplesError {
     /// No sample.
-    #[error("monte_carlo needs at least one sample")]
+    #[error("‹monte_carlo› needs at least one sample")]
     None,
     /// More than [`MAX_SAMPLES`].
-    #[error("monte_carlo takes at most {MAX_SAMPLES} samples, got {0}")]
+    #[error("‹monte_carlo› takes at most {MAX_SAMPLES} samples, got {0}")]
     TooMany(usize),
 }
 

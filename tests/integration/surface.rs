@@ -973,6 +973,8 @@ fn a_bad_grid_names_the_flag() {
         .unwrap()
     };
     let e = crest::pipeline::prepare::check_request(&req).unwrap_err();
-    assert_eq!(e.to_string(), "grid_um must be positive, got -1");
-    assert_eq!(e.with_flag(), "--grid-um must be positive, got -1");
+    let text = e.to_string();
+    use crest::pipeline::fields::{for_cli, for_python};
+    assert_eq!(for_python(&text), "grid_um must be positive, got -1");
+    assert_eq!(for_cli(&text), "--grid-um must be positive, got -1");
 }
