@@ -4,11 +4,12 @@
 use std::path::PathBuf;
 
 use crest::pipeline::ToolSource;
+use crest::pipeline::simulate::GridRequest;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::maps::part_map;
-use crate::simulate::{request_of, tool_source};
+use crate::simulate::{Keywords, request_of, tool_source};
 use crate::{err, json_dumps, json_loads};
 
 /// The tasks of a designed experiment (`crest study` design): `design` is a path to the
@@ -45,74 +46,48 @@ pub(crate) fn study_tasks<'py>(
     json_loads(py, &text)
 }
 
-/// The tile tasks of a part map (`simulate(..., map_mm=...)` with the same options): `tasks`
-/// plain dicts (picklable), task k simulating cells k, k+tasks, … of the map. The file
-/// paths are made absolute; every worker must see the files there.
+/// The tile tasks of a part map (`simulate(..., map_mm=...)` with the same keywords):
+/// `tasks` plain dicts (picklable), task k simulating cells k, k+tasks, … of the map. The
+/// file paths are made absolute; every worker must see the files there.
 #[pyfunction]
-#[pyo3(signature = (file, *, tasks, map_mm, part, region = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, feed = None, machine = None, model = "ice", dtheta_deg = 1.0, grid_um = None, chord_tol_um = None, band_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (file, *, tasks, map_mm, part, tool = None, **options))]
 pub(crate) fn map_tasks<'py>(
     py: Python<'py>,
     file: PathBuf,
     tasks: usize,
     map_mm: f64,
     part: PathBuf,
-    region: Option<[f64; 6]>,
     tool: Option<Bound<'py, PyAny>>,
-    process: Option<PathBuf>,
-    rpm: Option<f64>,
-    feed_mm_min: Option<f64>,
-    fz_mm: Option<f64>,
-    feed: Option<&str>,
-    machine: Option<PathBuf>,
-    model: &str,
-    dtheta_deg: f64,
-    grid_um: Option<f64>,
-    chord_tol_um: Option<f64>,
-    band_um: Option<f64>,
-    ap_mm: Option<f64>,
-    path: Option<usize>,
-    teeth: Option<usize>,
-    helix_deg: Option<f64>,
-    absolute: bool,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
-    let req = request_of(
-        abs(file),
+    let kw = Keywords::new(py, "map_tasks", options)?;
+    kw.set("map_mm", map_mm)?;
+    kw.set("part", part)?;
+    let mut req = request_of(
+        &kw,
+        absolute(file),
         absolute_tool(tool_source(tool)?),
+        "ice",
         None,
-        None,
-        None,
-        None,
-        Some(map_mm),
-        region,
-        Some(abs(part)),
-        process.map(abs),
-        rpm,
-        feed_mm_min,
-        fz_mm,
-        feed,
-        machine.map(abs),
-        model,
-        dtheta_deg,
-        grid_um,
-        chord_tol_um,
-        band_um,
-        ap_mm,
-        path,
-        teeth,
-        helix_deg,
-        absolute,
     )?;
+    kw.finish()?;
+    req.part = req.part.map(absolute);
+    req.process = req.process.map(absolute);
+    req.machine = req.machine.map(absolute);
     let tasks = crest::pipeline::tasks::map::map_tasks(&req, tasks).map_err(err)?;
     let text = serde_json::to_string(&tasks).map_err(|e| crate::crest_error(e.to_string()))?;
     json_loads(py, &text)
 }
 
+/// A path made absolute (tasks run in other processes, maybe elsewhere).
+fn absolute(p: PathBuf) -> PathBuf {
+    std::path::absolute(&p).unwrap_or(p)
+}
+
 /// A tool file made absolute (tasks run in other processes, maybe elsewhere).
 fn absolute_tool(tool: Option<ToolSource>) -> Option<ToolSource> {
     tool.map(|t| match t {
-        ToolSource::File(p) => ToolSource::File(std::path::absolute(&p).unwrap_or(p)),
+        ToolSource::File(p) => ToolSource::File(absolute(p)),
         text => text,
     })
 }
@@ -120,61 +95,33 @@ fn absolute_tool(tool: Option<ToolSource>) -> Option<ToolSource> {
 /// The patch tasks of a roughness atlas (`crest atlas`, the same options): `tasks` plain
 /// dicts (picklable), task k simulating patches k, k+tasks, … of the atlas (a patch every
 /// `every_mm` over every finishing region; `patch_mm` = (L, W), default twice the local
-/// stepover). The file paths are made absolute; every worker must see the files there.
+/// stepover); the other keywords are `simulate`'s, but for the grid (the atlas places its
+/// patches), `feed` and `machine`. The file paths are made absolute; every worker must see
+/// the files there.
 #[pyfunction]
-#[pyo3(signature = (file, *, tasks, every_mm, patch_mm = None, part = None, tool = None, process = None, rpm = None, feed_mm_min = None, fz_mm = None, model = "dome", dtheta_deg = 1.0, grid_um = None, chord_tol_um = None, band_um = None, ap_mm = None, path = None, teeth = None, helix_deg = None, absolute = false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (file, *, tasks, every_mm, patch_mm = None, tool = None, **options))]
 pub(crate) fn atlas_tasks<'py>(
     py: Python<'py>,
     file: PathBuf,
     tasks: usize,
     every_mm: f64,
     patch_mm: Option<[f64; 2]>,
-    part: Option<PathBuf>,
     tool: Option<Bound<'py, PyAny>>,
-    process: Option<PathBuf>,
-    rpm: Option<f64>,
-    feed_mm_min: Option<f64>,
-    fz_mm: Option<f64>,
-    model: &str,
-    dtheta_deg: f64,
-    grid_um: Option<f64>,
-    chord_tol_um: Option<f64>,
-    band_um: Option<f64>,
-    ap_mm: Option<f64>,
-    path: Option<usize>,
-    teeth: Option<usize>,
-    helix_deg: Option<f64>,
-    absolute: bool,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let abs = |p: PathBuf| std::path::absolute(&p).unwrap_or(p);
-    let simulate = request_of(
-        abs(file),
-        absolute_tool(tool_source(tool)?),
-        None,
-        None,
-        Some([0.0; 3]),
-        Some([1.0, 1.0]),
-        None,
-        None,
-        part.map(abs),
-        process.map(abs),
-        rpm,
-        feed_mm_min,
-        fz_mm,
-        None,
-        None,
-        model,
-        dtheta_deg,
-        grid_um,
-        chord_tol_um,
-        band_um,
-        ap_mm,
-        path,
-        teeth,
-        helix_deg,
-        absolute,
-    )?;
+    let kw = Keywords::new(py, "atlas_tasks", options)?;
+    kw.refuse(&["feed", "machine"])?;
+    // The grid of the shared request: a placeholder each patch replaces.
+    let grid = GridRequest::PatchNear {
+        point: [0.0; 3],
+        length_mm: 1.0,
+        width_mm: 1.0,
+    };
+    let tool = absolute_tool(tool_source(tool)?);
+    let mut simulate = request_of(&kw, absolute(file), tool, "dome", Some(grid))?;
+    kw.finish()?;
+    simulate.part = simulate.part.map(absolute);
+    simulate.process = simulate.process.map(absolute);
     let req = crest::pipeline::atlas::AtlasRequest {
         simulate,
         every_mm,

@@ -364,3 +364,24 @@ def test_messages_name_keywords_where_the_cli_names_options(cli, tmp_path):
     assert p.returncode == 2
     assert "--map-mm must be positive, got -1" in p.stderr, p.stderr
     assert "‹" not in p.stderr, p.stderr
+
+
+def test_the_functions_that_simulate_read_one_keyword_list():
+    # An unknown keyword, as Python names it, in every function that simulates; the
+    # caller's dict is left alone.
+    options = {"window": WINDOW, "grid_umm": 20.0}
+    with pytest.raises(TypeError, match=r"simulate\(\) got an unexpected keyword argument 'grid_umm'"):
+        crest.simulate(TRIAL3, tool=TORUS, **options)
+    assert options == {"window": WINDOW, "grid_umm": 20.0}
+    with pytest.raises(TypeError, match=r"map_tasks\(\) got an unexpected keyword argument 'grid_umm'"):
+        crest.map_tasks(TRIAL3, tasks=2, map_mm=0.5, part=TRIAL3, grid_umm=20.0)
+    # A keyword of the wrong type is named.
+    with pytest.raises(TypeError, match=r"simulate\(\) argument 'rpm'"):
+        crest.simulate(TRIAL3, tool=TORUS, window=WINDOW, rpm="fast")
+    # The atlas places its own patches, on the programmed feed.
+    for k, v in [("window", WINDOW), ("patch_near", (0.0, 0.0, 0.0)), ("feed", "predicted")]:
+        with pytest.raises(TypeError, match=rf"atlas_tasks\(\) got an unexpected keyword argument '{k}'"):
+            crest.atlas_tasks(TRIAL3, tasks=2, every_mm=3.0, teeth=2, rpm=10000.0, **{k: v})
+    # The choices are checked with their keyword.
+    with pytest.raises(crest.CrestError, match="model must be 'ice', 'dome' or 'swept', got 'wet'"):
+        crest.simulate(TRIAL3, tool=TORUS, window=WINDOW, model="wet")

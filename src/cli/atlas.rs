@@ -10,9 +10,9 @@
 //! The pipeline is `crest::pipeline::atlas`; this file parses the options and prints.
 
 use super::Outcome;
-use super::simulate::ModelName;
 use crest::pipeline::atlas::{Atlas, AtlasRequest};
 use crest::pipeline::simulate::{GridRequest, SimulateRequest};
+use crest::surface::ModelKind;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -74,7 +74,7 @@ pub struct Args {
     pub grid_um: Option<f64>,
     /// Surface model (default dome: the teeth's bodies at every feed per tooth).
     #[arg(long, value_enum, default_value = "dome")]
-    pub model: ModelName,
+    pub model: ModelKind,
     /// Spindle step of the ICE model, degrees.
     #[arg(long, value_name = "D", default_value_t = 1.0)]
     pub dtheta_deg: f64,
@@ -92,7 +92,7 @@ pub struct Args {
     pub path: Option<usize>,
     /// Which moves cut: `cut` (default) or `all`.
     #[arg(long, value_enum, default_value = "cut")]
-    pub moves: super::reading::MovesArg,
+    pub moves: crest::toolpath::Moves,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -312,7 +312,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             feed: None,
             machine: None,
             rtcp: crest::nc::Rtcp::default(),
-            model: args.model.into(),
+            model: args.model,
             dtheta_deg: args.dtheta_deg,
             grid_um: args.grid_um,
             chord_tol_um: args.chord_tol_um,
@@ -324,7 +324,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             },
             ap_mm: args.ap_mm,
             path: args.path,
-            moves: args.moves.into(),
+            moves: args.moves,
         },
         every_mm: args.every_mm,
         patch_mm,

@@ -46,7 +46,7 @@ pub struct Args {
     /// Which moves get contact data: `cut` (default: the cutting passes) or `all` (every
     /// feed move, engage and retract too).
     #[arg(long, value_enum, default_value = "cut")]
-    pub moves: super::reading::MovesArg,
+    pub moves: crest::toolpath::Moves,
     /// Print one JSON object: postures, with_contact, max_gouge_um, max_gap_um, ….
     #[arg(long)]
     pub json: bool,
@@ -62,7 +62,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         teeth: args.teeth,
         absolute: args.absolute,
         tolerance_um: args.tolerance_um,
-        moves: args.moves.into(),
+        moves: args.moves,
     };
     let run = contact(&req)?;
     for w in &run.warnings {
@@ -131,7 +131,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
             "max_gouge_um": run.max_gouge_um,
             "max_gap_um": run.max_gap_um,
             "tolerance_um": args.tolerance_um,
-            "moves": crest::toolpath::Moves::from(args.moves).name(),
+            "moves": args.moves.name(),
             "move_kinds": super::reading::moves_json(
                 run.program.paths.iter().flat_map(|t| t.postures.iter())
             ),

@@ -14,9 +14,10 @@
 //! is renamed only when everything succeeded, so bad input leaves no output behind.
 
 use super::Outcome;
-use super::reading::{RtcpArg, read_options};
+use super::reading::read_options;
 use crest::io::toolpath::{stream_from, stream_written_from};
 use crest::nc::GcodeWriter;
+use crest::nc::Rtcp;
 use crest::parse::Written;
 use crest::toolpath::{ClsfWriter, Contact12Writer, LowerOptions, Posture, Toolpath};
 use std::io::Write;
@@ -49,7 +50,7 @@ pub struct Args {
     /// `off`; for G-code output `on` writes the tool tip in the part frame under G43.4,
     /// otherwise joint positions with inverse-time feed (G93).
     #[arg(long, value_enum, default_value = "auto")]
-    pub rtcp: RtcpArg,
+    pub rtcp: Rtcp,
     /// Height-map input as a grid `.csv`: its x spacing, µm.
     #[arg(long, value_name = "UM")]
     pub dx_um: Option<f64>,
@@ -167,7 +168,7 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
         }
     };
     let mut gcode = match &machine {
-        Some(m) => Some(GcodeWriter::new(m, args.rtcp == RtcpArg::On).map_err(|e| {
+        Some(m) => Some(GcodeWriter::new(m, args.rtcp == Rtcp::On).map_err(|e| {
             miette::miette!(
                 "{}: {e}",
                 args.machine

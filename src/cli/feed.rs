@@ -39,7 +39,7 @@ pub struct Args {
     /// Tool-centre-point control of G-code input: `auto` (as the program says), `on` or
     /// `off` (the program is read through the kinematics of `--machine`).
     #[arg(long, value_enum, default_value = "auto")]
-    pub rtcp: super::reading::RtcpArg,
+    pub rtcp: crest::nc::Rtcp,
 }
 
 /// The `--level` values.
@@ -51,9 +51,6 @@ pub enum LevelArg {
     Acc,
 }
 
-/// The `--feed` values live with the other options of the commands that read tool paths.
-pub use super::reading::FeedSource;
-
 /// Run `crest feed`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     super::check_outputs(args.output.as_deref())?;
@@ -63,13 +60,8 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         LevelArg::Acc => Level::Acceleration,
     };
     let file = args.file.display().to_string();
-    let plans = crest::pipeline::feed::plan_file(
-        &args.file,
-        &machine,
-        level,
-        args.absolute,
-        args.rtcp.into(),
-    )?;
+    let plans =
+        crest::pipeline::feed::plan_file(&args.file, &machine, level, args.absolute, args.rtcp)?;
     let names = machine.joint_names();
     if let Some(out) = &args.output {
         crest::io::write_atomic(out, |w| write_csv(w, &plans, &names))

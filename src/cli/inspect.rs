@@ -7,8 +7,9 @@
 //! summarise in constant memory (`--regions` keeps the postures).
 
 use super::Outcome;
-use super::reading::{RtcpArg, read_options};
+use super::reading::read_options;
 use crest::io::toolpath::{detect, stream_program};
+use crest::nc::Rtcp;
 use crest::toolpath::{LowerOptions, MotionKind, MoveCounts, Posture, Toolpath};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -29,7 +30,7 @@ pub struct Args {
     /// Tool-centre-point control of G-code: `auto` (as the program says), `on` (X Y Z
     /// are the tool tip) or `off` (X Y Z are joint positions).
     #[arg(long, value_enum, default_value = "auto")]
-    pub rtcp: RtcpArg,
+    pub rtcp: Rtcp,
     /// Also list the finishing regions (groups of neighbouring cut passes): extents,
     /// passes, stepover, tool-axis range, feeds, cutting length and a centre point for
     /// `simulate --patch-near`.
@@ -180,7 +181,7 @@ struct Counts {
 pub fn summarise(
     file: &std::path::Path,
     machine: Option<&std::path::Path>,
-    rtcp: RtcpArg,
+    rtcp: Rtcp,
     regions: bool,
 ) -> miette::Result<InspectReport> {
     let kind = detect(file)?;

@@ -57,7 +57,7 @@ pub struct Args {
     /// `crest feed`; linear in time between postures).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
-    pub feed: Option<super::feed::FeedSource>,
+    pub feed: Option<crest::pipeline::simulate::FeedSource>,
     /// Machine description (`machine.toml`) for `--feed predicted` (given alone with a
     /// CLSF or contact12 file, it implies `--feed predicted`); G-code is read through its
     /// kinematics (the feed is then predicted only with `--feed predicted`).
@@ -66,7 +66,7 @@ pub struct Args {
     /// Tool-centre-point control of G-code input: `auto` (as the program says), `on` or
     /// `off`.
     #[arg(long, value_enum, default_value = "auto")]
-    pub rtcp: super::reading::RtcpArg,
+    pub rtcp: crest::nc::Rtcp,
     /// Tool-axis interpolation.
     #[arg(long, value_enum, default_value = "slerp")]
     pub axis: AxisArg,
@@ -79,7 +79,7 @@ pub struct Args {
     /// Which moves are resampled: `cut` (default: the cutting passes) or `all` (every feed
     /// move, engage and retract too).
     #[arg(long, value_enum, default_value = "cut")]
-    pub moves: super::reading::MovesArg,
+    pub moves: crest::toolpath::Moves,
     /// Output CSV.
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
@@ -109,16 +109,16 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         teeth: args.teeth,
         rpm: args.rpm,
         feed_mm_min: args.feed_mm_min,
-        feed: args.feed.map(Into::into),
+        feed: args.feed,
         machine: args.machine.clone(),
-        rtcp: args.rtcp.into(),
+        rtcp: args.rtcp,
         axis: match args.axis {
             AxisArg::Slerp => AxisInterpolation::Slerp,
             AxisArg::Nlerp => AxisInterpolation::Nlerp,
         },
         spline: args.spline,
         path: args.path,
-        moves: args.moves.into(),
+        moves: args.moves,
     };
     let run = resample_to_csv(&req, &args.output, args.max_output_gb, args.force)?;
     report(&args, &run.options, &run.paths, run.predicted)?;
@@ -161,7 +161,7 @@ fn report(
             "teeth": args.teeth,
             "dtheta_deg": matches!(args.mode, ModeArg::Dtheta).then_some(args.dtheta_deg),
             "step_mm": opts.nominal_step_mm(),
-            "moves_resampled": crest::toolpath::Moves::from(args.moves).name(),
+            "moves_resampled": args.moves.name(),
             "machine": args.machine.as_ref().map(|m| m.display().to_string()),
             "feed": if predicted { "predicted" } else { "programmed" },
             "samples": samples,

@@ -14,35 +14,12 @@
 //! plain lines elsewhere once the run is long).
 
 use super::Outcome;
-use clap::ValueEnum;
 use crest::pipeline::fields::for_cli;
 use crest::pipeline::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crest::surface::ModelKind;
 use miette::{IntoDiagnostic, WrapErr, miette};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// The surface model, as named on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ModelName {
-    /// Instantaneous positions: the revolved body of each tooth at every fz.
-    Dome,
-    /// Pondered movement: the teeth's cutting edges swept at every Δθ.
-    Ice,
-    /// The ball swept continuously along the path: no teeth, no feed marks, no run-out
-    /// (a tool's run-out is ignored); the scallops between passes, fast (ball end only).
-    Swept,
-}
-
-impl From<ModelName> for ModelKind {
-    fn from(m: ModelName) -> ModelKind {
-        match m {
-            ModelName::Dome => ModelKind::Dome,
-            ModelName::Ice => ModelKind::Ice,
-            ModelName::Swept => ModelKind::Swept,
-        }
-    }
-}
 
 /// Options of `crest simulate`.
 ///
@@ -89,7 +66,7 @@ pub struct Args {
     /// the spindle speed stays fixed, so the feed per tooth follows the feed).
     /// Default: `programmed`, or `predicted` when `--machine` is given.
     #[arg(long, value_enum, value_name = "SOURCE")]
-    pub feed: Option<super::feed::FeedSource>,
+    pub feed: Option<crest::pipeline::simulate::FeedSource>,
     /// Machine description (`machine.toml`) for `--feed predicted` (given alone, it implies
     /// `--feed predicted`). With `--feed-mm-min V`, the machine is planned at V.
     #[arg(long, value_name = "MACHINE.TOML")]
@@ -98,10 +75,10 @@ pub struct Args {
     /// `--machine`; the feed is then predicted only with `--feed predicted`): `auto` (as
     /// the program says), `on` or `off`.
     #[arg(long, value_enum, default_value = "auto")]
-    pub rtcp: super::reading::RtcpArg,
+    pub rtcp: crest::nc::Rtcp,
     /// Surface model (default: ice, the teeth's edges swept).
     #[arg(long, value_enum, default_value = "ice")]
-    pub model: ModelName,
+    pub model: ModelKind,
     /// Spindle step of the ICE model, degrees.
     #[arg(long, value_name = "D", default_value_t = 1.0)]
     pub dtheta_deg: f64,
@@ -184,7 +161,7 @@ pub struct Args {
     /// simulated; a patch in the air is refused) or `all` (every feed move, engage and
     /// retract too, as before crest told them apart).
     #[arg(long, value_enum, default_value = "cut")]
-    pub moves: super::reading::MovesArg,
+    pub moves: crest::toolpath::Moves,
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -322,10 +299,10 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         rpm: args.rpm,
         feed_mm_min: args.feed_mm_min,
         fz_mm: args.fz_mm,
-        feed: args.feed.map(Into::into),
+        feed: args.feed,
         machine: args.machine.clone(),
-        rtcp: args.rtcp.into(),
-        model: args.model.into(),
+        rtcp: args.rtcp,
+        model: args.model,
         dtheta_deg: args.dtheta_deg,
         grid_um,
         chord_tol_um: args.chord_tol_um,
@@ -333,7 +310,7 @@ pub fn run(args: Args) -> miette::Result<Outcome> {
         grid,
         ap_mm: args.ap_mm,
         path: args.path,
-        moves: args.moves.into(),
+        moves: args.moves,
     };
     let progress = super::progress::Phases::new();
     let pool = rayon::ThreadPoolBuilder::new()
@@ -561,8 +538,8 @@ fn summary(
     let mut j = serde_json::json!({
         "output": args.output.display().to_string(),
         "view": args.view.as_ref().map(|p| p.display().to_string()),
-        "model": ModelKind::from(args.model).name(),
-        "dtheta_deg": matches!(args.model, ModelName::Ice).then_some(args.dtheta_deg),
+        "model": args.model.name(),
+        "dtheta_deg": matches!(args.model, ModelKind::Ice).then_some(args.dtheta_deg),
         "nodes": run.nodes,
         "nodes_cut": run.nodes_cut,
         "nodes_not_reached": run.nodes - run.nodes_cut,

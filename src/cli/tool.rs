@@ -23,36 +23,17 @@ pub struct Args {
     pub fz_mm: f64,
     /// Which teeth cut: `exact` (the lower envelope of every tooth's marks) or `paper` (the
     /// participating-tooth rule of Marin et al. 2023, Eq 8, for reproducing the paper).
-    #[arg(long, value_enum, default_value_t = RuleArg::Exact)]
-    pub rule: RuleArg,
+    #[arg(long, value_enum, default_value_t = Rule::Exact)]
+    pub rule: Rule,
     /// Print one JSON object on stdout.
     #[arg(long)]
     pub json: bool,
 }
 
-/// The `--rule` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum RuleArg {
-    /// Marin et al. 2023, Eq 8: a tooth cuts when its radius at the generating height
-    /// exceeds the largest one less the nominal crest height.
-    Paper,
-    /// Lower envelope of the teeth's feed-direction profiles.
-    Exact,
-}
-
-impl From<RuleArg> for Rule {
-    fn from(r: RuleArg) -> Rule {
-        match r {
-            RuleArg::Paper => Rule::Paper,
-            RuleArg::Exact => Rule::Exact,
-        }
-    }
-}
-
 /// Run `crest tool`.
 pub fn run(args: Args) -> miette::Result<Outcome> {
     let cutter = crest::pipeline::load_tool(&args.tool)?;
-    let rule = Rule::from(args.rule);
+    let rule = args.rule;
     let a = analyse(&cutter, args.lead_deg, args.ap_mm, args.fz_mm, rule)
         .map_err(|e| miette::miette!("{e}"))?;
     let r = cutter.radius_mm;

@@ -33,17 +33,27 @@ pub use write::GcodeWriter;
 
 use crate::kinematics::Machine;
 
-/// Tool-centre-point control (RTCP, TCPM, TRAORI).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+/// Tool-centre-point control (RTCP, TCPM, TRAORI); also the command line's values (the
+/// variants' lines are their help).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Rtcp {
-    /// As the program says: on after `G43.4`, `TRAORI` or `M128`, off after `G49`,
-    /// `TRAFOOF` or `M129`, off at the start.
+    /// As the program says (`G43.4`, `TRAORI`, `M128` on; `G49`, `TRAFOOF`, `M129` off).
     #[default]
     Auto,
-    /// On for the whole program (X Y Z are the tool tip in the part frame).
+    /// On throughout: X Y Z are the tool tip in the part frame.
     On,
-    /// Off for the whole program (X Y Z are joint positions).
+    /// Off throughout: X Y Z are joint positions.
     Off,
 }
 

@@ -21,14 +21,26 @@ pub struct RequestError {
     pub message: String,
 }
 
-/// Which feed moves the tool.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+/// Which feed moves the tool; also the command line's values (the variants' lines are their
+/// help). The predicted feed is kinematics.md §7.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum FeedSource {
     /// The programmed feed (FEDRAT, or the feed given).
     #[default]
     Programmed,
-    /// The feed the machine really reaches (`crest feed`, kinematics.md §7).
+    /// The feed the machine really reaches (`crest feed`: the jerk-limited interpolator's
+    /// tool-tip feed, on the machine given).
     Predicted,
 }
 

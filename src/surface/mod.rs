@@ -56,16 +56,29 @@ pub enum Model {
     Swept,
 }
 
-/// The surface model by name, as files and options write it (`"ice"`, `"dome"`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+/// The surface model by name, as files, options and keywords write it (`"ice"`, `"dome"`,
+/// `"swept"`); the command line's values too (the variants' lines are their help). ICE is
+/// 002 §2.4.2, the dome 002 §2.4.1.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ModelKind {
-    /// Pondered movement: the teeth's edges sweep between spindle steps (002 §2.4.2).
+    /// Pondered movement: the teeth's cutting edges swept at every Δθ.
     #[default]
     Ice,
-    /// Instantaneous positions: the revolved body of each tooth every fz (002 §2.4.1).
+    /// Instantaneous positions: the revolved body of each tooth at every fz.
     Dome,
-    /// The ball swept continuously along the path, no teeth: scallops only, fast.
+    /// The ball swept continuously along the path: no teeth, no feed marks, no run-out
+    /// (a tool's run-out is ignored); the scallops between passes, fast (ball end only).
     Swept,
 }
 

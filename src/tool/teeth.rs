@@ -25,12 +25,25 @@ use super::effective::effective_radius;
 use super::section::{Envelope, envelope, feed_profile_for, nominal_crest_mm};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
-/// Which teeth cut: the paper's threshold or the exact one-dimensional envelope. Written
-/// `"paper"` / `"exact"` in files (the one enum every config and study uses).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+/// Which teeth cut: the paper's threshold (002 Eq 8: r_j(z_c) > max r − hc(nominal fz)) or
+/// the exact one-dimensional envelope. Written `"paper"` / `"exact"` in files and on the
+/// command line (the one enum every config, study and option uses; the variants' lines are
+/// the options' help).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Rule {
-    /// 002 Eq 8: r_j(z_c) > max r − hc(nominal fz) (the paper's rule, for reproducing it).
+    /// Marin et al. 2023, Eq 8: a tooth cuts when its radius at the generating height
+    /// exceeds the largest one less the nominal crest height.
     Paper,
     /// Lower envelope of the teeth's feed-direction profiles (the default: a tooth cuts
     /// where its marks reach below the others').

@@ -4,15 +4,27 @@
 use super::{MotionKind, Posture, Program};
 
 /// Which moves count as cutting: they define the reference surface, are simulated, and
-/// give the feed of a patch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+/// give the feed of a patch. Also the command line's values (the variants' lines are their
+/// help): engage and retract moves (lead-in and lead-out arcs) are in the air or only
+/// entering the material, so only cut moves count by default.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Moves {
-    /// Cut moves only (the default): engage and retract moves (lead-in and lead-out arcs)
-    /// are in the air or only entering the material.
+    /// Only the cut moves (NX colours 31 and 36, or every feed move nothing marks
+    /// otherwise).
     #[default]
     Cut,
-    /// Every feed move (engage, cut, retract), as crest did before it told them apart.
+    /// Every feed move: engage and retract moves too.
     All,
 }
 

@@ -656,7 +656,16 @@ fn only_the_listed_types_of_earlier_stages_deserialize() {
         let lines: Vec<&str> = text.lines().collect();
         for (i, l) in lines.iter().enumerate() {
             let t = l.trim_start();
-            if t.starts_with("#[derive(") && t.contains("Deserialize") {
+            // The whole attribute (rustfmt breaks a long derive over lines).
+            let attr: String = if t.starts_with("#[derive(") {
+                let end = (i..lines.len())
+                    .find(|&j| lines[j].contains(")]"))
+                    .unwrap_or(i);
+                lines[i..=end].concat()
+            } else {
+                String::new()
+            };
+            if attr.contains("Deserialize") {
                 let item = lines[i + 1..]
                     .iter()
                     .map(|l| l.trim_start())
@@ -915,5 +924,70 @@ fn library_messages_name_fields_not_options() {
         bad.is_empty(),
         "options named in library strings (write ‹field›):\n{}",
         bad.join("\n")
+    );
+}
+
+/// One request per command, built once by each front end. The command line's values of the
+/// library's choices (model, feed source, RTCP, moves, the teeth rule) are the library's own
+/// enums, `clap::ValueEnum` derived on them: no enum of the CLI mirrors one and converts
+/// with `From`. Python builds a `SimulateRequest` in one function
+/// (`python/src/simulate.rs::request_of`, called by every function that simulates), so the
+/// simulate keywords are spelled there only.
+#[test]
+fn one_request_per_command_one_builder_per_front_end() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src/cli"), &mut files);
+    let mut mirrors = Vec::new();
+    for p in &files {
+        let text = code(p);
+        let lines: Vec<&str> = text.lines().collect();
+        for (i, line) in lines.iter().enumerate() {
+            if !line.contains("ValueEnum") || !line.trim_start().starts_with("#[derive") {
+                continue;
+            }
+            let Some(name) = lines[i + 1..]
+                .iter()
+                .find_map(|l| l.trim_start().strip_prefix("pub enum "))
+                .and_then(|rest| rest.split([' ', '{']).next())
+            else {
+                continue;
+            };
+            if text.contains(&format!("impl From<{name}> for")) {
+                mirrors.push(format!("{}: {name}", p.display()));
+            }
+        }
+    }
+    assert!(
+        mirrors.is_empty(),
+        "CLI enums that mirror a library enum (derive clap::ValueEnum on the library's): {mirrors:?}"
+    );
+    let mut py = Vec::new();
+    rust_files(&root().join("python/src"), &mut py);
+    let mut builders = Vec::new();
+    let mut spelled = Vec::new();
+    for p in &py {
+        let text = code(p);
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        builders.extend(std::iter::repeat_n(
+            name.clone(),
+            text.matches("SimulateRequest {").count(),
+        ));
+        // Keywords only `simulate` takes.
+        if ["chord_tol_um", "band_um", "patch_near"]
+            .iter()
+            .any(|k| text.contains(k))
+        {
+            spelled.push(name);
+        }
+    }
+    assert_eq!(
+        builders,
+        ["simulate.rs"],
+        "where Python builds a SimulateRequest"
+    );
+    assert_eq!(
+        spelled,
+        ["simulate.rs"],
+        "where Python spells simulate's keywords"
     );
 }
