@@ -38,7 +38,12 @@ struct FeedFigures {
 }
 
 impl FeedFigures {
-    fn push(&mut self, run: usize, t_s: f64, feed: f64) {
+    /// `count` samples of `run` at one feed, the last at `t_s` (times grow along a run):
+    /// the same figures as each pushed on its own.
+    fn push(&mut self, run: usize, t_s: f64, feed: f64, count: u64) {
+        if count == 0 {
+            return;
+        }
         if self.n == 0 {
             self.min = f64::INFINITY;
             self.max = f64::NEG_INFINITY;
@@ -52,8 +57,11 @@ impl FeedFigures {
         self.run_end = self.run_end.max(t_s);
         self.min = self.min.min(feed);
         self.max = self.max.max(feed);
-        self.sum += feed;
-        self.n += 1;
+        // One addition per sample: the sum rounds as it always did.
+        for _ in 0..count {
+            self.sum += feed;
+        }
+        self.n += count as usize;
     }
 
     fn finish(&self) -> (f64, (f64, f64, f64)) {
@@ -99,7 +107,8 @@ pub fn select(
         resample::resample_streamed(path, &popts, |s| {
             let run = s.run() + run_base;
             last_run = last_run.max(run);
-            figures.push(run, s.t_s(), s.feed_mm_min());
+            let count = s.count();
+            figures.push(run, s.t_s(), s.feed_mm_min(), count);
             match s {
                 Streamed::Sample(s) => {
                     let keep = reach.is_none_or(|r| r.near(&s.position, margin));
@@ -107,10 +116,11 @@ pub fn select(
                     s.run = run;
                     subset.push(&s, keep);
                 }
-                Streamed::Far(_) => subset.skip(),
+                Streamed::Far(_) | Streamed::FarRun(_) => subset.skip(count as usize),
             }
-            streamed += 1;
-            if streamed.is_multiple_of(1 << 16) {
+            let before = streamed;
+            streamed += count;
+            if streamed >> 16 != before >> 16 {
                 progress.advance(streamed, (estimated as u64).max(streamed));
             }
         })

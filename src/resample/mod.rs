@@ -115,7 +115,21 @@ pub struct Far {
     pub feed_mm_min: f64,
 }
 
-/// What a resampling hands on: a built sample, or the clock of one far from
+/// Consecutive samples of one move far from [`Options::near`] at one feed: their count and
+/// the clock of the last (the time grows along a run, so it is the latest).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FarRun {
+    /// Index of the cutting run.
+    pub run: usize,
+    /// Samples (at least one).
+    pub count: u64,
+    /// Time of the last, s.
+    pub t_s: f64,
+    /// Local feed of every one, mm/min.
+    pub feed_mm_min: f64,
+}
+
+/// What a resampling hands on: a built sample, or the clock of one or several far from
 /// [`Options::near`].
 #[derive(Debug, Clone, Copy)]
 pub enum Streamed<'a> {
@@ -123,6 +137,9 @@ pub enum Streamed<'a> {
     Sample(&'a Sample),
     /// A sample of a move that cannot come near the box.
     Far(&'a Far),
+    /// Samples of a move that cannot come near the box, at one feed (a move with the same
+    /// feed at both ends), handed on together.
+    FarRun(&'a FarRun),
 }
 
 impl Streamed<'_> {
@@ -131,14 +148,16 @@ impl Streamed<'_> {
         match self {
             Streamed::Sample(s) => s.run,
             Streamed::Far(f) => f.run,
+            Streamed::FarRun(r) => r.run,
         }
     }
 
-    /// Time, s.
+    /// Time, s (of the last, for several).
     pub fn t_s(&self) -> f64 {
         match self {
             Streamed::Sample(s) => s.t_s,
             Streamed::Far(f) => f.t_s,
+            Streamed::FarRun(r) => r.t_s,
         }
     }
 
@@ -147,6 +166,15 @@ impl Streamed<'_> {
         match self {
             Streamed::Sample(s) => s.feed_mm_min,
             Streamed::Far(f) => f.feed_mm_min,
+            Streamed::FarRun(r) => r.feed_mm_min,
+        }
+    }
+
+    /// Samples handed on.
+    pub fn count(&self) -> u64 {
+        match self {
+            Streamed::Sample(_) | Streamed::Far(_) => 1,
+            Streamed::FarRun(r) => r.count,
         }
     }
 }

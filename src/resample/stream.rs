@@ -407,7 +407,7 @@ fn emitter<'s>(
     sink: &'s mut impl FnMut(Streamed<'_>),
 ) -> impl FnMut(Streamed<'_>, &Clock, &mut Stats) + 's {
     move |s: Streamed<'_>, clock: &Clock, stats: &mut Stats| {
-        stats.samples += 1;
+        stats.samples += s.count();
         let feed = s.feed_mm_min();
         let fz = feed / (clock.teeth * clock.rpm);
         stats.feed_min_mm_min = Some(stats.feed_min_mm_min.map_or(feed, |m| m.min(feed)));
@@ -966,9 +966,24 @@ mod tests {
                 let (lo, hi) = (c - h, c + h);
                 let inside = |p: &Point3| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
                 let near = opts.clone().with_near(lo, hi);
-                let (mut built, mut far) = (0, 0);
+                let (mut built, mut far, mut together) = (0, 0, 0);
                 let mut i = 0;
                 let stats = resample_streamed(&path, &near, |s| {
+                    if let Streamed::FarRun(r) = s {
+                        // Samples of one move at one feed, together: each is as built.
+                        let n = usize::try_from(r.count).unwrap();
+                        assert!(n >= 1);
+                        for f in &full[i..i + n] {
+                            assert!(!inside(&f.position), "sample {i} in the box left unbuilt");
+                            assert_eq!(f.run, r.run, "sample {i}");
+                            assert_eq!(f.feed_mm_min.to_bits(), r.feed_mm_min.to_bits());
+                        }
+                        assert_eq!(full[i + n - 1].t_s.to_bits(), r.t_s.to_bits());
+                        i += n;
+                        far += n;
+                        together += 1;
+                        return;
+                    }
                     let f = &full[i];
                     match s {
                         Streamed::Sample(s) => {
@@ -986,6 +1001,7 @@ mod tests {
                             assert_eq!(x.feed_mm_min.to_bits(), f.feed_mm_min.to_bits());
                             far += 1;
                         }
+                        Streamed::FarRun(_) => unreachable!(),
                     }
                     i += 1;
                 })
@@ -1003,6 +1019,10 @@ mod tests {
                 let wanted = full.iter().filter(|s| inside(&s.position)).count();
                 assert!(built >= wanted, "{built} < {wanted}");
                 assert_eq!(built + far, full.len());
+                // Even feed per tooth hands the far samples of a move on together.
+                if mode == Mode::FeedPerTooth && far > 20 {
+                    assert!(together > 0, "{far} far samples, none together");
+                }
             }
             // A box beside the path builds nothing but the ends of the runs.
             let near = opts

@@ -3,7 +3,7 @@
 
 use super::curve::{Curve, above};
 use super::sphere::SphereInterp;
-use super::{AxisInterpolation, Far, Mode, ResampleError, Sample, Stats, Streamed};
+use super::{AxisInterpolation, Far, FarRun, Mode, ResampleError, Sample, Stats, Streamed};
 use crate::math::{Point3, Vec3, any_perpendicular, normalize_or_none};
 use crate::toolpath::Posture;
 
@@ -330,6 +330,7 @@ impl RunWalker {
             .near
             .is_some_and(|(lo, hi)| !mv.curve.may_meet(&lo, &hi));
         match self.params.mode {
+            Mode::FeedPerTooth if far && mv.va == mv.vb => self.skip_far(&mv, s_end, stats, emit),
             Mode::FeedPerTooth => {
                 let step = self.params.fz_mm;
                 loop {
@@ -358,6 +359,78 @@ impl RunWalker {
         self.theta_end = theta_end;
         self.last = Some(mv);
         Ok(())
+    }
+
+    /// The samples of a far move at one feed (`mv.va == mv.vb`), every fz up to `s_end`:
+    /// what [`RunWalker::push`] would do for each, with the clocks of all but the last
+    /// handed on together ([`Streamed::FarRun`]; their times and feeds are the same values
+    /// as one by one).
+    fn skip_far(
+        &mut self,
+        mv: &Move,
+        s_end: f64,
+        stats: &mut Stats,
+        emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
+    ) {
+        let step = self.params.fz_mm;
+        // The first k at or past the end, as the sample loop finds it (k · fz ≥ s_end).
+        let mut end = (s_end / step).ceil().max(0.0) as u64;
+        while end > self.k && (end - 1) as f64 * step >= s_end {
+            end -= 1;
+        }
+        while (end as f64 * step) < s_end {
+            end += 1;
+        }
+        if end <= self.k + 1 {
+            if end == self.k + 1 {
+                self.far_sample(mv, stats, emit);
+            }
+            return;
+        }
+        // All but the last: the one held back goes first, then the run of them.
+        if let Some(p) = self.pending.take() {
+            emit(p.streamed(), &self.clock, stats);
+        }
+        let last = end - 2;
+        let (t, _) = self.far_clock(mv, last as f64 * step);
+        let batch = FarRun {
+            run: self.run_idx,
+            count: last + 1 - self.k,
+            t_s: t,
+            feed_mm_min: if self.clock.timeless {
+                f64::NAN
+            } else {
+                mv.feed_at(0.0) * 60.0
+            },
+        };
+        emit(Streamed::FarRun(&batch), &self.clock, stats);
+        self.k = end - 1;
+        self.far_sample(mv, stats, emit);
+    }
+
+    /// Time of the far sample at run-relative arc length `s`, and its τ into the move.
+    fn far_clock(&self, mv: &Move, s: f64) -> (f64, f64) {
+        let tau = mv.tau_at((s - mv.s0).max(0.0));
+        let t = if self.clock.timeless {
+            f64::NAN
+        } else {
+            mv.t0 + tau
+        };
+        (t, tau)
+    }
+
+    /// [`RunWalker::push`] of the far sample `k` of the fz grid.
+    fn far_sample(
+        &mut self,
+        mv: &Move,
+        stats: &mut Stats,
+        emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
+    ) {
+        let s = self.k as f64 * self.params.fz_mm;
+        let sigma = (s - mv.s0).max(0.0);
+        let tau = mv.tau_at(sigma);
+        let theta = mv.theta0 + self.clock.omega * tau;
+        self.push(mv, s, sigma, tau, theta, true, stats, emit);
     }
 
     /// Build the sample at run-relative arc length `s` (σ into the move, τ after its

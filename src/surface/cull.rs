@@ -18,9 +18,9 @@ pub struct Subset {
 }
 
 impl Subset {
-    /// Count a sample of the stream that was not built (it cannot reach the grid).
-    pub fn skip(&mut self) {
-        self.seen += 1;
+    /// Count `count` samples of the stream that were not built (they cannot reach the grid).
+    pub fn skip(&mut self, count: usize) {
+        self.seen += count;
         self.dropped_since = true;
     }
 
