@@ -24,6 +24,6 @@ pub mod position;
 
 pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind, Written};
 pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
-pub use error::{ParseError, SyntaxError};
+pub use error::ParseError;
 pub use gcode::{Block, GcodeReader, looks_like_gcode};
-pub use position::line_column;
+pub use position::{Located, Problem, Span, line_column};

@@ -448,7 +448,7 @@ proptest! {
         for r in ClsfReader::new(&bytes[..]) {
             match r {
                 Ok(r) => { if low.push(&r, &mut sink).is_err() { break; } }
-                Err(e) => { let s = e.syntax().map(|s| s.line).unwrap_or(1); prop_assert!(s >= 1); break; }
+                Err(e) => { let s = e.syntax().map(|s| s.span.line).unwrap_or(1); prop_assert!(s >= 1); break; }
             }
         }
         let _ = low.finish(&mut sink);
