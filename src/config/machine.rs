@@ -11,6 +11,7 @@
 use crate::kinematics::Machine;
 use crate::kinematics::machine::{BranchPreference, Limits, LinearAxis, RotaryAxis, Side};
 use crate::math::{Point3, Vec3};
+use crate::parse::Span;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -23,12 +24,10 @@ pub enum MachineError {
     Syntax(String),
     /// TOML that does not parse into a machine (a value of the wrong type or out of its
     /// type's range, an unknown key), where the TOML reader knows the place.
-    #[error("line {line}, column {column}: {message}")]
+    #[error("line {}, column {}: {message}", at.line, at.column)]
     Toml {
-        /// 1-based line.
-        line: usize,
-        /// 1-based column (characters).
-        column: usize,
+        /// Where.
+        at: Span,
         /// The TOML reader's message.
         message: String,
     },
@@ -371,14 +370,10 @@ impl Machine {
         let file: FileMachine = toml::from_str(text).map_err(|e| {
             let msg = e.message().trim().to_string();
             match e.span() {
-                Some(s) => {
-                    let (line, column) = crate::parse::line_column(text, s.start);
-                    MachineError::Toml {
-                        line,
-                        column,
-                        message: msg,
-                    }
-                }
+                Some(_) => MachineError::Toml {
+                    at: super::toml_span(text, &e),
+                    message: msg,
+                },
                 None => MachineError::Syntax(msg),
             }
         })?;
