@@ -917,3 +917,132 @@ fn library_messages_name_fields_not_options() {
         bad.join("\n")
     );
 }
+
+/// The items of `text` (non-test code) that derive an error type (`thiserror::Error`), each
+/// as its name and its body from the `struct`/`enum` line to the closing brace.
+fn error_items(text: &str) -> Vec<(String, String)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < lines.len() {
+        let l = lines[k].trim_start();
+        if !(l.starts_with("#[derive(") && l.contains("Error")) {
+            k += 1;
+            continue;
+        }
+        // The item after its attributes (which may span lines).
+        let is_item = |l: &str| {
+            let t = l.trim_start();
+            let t = t.strip_prefix("pub(crate) ").unwrap_or(t);
+            let t = t.strip_prefix("pub ").unwrap_or(t);
+            t.starts_with("struct ") || t.starts_with("enum ")
+        };
+        let mut i = k + 1;
+        while i < lines.len() && !is_item(lines[i]) {
+            i += 1;
+        }
+        // Its body: to the brace that closes it, or the `;` of a tuple or unit struct.
+        let (mut depth, mut opened) = (0i64, false);
+        let mut body = String::new();
+        let mut j = i;
+        while j < lines.len() {
+            body.push_str(lines[j]);
+            body.push('\n');
+            depth += lines[j].matches('{').count() as i64;
+            depth -= lines[j].matches('}').count() as i64;
+            opened |= lines[j].contains('{');
+            if depth <= 0 && (opened || lines[j].trim_end().ends_with(';')) {
+                break;
+            }
+            j += 1;
+        }
+        let name = lines
+            .get(i)
+            .and_then(|l| {
+                l.split_whitespace()
+                    .skip_while(|w| *w != "struct" && *w != "enum")
+                    .nth(1)
+            })
+            .map_or_else(String::new, |w| {
+                w.trim_end_matches(|c: char| !c.is_alphanumeric())
+                    .to_string()
+            });
+        out.push((name, body));
+        k = j.max(k + 1);
+    }
+    out
+}
+
+/// The error types of `text` that keep a column of their own (an integer field `column`),
+/// not a `parse::Span`.
+fn errors_with_own_column(text: &str) -> Vec<String> {
+    error_items(text)
+        .into_iter()
+        .filter(|(_, body)| {
+            body.lines().any(|l| {
+                let t = l.trim_start().trim_start_matches("pub ");
+                ["u32", "u64", "usize"]
+                    .iter()
+                    .any(|ty| t.starts_with(&format!("column: {ty}")))
+            })
+        })
+        .map(|(name, _)| name)
+        .collect()
+}
+
+/// One span type: every error that says where in an input something is carries a
+/// `parse::Span` (inside a `parse::Located` or on its own), none a line and column of its
+/// own. Only `src/parse/position.rs`, which defines the span, declares such fields.
+#[test]
+fn errors_carry_a_span_not_their_own_line_and_column() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let mut bad = Vec::new();
+    for p in files
+        .iter()
+        .filter(|p| !p.ends_with("src/parse/position.rs"))
+    {
+        for name in errors_with_own_column(&code(p)) {
+            bad.push(format!("{}: {name}", p.display()));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "error types with a line and column of their own (carry a parse::Span): {bad:?}"
+    );
+}
+
+#[test]
+fn the_span_check_finds_an_error_with_its_own_column() {
+    let text = r#"
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OldError {
+    #[error("line {line}, column {column}: {message}")]
+    At {
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        message: String,
+    },
+}
+
+#[derive(Debug, thiserror::Error)]
+#[error("{file}:{}:{}: {message}", at.line, at.column)]
+pub struct NewError {
+    pub file: String,
+    pub at: Span,
+    pub message: String,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub line: u32,
+    pub column: u32,
+}
+"#;
+    assert_eq!(errors_with_own_column(text), ["OldError"]);
+    let tuple = "#[derive(Debug, thiserror::Error)]\n#[error(\"{0}\")]\npub struct E(pub Located);\n\n#[derive(thiserror::Error)]\nstruct F {\n    pub column: u32,\n}\n";
+    assert_eq!(errors_with_own_column(tuple), ["F"]);
+}
