@@ -875,7 +875,7 @@ mod tests {
         let msgs: Vec<(u32, String)> = p
             .warnings
             .iter()
-            .map(|w| (w.line, w.message.clone()))
+            .map(|w| (w.at.line, w.message.clone()))
             .collect();
         assert!(
             msgs[0].1.contains("axis Y, Z, A, C not programmed"),

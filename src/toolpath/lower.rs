@@ -306,8 +306,7 @@ impl Lowerer {
         *count += 1;
         if *count <= WARNINGS_PER_KIND {
             self.warnings.push(Warning {
-                line,
-                column,
+                at: Span::line_column(line, column),
                 message,
             });
         }
@@ -1020,8 +1019,7 @@ impl Lowerer {
         counts.sort();
         for (kind, c) in counts {
             self.warnings.push(Warning {
-                line: 0,
-                column: 0,
+                at: Span::NONE,
                 message: format!(
                     "{} more warnings of kind {kind} not shown",
                     c - WARNINGS_PER_KIND

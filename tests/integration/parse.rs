@@ -113,7 +113,7 @@ fn summary(program: &Program) -> String {
         s += &format!("cutting runs {}\n", t.cutting_runs().len());
     }
     for w in &program.warnings {
-        s += &format!("warning {}:{} {}\n", w.line, w.column, w.message);
+        s += &format!("warning {}:{} {}\n", w.at.line, w.at.column, w.message);
     }
     s
 }
