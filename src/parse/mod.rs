@@ -5,7 +5,8 @@
 //! The accepted grammars are written in `grammars/clsf.ebnf`, `grammars/contact12.ebnf`
 //! and `grammars/gcode.ebnf`.
 //! Both readers stream: they hold one line at a time, so any file size reads in constant
-//! memory. Errors carry the 1-based line and column, what was expected and what was found.
+//! memory. A syntax error is a [`Located`]: the [`Span`] (1-based line and column), what was
+//! expected, what was found and the offending line.
 //!
 //! ```
 //! use crest::parse::clsf::{parse_str, RecordKind};
