@@ -30,12 +30,12 @@ use crate::parse::{Located, Span};
 /// file (line and column 0 when the error has no position).
 #[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
 #[error("{}:{}:{}: {}", .0.file.as_deref().unwrap_or_default(), .0.span.line, .0.span.column, .0.problem)]
-pub struct ConfigError(pub Located);
+pub struct ConfigError(pub Box<Located>);
 
 impl ConfigError {
     /// `message` at `span` of `file`.
     pub fn new(file: &str, span: Span, message: impl Into<String>) -> ConfigError {
-        ConfigError(Located::message(span, message).in_file(file))
+        ConfigError(Box::new(Located::message(span, message).in_file(file)))
     }
 
     /// An error at byte offset `at` of `text`.

@@ -215,7 +215,7 @@ pub fn part_from_bytes(
                 ),
             ),
         };
-        let at = t.map_or_else(|| MeshPlace::file(), |t| origins.describe(t));
+        let at = t.map_or_else(MeshPlace::file, |t| origins.describe(t));
         err(at, message)
     })?;
     let warnings = check

@@ -25,16 +25,15 @@ pub fn of_error<'a>(e: &'a (dyn std::error::Error + 'static)) -> Option<&'a Loca
         return Some(l);
     }
     if let Some(ConfigError(l)) = e.downcast_ref::<ConfigError>() {
+        return Some(l.as_ref());
+    }
+    if let Some(ParseError::Syntax(l)) = e.downcast_ref::<ParseError>() {
         return Some(l);
     }
-    match e.downcast_ref::<ParseError>() {
-        Some(ParseError::Syntax(l)) => return Some(l),
-        Some(_) | None => {}
+    if let Some(LowerError::Invalid(l)) = e.downcast_ref::<LowerError>() {
+        return Some(l);
     }
-    match e.downcast_ref::<LowerError>() {
-        Some(LowerError::Invalid(l)) => Some(l),
-        Some(_) | None => None,
-    }
+    None
 }
 
 /// The first located diagnostic in `e`'s chain of causes, from the outermost.
