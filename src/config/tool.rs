@@ -822,7 +822,7 @@ pub fn with_runout(text: &str, offset: Option<(f64, f64)>, devs_um: &[f64]) -> S
 /// assert_eq!(cutter.teeth(), 4);
 /// let err = crest::config::load_tool_toml("shape = \"ball\"\nradius_mm = -5.0\nteeth = 4\nhelix_deg = 0\n")
 ///     .unwrap_err();
-/// assert_eq!(err.line(), 2);
+/// assert_eq!(err.span().line, 2);
 /// ```
 pub fn load_tool_toml(text: &str) -> Result<Cutter, ToolConfigError> {
     parse_tool_config(text)?.to_cutter(text)

@@ -8,7 +8,7 @@ use super::position::{Located, Span};
 #[non_exhaustive]
 pub enum ParseError {
     /// Malformed text.
-    #[error("{0}")]
+    #[error("line {}, column {}: {}", .0.span.line, .0.span.column, .0.problem)]
     Syntax(Box<Located>),
     /// The underlying reader failed.
     #[error("reading failed: {0}")]
