@@ -23,24 +23,25 @@ pub enum MeasuredError {
         message: String,
     },
     /// A malformed line in the measured table.
-    #[error("{file}:{line}: {message}")]
+    #[error("{file}:{}: {message}", at.line)]
     Line {
         /// File name as given.
         file: String,
-        /// 1-based line.
-        line: u64,
+        /// The line.
+        at: Span,
         /// What was wrong.
         message: String,
     },
     /// The header lacks required columns.
     #[error(
-        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um"
+        "{file}:{}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um",
+        at.line
     )]
     MissingColumns {
         /// File name as given.
         file: String,
-        /// Line of the header.
-        line: u64,
+        /// The header's line.
+        at: Span,
         /// The missing column names, comma separated.
         missing: String,
     },
@@ -131,7 +132,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         let line = e.position().map(|p| p.line()).unwrap_or(0);
         MeasuredError::Line {
             file: file.to_string(),
-            line,
+            at: Span::line_u64(line),
             message: format!("not valid CSV: {e}"),
         }
     };
@@ -143,7 +144,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if headers.is_empty() || headers.iter().all(|h| h.is_empty()) {
         return Err(MeasuredError::MissingColumns {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             missing: "lead_deg, side, sample, Ra_um, Rz_um".to_string(),
         });
     }
@@ -185,7 +186,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if !missing.is_empty() {
         return Err(MeasuredError::MissingColumns {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             missing: missing.join(", "),
         });
     }
@@ -203,7 +204,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         if record.len() != headers.len() {
             return Err(MeasuredError::Line {
                 file: file.to_string(),
-                line,
+                at: Span::line_u64(line),
                 message: format!(
                     "{} field(s) where the header has {}",
                     record.len(),
@@ -313,7 +314,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if rows.is_empty() {
         return Err(MeasuredError::Line {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             message: "the table has a header but no data rows".to_string(),
         });
     }

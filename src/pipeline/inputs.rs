@@ -89,8 +89,8 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
     let file = path.display().to_string();
     Machine::from_toml_str(&text).map_err(|e| {
         let e = match &e {
-            MachineError::Missing { line, .. } | MachineError::Invalid { line, .. } => {
-                let line = u32::try_from(*line).unwrap_or(u32::MAX);
+            MachineError::Missing { at, .. } | MachineError::Invalid { at, .. } => {
+                let line = at.line;
                 let msg = e.to_string();
                 let msg = msg
                     .strip_prefix(&format!("line {line}: "))
