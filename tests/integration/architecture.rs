@@ -964,8 +964,9 @@ fn error_items(text: &str) -> Vec<(String, String)> {
                     .nth(1)
             })
             .map_or_else(String::new, |w| {
-                w.trim_end_matches(|c: char| !c.is_alphanumeric())
-                    .to_string()
+                w.chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect()
             });
         out.push((name, body));
         k = j.max(k + 1);
@@ -1059,8 +1060,10 @@ pub struct Row {
 }
 "#;
     assert_eq!(errors_with_own_position(text), ["OldError"]);
-    let tuple = "#[derive(Debug, thiserror::Error)]\n#[error(\"{0}\")]\npub struct E(pub Located);\n\n#[derive(thiserror::Error)]\nstruct F {\n    pub column: u32,\n}\n";
+    let tuple = "#[derive(Debug, thiserror::Error)]\n#[error(\"{0}\")]\npub struct E(pub Located);\n\n#[derive(thiserror::Error)]\nstruct F{\n    pub column: u32,\n}\n";
     assert_eq!(errors_with_own_position(tuple), ["F"]);
+    let names: Vec<String> = error_items(tuple).into_iter().map(|(n, _)| n).collect();
+    assert_eq!(names, ["E", "F"]);
     let line_only = "#[derive(Debug, thiserror::Error)]\n#[error(\"line {line}\")]\npub struct G {\n    line: u64,\n}\n";
     assert_eq!(errors_with_own_position(line_only), ["G"]);
 }
