@@ -18,6 +18,13 @@ class CrestError(Exception):
     """Bad input (the message names file, line and column) or a failed computation; the
     message is the command line's."""
 
+    file: Optional[str]
+    """The input the error names, when it names a place in one."""
+    line: Optional[int]
+    """The 1-based line of that place (None when the error names none)."""
+    column: Optional[int]
+    """The 1-based column, in characters (None when the error names none)."""
+
 class Cutter:
     """A cutter as crest reads it from a ``tool.toml``.
 

@@ -10,18 +10,32 @@ create_exception!(
     CrestError,
     pyo3::exceptions::PyException,
     "An error of crest: bad input (naming file, line and column) or a failed computation. \
-     The message is the command line's."
+     The message is the command line's; `file`, `line` and `column` are the place in an \
+     input it names (None when it names none)."
 );
 
 /// A crest error as a Python exception: the message and its causes, one per line, as the
-/// command line prints them (without the code frame).
+/// command line prints them (without the code frame), and the place in an input it names
+/// (the error's `crest::parse::Located`, as the command line's frame) as `file`, `line` and
+/// `column`.
 fn err(e: miette::Report) -> PyErr {
     let mut msg = e.to_string();
     for cause in e.chain().skip(1) {
         msg.push_str("\n  caused by: ");
         msg.push_str(&cause.to_string());
     }
-    crest_error(msg)
+    let place = crest::pipeline::located::of_report(&e).map(|l| (l.file.clone(), l.span));
+    let py_err = crest_error(msg);
+    if let Some((file, span)) = place {
+        Python::with_gil(|py| {
+            let value = py_err.value(py);
+            // Setting an attribute on an exception instance cannot fail.
+            let _ = value.setattr("file", file);
+            let _ = value.setattr("line", (span.line > 0).then_some(span.line));
+            let _ = value.setattr("column", (span.column > 0).then_some(span.column));
+        });
+    }
+    py_err
 }
 
 /// A [`CrestError`] with `message`, its request fields as keywords (`‹grid_um›` → `grid_um`).
@@ -56,7 +70,11 @@ mod tasks;
 #[pymodule]
 #[pyo3(name = "crest")]
 fn crest_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("CrestError", m.py().get_type::<CrestError>())?;
+    let error = m.py().get_type::<CrestError>();
+    for name in ["file", "line", "column"] {
+        error.setattr(name, m.py().None())?;
+    }
+    m.add("CrestError", error)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<cutter::Cutter>()?;
     m.add_class::<maps::HeightMap>()?;

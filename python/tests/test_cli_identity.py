@@ -108,6 +108,7 @@ def test_cutter_from_keywords_and_file_agree_and_errors_name_line_and_column(cli
         crest.Cutter.from_toml(bad)
     first = str(e.value).splitlines()[0]
     assert first.startswith(f"{bad}:2:"), first
+    assert (e.value.file, e.value.line, e.value.column) == (str(bad), 2, 13)
     p = cli("tool", "--tool", bad, "--lead-deg", "15", "--ap-mm", "0.4", "--fz-mm", "0.05")
     assert p.returncode == 2
     assert norm(first) in norm(p.stderr), (first, p.stderr)
@@ -126,6 +127,7 @@ def test_simulate_errors_are_the_cli_messages(cli, tmp_path):
     assert p.returncode == 2
     assert norm(first) in norm(p.stderr), (first, p.stderr)
     assert f"{bad}:2:" in first or f"{bad}:2:" in str(e.value), str(e.value)
+    assert (e.value.file, e.value.line) == (str(bad), 2), str(e.value)
 
 
 def test_a_bad_grid_names_the_keyword_here_and_the_flag_on_the_command_line(cli, tmp_path):

@@ -3,7 +3,9 @@
 //! file, one plain line per cause, never wrapped, so that logs can be searched and tests do
 //! not depend on the width of a terminal or the length of a path. Control characters that
 //! came from an input (ESC, BEL, NUL, …) are shown escaped (`\x1b`) in the plain lines and in
-//! the graphical report (which keeps only its own colour codes).
+//! the graphical report (which keeps only its own colour codes). An error that names a place
+//! in an input carries one `crest::parse::Located`: its message is the plain line, and its
+//! frame and label are the code frame of the graphical report.
 
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -139,6 +141,26 @@ mod tests {
         let plain = escape_graphical(t, false);
         assert!(!plain.contains('\x1b') && !plain.contains('\x07') && !plain.contains('\0'));
         assert!(plain.starts_with("\\x1b[31merror"), "{plain}");
+    }
+
+    #[test]
+    fn a_located_error_is_one_plain_line_or_a_frame_of_its_line() {
+        use crest::parse::{Located, Span};
+        let line = "GOTO/1,zz,3";
+        let e = Located::expected(Span::in_line(12, line, 7..9), "a number", "`zz`", line)
+            .in_file("a.cls");
+        let r = miette::Report::new(e);
+        assert_eq!(
+            plain(&r),
+            "error: a.cls:12:8: expected a number, found `zz`\n"
+        );
+        let mut out = String::new();
+        miette::GraphicalReportHandler::new_themed(miette::GraphicalTheme::unicode_nocolor())
+            .render_report(&mut out, r.as_ref())
+            .unwrap();
+        assert!(out.contains("[a.cls:12:8]"), "{out}");
+        assert!(out.contains("12 │ GOTO/1,zz,3"), "{out}");
+        assert!(out.contains("expected a number"), "{out}");
     }
 
     #[test]

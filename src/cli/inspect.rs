@@ -294,8 +294,8 @@ pub fn summarise(
             .warnings
             .into_iter()
             .map(|w| WarningSummary {
-                line: w.line,
-                column: w.column,
+                line: w.at.line,
+                column: w.at.column,
                 message: w.message,
             })
             .collect(),

@@ -23,6 +23,7 @@
 //! ```
 
 use super::ConfigError;
+use crate::parse::Span;
 use crate::study::design::{Design, FactorLevels, StepRule};
 use crate::surface::ModelKind;
 use crate::synth::Pattern;
@@ -73,28 +74,34 @@ struct DesignFile {
     uncertainty: Option<super::uncertainty::UncertaintyFile>,
 }
 
-/// The 1-based line and column of the first line that starts with `key` (for rules about a
-/// whole table), or (0, 0).
-fn key_position(text: &str, key: &str) -> (usize, usize) {
-    text.lines()
-        .enumerate()
-        .find(|(_, l)| l.trim_start().starts_with(key))
-        .map_or((0, 0), |(i, l)| (i + 1, l.len() - l.trim_start().len() + 1))
+/// The first line that starts with `key` (for rules about a whole table), at its first
+/// character: the column counts the bytes of its indentation ([`Span::NONE`] when no line
+/// does).
+fn key_position(text: &str, key: &str) -> Span {
+    let mut start = 0;
+    for (i, whole) in text.split_inclusive('\n').enumerate() {
+        let l = whole.strip_suffix('\n').unwrap_or(whole);
+        let l = l.strip_suffix('\r').unwrap_or(l);
+        let lead = l.len() - l.trim_start().len();
+        if l.trim_start().starts_with(key) {
+            return Span {
+                offset: start + lead,
+                len: 0,
+                line: u32::try_from(i + 1).unwrap_or(u32::MAX),
+                column: u32::try_from(lead + 1).unwrap_or(u32::MAX),
+            };
+        }
+        start += whole.len();
+    }
+    Span::NONE
 }
 
 /// Parse a design file; `file` names it in errors (line and column of the key or value).
 pub fn parse_design(text: &str, file: &str) -> Result<Design, ConfigError> {
     let d: DesignFile = super::from_toml(text, file)?;
     let at = |pos: usize, message: String| ConfigError::at(file, text, pos, message);
-    let at_key = |key: &str, message: String| {
-        let (line, column) = key_position(text, key);
-        ConfigError {
-            file: file.to_string(),
-            line,
-            column,
-            message,
-        }
-    };
+    let at_key =
+        |key: &str, message: String| ConfigError::new(file, key_position(text, key), message);
     let positive = |key: &str, v: &Spanned<f64>| {
         let x = *v.get_ref();
         if x > 0.0 && x.is_finite() {
@@ -329,9 +336,9 @@ mod tests {
         );
     }
 
-    fn design_err(text: &str) -> (usize, String) {
+    fn design_err(text: &str) -> (u32, String) {
         match parse_design(text, "d.toml") {
-            Err(e) => (e.line, e.message),
+            Err(e) => (e.0.span.line, e.message()),
             Ok(_) => panic!("accepted: {text}"),
         }
     }

@@ -11,6 +11,7 @@
 use crate::kinematics::Machine;
 use crate::kinematics::machine::{BranchPreference, Limits, LinearAxis, RotaryAxis, Side};
 use crate::math::{Point3, Vec3};
+use crate::parse::Span;
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -23,32 +24,30 @@ pub enum MachineError {
     Syntax(String),
     /// TOML that does not parse into a machine (a value of the wrong type or out of its
     /// type's range, an unknown key), where the TOML reader knows the place.
-    #[error("line {line}, column {column}: {message}")]
+    #[error("line {}, column {}: {message}", at.line, at.column)]
     Toml {
-        /// 1-based line.
-        line: usize,
-        /// 1-based column (characters).
-        column: usize,
+        /// Where.
+        at: Span,
         /// The TOML reader's message.
         message: String,
     },
     /// A required key is missing.
-    #[error("line {line}: missing `{key}` in {table}")]
+    #[error("line {}: missing `{key}` in {table}", at.line)]
     Missing {
         /// Key name.
         key: String,
         /// The table it belongs in, e.g. `[[linear]] X`.
         table: String,
-        /// 1-based line of that table.
-        line: usize,
+        /// Where that table starts (line 1 for the top level).
+        at: Span,
     },
     /// A value is out of range, has the wrong unit, or is inconsistent.
-    #[error("line {line}: `{key}` {message}")]
+    #[error("line {}: `{key}` {message}", at.line)]
     Invalid {
         /// Key name.
         key: String,
-        /// 1-based line of the value.
-        line: usize,
+        /// The value.
+        at: Span,
         /// What is wrong and what was expected.
         message: String,
     },
@@ -204,24 +203,19 @@ fn unit_factor(unit: &str, kind: Kind, rotary: bool) -> Option<f64> {
     Some(base(num)? * per)
 }
 
-/// Line (1-based) of byte offset `pos` in `text`.
-fn line_of(text: &str, pos: usize) -> usize {
-    crate::parse::line_column(text, pos).0
-}
-
 struct Ctx<'a> {
     text: &'a str,
 }
 
 impl Ctx<'_> {
-    fn line<T>(&self, s: &Spanned<T>) -> usize {
-        line_of(self.text, s.span().start)
+    fn span<T>(&self, s: &Spanned<T>) -> Span {
+        Span::of(self.text, s.span())
     }
 
     fn invalid<T>(&self, key: &str, s: &Spanned<T>, message: impl Into<String>) -> MachineError {
         MachineError::Invalid {
             key: key.to_string(),
-            line: self.line(s),
+            at: self.span(s),
             message: message.into(),
         }
     }
@@ -325,16 +319,11 @@ fn finite3(ctx: &Ctx, key: &str, v: &Spanned<super::Fixed<3>>) -> Result<Vec3, M
     Ok(Vec3::new(x, y, z))
 }
 
-fn need<'b, T>(
-    v: &'b Option<T>,
-    key: &str,
-    table: &str,
-    line: usize,
-) -> Result<&'b T, MachineError> {
+fn need<'b, T>(v: &'b Option<T>, key: &str, table: &str, at: Span) -> Result<&'b T, MachineError> {
     v.as_ref().ok_or_else(|| MachineError::Missing {
         key: key.to_string(),
         table: table.to_string(),
-        line,
+        at,
     })
 }
 
@@ -350,11 +339,11 @@ fn limits_of(
     ctx: &Ctx,
     a: &FileAxis,
     table: &str,
-    line: usize,
+    at: Span,
     rotary: bool,
 ) -> Result<Limits, MachineError> {
     let q = |key: &str, v: &Option<Spanned<Quantity>>, kind: Kind| -> Result<f64, MachineError> {
-        ctx.quantity(key, need(v, key, table, line)?, kind, rotary)
+        ctx.quantity(key, need(v, key, table, at)?, kind, rotary)
     };
     let scale = if rotary { 1f64.to_radians() } else { 1.0 };
     Ok(Limits {
@@ -371,20 +360,16 @@ impl Machine {
         let file: FileMachine = toml::from_str(text).map_err(|e| {
             let msg = e.message().trim().to_string();
             match e.span() {
-                Some(s) => {
-                    let (line, column) = crate::parse::line_column(text, s.start);
-                    MachineError::Toml {
-                        line,
-                        column,
-                        message: msg,
-                    }
-                }
+                Some(_) => MachineError::Toml {
+                    at: super::toml_span(text, &e),
+                    message: msg,
+                },
                 None => MachineError::Syntax(msg),
             }
         })?;
         let ctx = Ctx { text };
         let top = "the top level";
-        let cycle = need(&file.cycle_time, "cycle_time", top, 1)?;
+        let cycle = need(&file.cycle_time, "cycle_time", top, Span::at(text, 0))?;
         let cycle_time = ctx.quantity("cycle_time", cycle, Kind::Time, false)?;
         let min_block_cycles = match &file.min_block_cycles {
             None => 1.0,
@@ -414,18 +399,18 @@ impl Machine {
                 }
             },
         };
-        let tool = need(&file.tool, "[tool]", top, 1)?;
-        let tool_line = ctx.line(tool);
+        let tool = need(&file.tool, "[tool]", top, Span::at(text, 0))?;
+        let tool_at = ctx.span(tool);
         let t = tool.get_ref();
         let dir_home = unit_vec(
             &ctx,
             "dir_home",
-            need(&t.dir_home, "dir_home", "[tool]", tool_line)?,
+            need(&t.dir_home, "dir_home", "[tool]", tool_at)?,
         )?;
         let tip_home = finite3(
             &ctx,
             "tip_home",
-            need(&t.tip_home, "tip_home", "[tool]", tool_line)?,
+            need(&t.tip_home, "tip_home", "[tool]", tool_at)?,
         )?;
         let part_origin = match &t.part_origin {
             Some(v) => finite3(&ctx, "part_origin", v)?,
@@ -435,13 +420,16 @@ impl Machine {
         if file.linear.len() != 3 {
             return Err(MachineError::Invalid {
                 key: "[[linear]]".into(),
-                line: file.linear.first().map_or(1, |l| ctx.line(l)),
+                at: file
+                    .linear
+                    .first()
+                    .map_or(Span::at(text, 0), |l| ctx.span(l)),
                 message: format!("needs exactly 3 linear axes, found {}", file.linear.len()),
             });
         }
         let mut linear = Vec::with_capacity(3);
         for (i, l) in file.linear.iter().enumerate() {
-            let line = ctx.line(l);
+            let at = ctx.span(l);
             let a = l.get_ref();
             let name = a
                 .name
@@ -454,11 +442,11 @@ impl Machine {
             let direction = unit_vec(
                 &ctx,
                 "direction",
-                need(&a.direction, "direction", &table, line)?,
+                need(&a.direction, "direction", &table, at)?,
             )?;
             linear.push(LinearAxis {
                 sign: sign_of(&ctx, &a.sign)?,
-                limits: limits_of(&ctx, a, &table, line, false)?,
+                limits: limits_of(&ctx, a, &table, at, false)?,
                 name,
                 direction,
             });
@@ -471,7 +459,7 @@ impl Machine {
         if m.determinant().abs() < 1e-6 {
             return Err(MachineError::Invalid {
                 key: "direction".into(),
-                line: ctx.line(&file.linear[0]),
+                at: ctx.span(&file.linear[0]),
                 message: "the three linear directions do not span space".into(),
             });
         }
@@ -479,17 +467,20 @@ impl Machine {
         if file.rotary.len() != 2 {
             return Err(MachineError::Invalid {
                 key: "[[rotary]]".into(),
-                line: file.rotary.first().map_or(1, |l| ctx.line(l)),
+                at: file
+                    .rotary
+                    .first()
+                    .map_or(Span::at(text, 0), |l| ctx.span(l)),
                 message: format!("needs exactly 2 rotary axes, found {}", file.rotary.len()),
             });
         }
         let mut rotary = Vec::with_capacity(2);
         for (i, r) in file.rotary.iter().enumerate() {
-            let line = ctx.line(r);
+            let at = ctx.span(r);
             let a = r.get_ref();
             let name = a.name.clone().unwrap_or_else(|| ["A", "C"][i].to_string());
             let table = format!("[[rotary]] {name}");
-            let side_v = need(&a.side, "side", &table, line)?;
+            let side_v = need(&a.side, "side", &table, at)?;
             let side = match side_v.get_ref().as_str() {
                 "table" => Side::Table,
                 "head" => Side::Head,
@@ -501,12 +492,12 @@ impl Machine {
                     ));
                 }
             };
-            let axis = unit_vec(&ctx, "axis", need(&a.axis, "axis", &table, line)?)?;
+            let axis = unit_vec(&ctx, "axis", need(&a.axis, "axis", &table, at)?)?;
             let point = match &a.point {
                 Some(p) => Point3::from(finite3(&ctx, "point", p)?),
                 None => Point3::origin(),
             };
-            let lim_v = need(&a.limits, "limits", &table, line)?;
+            let lim_v = need(&a.limits, "limits", &table, at)?;
             let travel = match lim_v.get_ref().as_slice() {
                 [] => None,
                 [lo, hi] if lo.is_finite() && hi.is_finite() && lo < hi => {
@@ -522,7 +513,7 @@ impl Machine {
             };
             rotary.push(RotaryAxis {
                 sign: sign_of(&ctx, &a.sign)?,
-                limits: limits_of(&ctx, a, &table, line, true)?,
+                limits: limits_of(&ctx, a, &table, at, true)?,
                 name,
                 side,
                 axis,
@@ -533,7 +524,7 @@ impl Machine {
         if rotary[0].side == Side::Head && rotary[1].side == Side::Table {
             return Err(MachineError::Invalid {
                 key: "side".into(),
-                line: ctx.line(&file.rotary[0]),
+                at: ctx.span(&file.rotary[0]),
                 message: "list table axes (base -> part) before head axes (base -> spindle)".into(),
             });
         }
@@ -603,8 +594,8 @@ mod tests {
         );
     }
 
-    fn line_of_str(text: &str, needle: &str) -> usize {
-        line_of(text, text.find(needle).unwrap())
+    fn line_of_str(text: &str, needle: &str) -> u32 {
+        Span::at(text, text.find(needle).unwrap()).line
     }
 
     #[test]
@@ -613,13 +604,9 @@ mod tests {
         let t = TABLE_I_AC_TOML.replacen("amax = 5000.0", "amax = 5.0", 1);
         let line = line_of_str(&t, "amax = 5.0");
         match Machine::from_toml_str(&t).unwrap_err() {
-            MachineError::Invalid {
-                key,
-                line: l,
-                message,
-            } => {
+            MachineError::Invalid { key, at, message } => {
                 assert_eq!(key, "amax");
-                assert_eq!(l, line);
+                assert_eq!(at.line, line);
                 assert!(message.contains("m/s2"), "{message}");
             }
             e => panic!("unexpected {e}"),
@@ -628,11 +615,16 @@ mod tests {
         let t = TABLE_I_AC_TOML.replacen("vmax = 300.0", "vmax = \"3 rev/s2\"", 1);
         let line = line_of_str(&t, "vmax = \"3 rev/s2\"");
         let e = Machine::from_toml_str(&t).unwrap_err();
+        let at = Span::of(
+            &t,
+            t.find("\"3 rev/s2\"").unwrap()..t.find("\"3 rev/s2\"").unwrap() + 10,
+        );
+        assert_eq!(at.line, line);
         assert_eq!(
             e,
             MachineError::Invalid {
                 key: "vmax".into(),
-                line,
+                at,
                 message: "has unit \"rev/s2\", expected deg/s or a convertible unit".into()
             }
         );
@@ -647,14 +639,15 @@ mod tests {
     fn missing_limits_name_the_key_and_table_line() {
         let t = TABLE_I_AC_TOML.replacen("jmax = 80000.0\n", "", 1);
         let line = line_of_str(&t, "name = \"Y\"") - 1;
-        assert_eq!(
-            Machine::from_toml_str(&t).unwrap_err(),
-            MachineError::Missing {
-                key: "jmax".into(),
-                table: "[[linear]] Y".into(),
-                line
+        match Machine::from_toml_str(&t).unwrap_err() {
+            MachineError::Missing { key, table, at } => {
+                assert_eq!(
+                    (key.as_str(), table.as_str(), at.line),
+                    ("jmax", "[[linear]] Y", line)
+                );
             }
-        );
+            e => panic!("unexpected {e}"),
+        }
         let t = TABLE_I_AC_TOML.replacen("limits = []", "", 1);
         let e = Machine::from_toml_str(&t).unwrap_err();
         assert!(

@@ -5,9 +5,9 @@
 //! [`crate::kinematics::Machine`], a [`crate::study::design::Design`], …); no stage before
 //! this one derives serde for a file.
 //!
-//! Errors name the file, the 1-based line and column of the offending key or value
-//! ([`crate::parse::line_column`]) and what is wrong. Reading the text from disk is the
-//! caller's (see `crate::io`).
+//! Errors name the file, the 1-based line and column of the offending key or value (a
+//! [`crate::parse::Span`]; a TOML reader's error through [`toml_span`]) and what is wrong.
+//! Reading the text from disk is the caller's (see `crate::io`).
 
 pub mod design;
 pub mod machine;
@@ -24,43 +24,46 @@ pub use tool::{
     load_tool_toml, parse_tool_config,
 };
 
-use crate::parse::line_column;
+use crate::parse::{Located, Span};
 
-/// A configuration file that does not parse or breaks a rule.
+/// A configuration file that does not parse or breaks a rule: a [`Located`] message in the
+/// file (line and column 0 when the error has no position).
 #[derive(Debug, Clone, PartialEq, thiserror::Error, miette::Diagnostic)]
-#[error("{file}:{line}:{column}: {message}")]
-pub struct ConfigError {
-    /// File name as given.
-    pub file: String,
-    /// 1-based line (0 when the error has no position).
-    pub line: usize,
-    /// 1-based column in characters (0 when the error has no position).
-    pub column: usize,
-    /// What is wrong.
-    pub message: String,
-}
+#[error("{}:{}:{}: {}", .0.file.as_deref().unwrap_or_default(), .0.span.line, .0.span.column, .0.problem)]
+pub struct ConfigError(pub Box<Located>);
 
 impl ConfigError {
+    /// `message` at `span` of `file`.
+    pub fn new(file: &str, span: Span, message: impl Into<String>) -> ConfigError {
+        ConfigError(Box::new(Located::message(span, message).in_file(file)))
+    }
+
     /// An error at byte offset `at` of `text`.
     pub fn at(file: &str, text: &str, at: usize, message: impl Into<String>) -> ConfigError {
-        let (line, column) = line_column(text, at);
-        ConfigError {
-            file: file.to_string(),
-            line,
-            column,
-            message: message.into(),
-        }
+        ConfigError::new(file, Span::at(text, at), message)
     }
 
     /// An error about the whole file (no position).
     pub fn whole(file: &str, message: impl Into<String>) -> ConfigError {
-        ConfigError {
-            file: file.to_string(),
-            line: 0,
-            column: 0,
-            message: message.into(),
-        }
+        ConfigError::new(file, Span::NONE, message)
     }
+
+    /// The file name as given.
+    pub fn file(&self) -> &str {
+        self.0.file.as_deref().unwrap_or_default()
+    }
+
+    /// What is wrong, without the place.
+    pub fn message(&self) -> String {
+        self.0.message_text()
+    }
+}
+
+/// Where a TOML reader's error is in `text`: the one mapping of the `toml` crate's byte
+/// spans to [`Span`] for every configuration file (line 1, column 1 when it gives none).
+pub(crate) fn toml_span(text: &str, e: &toml::de::Error) -> Span {
+    e.span()
+        .map_or(Span::line_column(1, 1), |s| Span::of(text, s))
 }
 
 /// The message of a TOML error: its own message, or, when that is empty (a document cut
@@ -82,15 +85,7 @@ pub(crate) fn from_toml<T: serde::de::DeserializeOwned>(
     text: &str,
     file: &str,
 ) -> Result<T, ConfigError> {
-    toml::from_str(text).map_err(|e| {
-        let (line, column) = e.span().map_or((1, 1), |s| line_column(text, s.start));
-        ConfigError {
-            file: file.to_string(),
-            line,
-            column,
-            message: toml_message(&e),
-        }
-    })
+    toml::from_str(text).map_err(|e| ConfigError::new(file, toml_span(text, &e), toml_message(&e)))
 }
 
 /// A fixed-length array of numbers in a file: exactly `N` values, no more, no fewer (serde's

@@ -315,17 +315,17 @@ mod tests {
             "s.toml",
         )
         .unwrap_err();
-        assert_eq!((e.line, e.column), (9, 12), "{e}");
-        assert!(e.message.contains("lead_deg"), "{e}");
+        assert_eq!((e.0.span.line, e.0.span.column), (9, 12), "{e}");
+        assert!(e.message().contains("lead_deg"), "{e}");
         let e = parse_study(&BASE.replace("fz_mm = 0.05", "fz_mm = -0.05"), "s.toml").unwrap_err();
-        assert_eq!((e.line, e.column), (3, 9), "{e}");
+        assert_eq!((e.0.span.line, e.0.span.column), (3, 9), "{e}");
         let e = parse_study(
             &format!("{BASE}rule = \"papr\"\n[[case]]\nlead_deg = 5\nside = \"plane\"\n"),
             "s.toml",
         )
         .unwrap_err();
-        assert_eq!(e.line, 5, "{e}");
+        assert_eq!(e.0.span.line, 5, "{e}");
         let e = parse_study(BASE, "s.toml").unwrap_err();
-        assert!(e.message.contains("no [[case]]"), "{e}");
+        assert!(e.message().contains("no [[case]]"), "{e}");
     }
 }

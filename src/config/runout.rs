@@ -17,7 +17,7 @@
 //! axis_tilt_phase_deg = [0]
 //! ```
 
-use crate::parse::line_column;
+use crate::parse::Span;
 use crate::study::runout::{MAX_CASES, RunoutParam, Study, SweepValues};
 use crate::tool::Rule;
 use serde::Deserialize;
@@ -68,24 +68,17 @@ pub struct StudyConfig {
 
 /// Why a study file was rejected (1-based line and column, key named in the message).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("line {line}, column {column}: {message}")]
+#[error("line {}, column {}: {message}", at.line, at.column)]
 pub struct StudyError {
-    /// 1-based line.
-    pub line: usize,
-    /// 1-based column.
-    pub column: usize,
-    /// Byte range of the offending text, when known.
-    pub span: Option<std::ops::Range<usize>>,
+    /// Where (line 1, column 1 when the TOML reader gives no place).
+    pub at: Span,
     /// What is wrong.
     pub message: String,
 }
 
 fn at(text: &str, span: std::ops::Range<usize>, message: String) -> StudyError {
-    let (line, column) = line_column(text, span.start);
     StudyError {
-        line,
-        column,
-        span: Some(span),
+        at: Span::of(text, span),
         message,
     }
 }
@@ -112,15 +105,9 @@ fn list(
 
 /// Parse and check a study file.
 pub fn parse_study(text: &str) -> Result<Study, StudyError> {
-    let cfg: StudyConfig = toml::from_str(text).map_err(|e| {
-        let span = e.span();
-        let (line, column) = span.as_ref().map_or((1, 1), |s| line_column(text, s.start));
-        StudyError {
-            line,
-            column,
-            span,
-            message: e.message().trim().to_string(),
-        }
+    let cfg: StudyConfig = toml::from_str(text).map_err(|e| StudyError {
+        at: super::toml_span(text, &e),
+        message: e.message().trim().to_string(),
     })?;
     let ap = *cfg.ap_mm.get_ref();
     if !(ap.is_finite() && ap >= 0.0) {

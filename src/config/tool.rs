@@ -41,7 +41,7 @@
 //! name and the 1-based line and column of the offending text. Only these config types
 //! derive serde; the `tool` stage itself stays free of it.
 
-use crate::parse::line_column;
+use crate::parse::Span;
 use crate::tool::{Cutter, Meridian, Runout, Shape, meridian};
 use serde::Deserialize;
 use std::f64::consts::TAU;
@@ -54,61 +54,36 @@ pub const MAX_TEETH: i64 = 64;
 /// a few thousand; more only costs time in every sampling of the meridian.
 pub const MAX_PROFILE_POINTS: usize = 10_000;
 
-/// Why a `tool.toml` was rejected. Every variant carries the 1-based line and column.
+/// Why a `tool.toml` was rejected. Every variant carries the [`Span`] of the problem.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum ToolConfigError {
     /// TOML syntax errors, unknown keys, missing keys and wrong value types (the message
     /// from the TOML reader names the key).
-    #[error("line {line}, column {column}: {message}")]
+    #[error("line {}, column {}: {message}", at.line, at.column)]
     Toml {
-        /// 1-based line.
-        line: usize,
-        /// 1-based column (characters).
-        column: usize,
-        /// Byte range of the offending text, when known.
-        span: Option<Range<usize>>,
+        /// Where (line 1, column 1 when the TOML reader gives no place).
+        at: Span,
         /// What is wrong.
         message: String,
     },
     /// A value that parses but cannot describe a cutter.
-    #[error("line {line}, column {column}: `{key}` {message}")]
+    #[error("line {}, column {}: `{key}` {message}", at.line, at.column)]
     Invalid {
         /// The key, e.g. `radius_mm` or `runout.tooth_radius_deviation_um`.
         key: String,
-        /// 1-based line.
-        line: usize,
-        /// 1-based column (characters).
-        column: usize,
-        /// Byte range of the value.
-        span: Range<usize>,
+        /// The value.
+        at: Span,
         /// What is wrong with it.
         message: String,
     },
 }
 
 impl ToolConfigError {
-    /// The 1-based line of the problem.
-    pub fn line(&self) -> usize {
+    /// Where the problem is.
+    pub fn span(&self) -> Span {
         match self {
-            ToolConfigError::Toml { line, .. } | ToolConfigError::Invalid { line, .. } => *line,
-        }
-    }
-
-    /// The 1-based column of the problem.
-    pub fn column(&self) -> usize {
-        match self {
-            ToolConfigError::Toml { column, .. } | ToolConfigError::Invalid { column, .. } => {
-                *column
-            }
-        }
-    }
-
-    /// Byte range of the offending text, when known.
-    pub fn span(&self) -> Option<Range<usize>> {
-        match self {
-            ToolConfigError::Toml { span, .. } => span.clone(),
-            ToolConfigError::Invalid { span, .. } => Some(span.clone()),
+            ToolConfigError::Toml { at, .. } | ToolConfigError::Invalid { at, .. } => *at,
         }
     }
 
@@ -292,12 +267,9 @@ pub struct RunoutConfig {
 }
 
 fn invalid(text: &str, key: &str, span: Range<usize>, message: String) -> ToolConfigError {
-    let (line, column) = line_column(text, span.start);
     ToolConfigError::Invalid {
         key: key.to_string(),
-        line,
-        column,
-        span,
+        at: Span::of(text, span),
         message,
     }
 }
@@ -322,15 +294,9 @@ fn opt_finite(text: &str, key: &str, v: &Option<Spanned<f64>>) -> Result<f64, To
 
 /// Parse a `tool.toml` document into its config form (syntax, unknown and missing keys).
 pub fn parse_tool_config(text: &str) -> Result<ToolConfig, ToolConfigError> {
-    toml::from_str::<ToolConfig>(text).map_err(|e| {
-        let span = e.span();
-        let (line, column) = span.as_ref().map_or((1, 1), |s| line_column(text, s.start));
-        ToolConfigError::Toml {
-            line,
-            column,
-            span,
-            message: e.message().trim().to_string(),
-        }
+    toml::from_str::<ToolConfig>(text).map_err(|e| ToolConfigError::Toml {
+        at: super::toml_span(text, &e),
+        message: e.message().trim().to_string(),
     })
 }
 
@@ -856,7 +822,7 @@ pub fn with_runout(text: &str, offset: Option<(f64, f64)>, devs_um: &[f64]) -> S
 /// assert_eq!(cutter.teeth(), 4);
 /// let err = crest::config::load_tool_toml("shape = \"ball\"\nradius_mm = -5.0\nteeth = 4\nhelix_deg = 0\n")
 ///     .unwrap_err();
-/// assert_eq!(err.line(), 2);
+/// assert_eq!(err.span().line, 2);
 /// ```
 pub fn load_tool_toml(text: &str) -> Result<Cutter, ToolConfigError> {
     parse_tool_config(text)?.to_cutter(text)
@@ -890,7 +856,7 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
         assert_relative_eq!(load_tool_min_chip(&t).unwrap().unwrap(), 0.003);
         let t = format!("{base}min_chip_ratio = 0.3\n");
         let e = load_tool_toml(&t).unwrap_err();
-        assert_eq!((e.line(), e.column()), (5, 18));
+        assert_eq!((e.span().line, e.span().column), (5, 18));
     }
 
     #[test]
@@ -929,38 +895,38 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
     fn rejections_name_key_and_line() {
         let base = "shape = \"ball\"\nradius_mm = 5.0\nteeth = 4\nhelix_deg = 30.0\n";
         let e = err(&format!("{base}colour = 3\n"));
-        assert_eq!(e.line(), 5);
+        assert_eq!(e.span().line, 5);
         assert!(e.to_string().contains("colour"), "{e}");
 
         let e = err("shape = \"ball\"\nteeth = 4\nhelix_deg = 30.0\n");
         assert!(e.to_string().contains("radius_mm"), "{e}");
 
         let e = err("shape = \"ball\"\nradius_mm = -1\nteeth = 4\nhelix_deg = 30.0\n");
-        assert_eq!((e.line(), e.column()), (2, 13));
+        assert_eq!((e.span().line, e.span().column), (2, 13));
         assert!(e.to_string().contains("radius_mm"), "{e}");
 
         let e = err(
             "shape = \"torus\"\nradius_mm = 5\nteeth = 4\nhelix_deg = 0\ncorner_radius_mm = 6\n",
         );
-        assert_eq!(e.line(), 5);
+        assert_eq!(e.span().line, 5);
         assert!(e.to_string().contains("corner_radius_mm"), "{e}");
 
         let e = err("shape = \"ball\"\nradius_mm = 5.0\nteeth = 0\nhelix_deg = 30.0\n");
-        assert_eq!(e.line(), 3);
+        assert_eq!(e.span().line, 3);
         assert!(e.to_string().contains("teeth"), "{e}");
 
         let e = err(&format!(
             "{base}[runout]\noffset_um = 1\ntooth_radius_deviation_um = [1.0, 2.0]\n"
         ));
-        assert_eq!(e.line(), 7);
+        assert_eq!(e.span().line, 7);
         assert!(e.to_string().contains("tooth_radius_deviation_um"), "{e}");
 
         let e = err(&format!("{base}[runout]\nofset_um = 1\n"));
-        assert_eq!(e.line(), 6);
+        assert_eq!(e.span().line, 6);
         assert!(e.to_string().contains("ofset_um"), "{e}");
 
         let e = err("shape = \"cone\"\nradius_mm = 5.0\nteeth = 4\nhelix_deg = 30.0\n");
-        assert_eq!(e.line(), 1);
+        assert_eq!(e.span().line, 1);
 
         let e = err("shape = \"torus\"\nradius_mm = 5\nteeth = 4\nhelix_deg = 0\n");
         assert!(e.to_string().contains("corner_radius_mm"), "{e}");
@@ -1025,22 +991,22 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
         let e = err(&format!(
             "shape = \"lens\"\nradius_mm = 5\nsegment_radius_mm = 4\ncorner_radius_mm = 1\n{tail}"
         ));
-        assert_eq!(e.line(), 3);
+        assert_eq!(e.span().line, 3);
         assert!(e.to_string().contains("describes no cutter"), "{e}");
         let e = err(&format!(
             "shape = \"apt\"\napt = [10, 1, 4, 1, 0, 0, 30]\nradius_mm = 4\n{tail}"
         ));
-        assert_eq!(e.line(), 3);
+        assert_eq!(e.span().line, 3);
         assert!(e.to_string().contains("largest radius"), "{e}");
         let e = err(&format!(
             "shape = \"oval\"\nradius_mm = 5\nsegment_radius_mm = 20\n{tail}"
         ));
-        assert_eq!(e.line(), 1);
+        assert_eq!(e.span().line, 1);
         assert!(e.to_string().contains("tip_radius_mm"), "{e}");
         let e = err(&format!(
             "shape = \"flat\"\nradius_mm = 5\nprofile_mm = [[0, 0], [5, 0]]\n{tail}"
         ));
-        assert_eq!(e.line(), 3);
+        assert_eq!(e.span().line, 3);
         assert!(e.to_string().contains("not used"), "{e}");
     }
 
@@ -1054,6 +1020,6 @@ tooth_radius_deviation_um = [0.0, 0.0, 0.0, 0.0]
         let e = err(
             "shape = \"ball\"\nradius_mm = 5\nteeth = 3\nhelix_deg = 0\ntooth_pitch_deg = [0, 230, 100]\n",
         );
-        assert_eq!(e.line(), 5);
+        assert_eq!(e.span().line, 5);
     }
 }

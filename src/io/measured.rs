@@ -3,6 +3,7 @@
 //! `Ra_stepover_um`, `Rz_stepover_um`, and `measured_file`, a height map to measure), every
 //! bad cell named by file, line and column.
 
+use crate::parse::Span;
 use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Param, Side};
 use std::collections::BTreeMap;
 
@@ -10,38 +11,37 @@ use std::collections::BTreeMap;
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum MeasuredError {
     /// A value in the measured table could not be read.
-    #[error("{file}:{line}:{column}: column `{name}`: {message}")]
+    #[error("{file}:{}:{}: column `{name}`: {message}", at.line, at.column)]
     Cell {
         /// File name as given.
         file: String,
-        /// 1-based line.
-        line: u64,
-        /// 1-based character column of the field.
-        column: usize,
+        /// Where the field starts.
+        at: Span,
         /// Column name.
         name: String,
         /// What was wrong.
         message: String,
     },
     /// A malformed line in the measured table.
-    #[error("{file}:{line}: {message}")]
+    #[error("{file}:{}: {message}", at.line)]
     Line {
         /// File name as given.
         file: String,
-        /// 1-based line.
-        line: u64,
+        /// The line.
+        at: Span,
         /// What was wrong.
         message: String,
     },
     /// The header lacks required columns.
     #[error(
-        "{file}:{line}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um"
+        "{file}:{}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um",
+        at.line
     )]
     MissingColumns {
         /// File name as given.
         file: String,
-        /// Line of the header.
-        line: u64,
+        /// The header's line.
+        at: Span,
         /// The missing column names, comma separated.
         missing: String,
     },
@@ -85,13 +85,15 @@ fn line_of_record(text: &str, pos: &csv::Position) -> u64 {
     1 + bytes[..at].iter().filter(|b| **b == b'\n').count() as u64
 }
 
-/// The 1-based character column where field `index` of a raw CSV line starts.
-fn field_column(raw: &str, index: usize) -> usize {
+/// Where field `index` of the raw CSV line `raw` (line `line`) starts (just after the
+/// line's end when it has fewer fields).
+fn field_span(raw: &str, line: u64, index: usize) -> Span {
+    let line = u32::try_from(line).unwrap_or(u32::MAX);
     let mut field = 0;
     let mut in_quotes = false;
-    for (col, ch) in raw.chars().enumerate() {
+    for (at, ch) in raw.char_indices() {
         if field == index {
-            return col + 1;
+            return Span::in_line(line, raw, at..at);
         }
         match ch {
             '"' => in_quotes = !in_quotes,
@@ -99,7 +101,7 @@ fn field_column(raw: &str, index: usize) -> usize {
             _ => {}
         }
     }
-    raw.chars().count() + 1
+    Span::in_line(line, raw, raw.len()..raw.len())
 }
 
 /// Parse a measured table from CSV text. `file` names the file in error messages.
@@ -130,7 +132,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         let line = e.position().map(|p| p.line()).unwrap_or(0);
         MeasuredError::Line {
             file: file.to_string(),
-            line,
+            at: Span::line_u64(line),
             message: format!("not valid CSV: {e}"),
         }
     };
@@ -142,7 +144,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if headers.is_empty() || headers.iter().all(|h| h.is_empty()) {
         return Err(MeasuredError::MissingColumns {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             missing: "lead_deg, side, sample, Ra_um, Rz_um".to_string(),
         });
     }
@@ -151,8 +153,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         let Some(known) = KNOWN_COLUMNS.iter().find(|k| **k == h) else {
             return Err(MeasuredError::Cell {
                 file: file.to_string(),
-                line: header_line,
-                column: field_column(raw_line(header_line), i),
+                at: field_span(raw_line(header_line), header_line, i),
                 name: h.to_string(),
                 message: format!(
                     "unknown column; expected one of {} (units in the name)",
@@ -163,8 +164,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         if index.insert(known, i).is_some() {
             return Err(MeasuredError::Cell {
                 file: file.to_string(),
-                line: header_line,
-                column: field_column(raw_line(header_line), i),
+                at: field_span(raw_line(header_line), header_line, i),
                 name: h.to_string(),
                 message: "column given twice".to_string(),
             });
@@ -186,7 +186,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if !missing.is_empty() {
         return Err(MeasuredError::MissingColumns {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             missing: missing.join(", "),
         });
     }
@@ -204,7 +204,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         if record.len() != headers.len() {
             return Err(MeasuredError::Line {
                 file: file.to_string(),
-                line,
+                at: Span::line_u64(line),
                 message: format!(
                     "{} field(s) where the header has {}",
                     record.len(),
@@ -218,8 +218,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         };
         let bad = |name: &str, i: usize, message: String| MeasuredError::Cell {
             file: file.to_string(),
-            line,
-            column: field_column(raw_line(line), i),
+            at: field_span(raw_line(line), line, i),
             name: name.to_string(),
             message,
         };
@@ -315,7 +314,7 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     if rows.is_empty() {
         return Err(MeasuredError::Line {
             file: file.to_string(),
-            line: header_line,
+            at: Span::line_u64(header_line),
             message: "the table has a header but no data rows".to_string(),
         });
     }
@@ -328,8 +327,10 @@ mod tests {
 
     #[test]
     fn field_columns_count_characters() {
-        assert_eq!(field_column("5,concave,S1,x,2", 0), 1);
-        assert_eq!(field_column("5,concave,S1,x,2", 3), 14);
-        assert_eq!(field_column("5,\"a,b\",S1", 2), 9);
+        assert_eq!(field_span("5,concave,S1,x,2", 4, 0).column, 1);
+        assert_eq!(field_span("5,concave,S1,x,2", 4, 3).column, 14);
+        assert_eq!(field_span("5,\"a,b\",S1", 4, 2).column, 9);
+        assert_eq!(field_span("µ,x", 4, 1), Span::in_line(4, "µ,x", 3..3));
+        assert_eq!(field_span("a", 4, 3).column, 2);
     }
 }

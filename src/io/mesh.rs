@@ -11,6 +11,7 @@
 //! degenerate triangles are dropped with a warning naming them.
 
 use crate::math::{Point3, Vec3};
+use crate::parse::Span;
 use crate::part::{Mesh, MeshError, Part};
 use crate::surface::MapPoint;
 use std::io::Write;
@@ -22,10 +23,37 @@ use std::path::Path;
 pub struct MeshFileError {
     /// File name as given.
     pub file: String,
-    /// Where: `LINE:COLUMN` for text, `triangle N (byte B)` for binary, or `1` for the file.
-    pub at: String,
+    /// Where: a line (and column) of a text mesh, or a place in a binary one.
+    pub at: MeshPlace,
     /// What is wrong.
     pub message: String,
+}
+
+/// Where in a mesh file a problem is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum MeshPlace {
+    /// A line (and column, when known) of a text mesh, shown `LINE` or `LINE:COLUMN`; the
+    /// whole file is line 1.
+    Line(Span),
+    /// A place in a binary mesh, in words (`triangle N (byte B)`, `byte B`).
+    Binary(String),
+}
+
+impl MeshPlace {
+    /// The whole file (shown as line 1).
+    fn file() -> MeshPlace {
+        at_line(1)
+    }
+}
+
+impl std::fmt::Display for MeshPlace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MeshPlace::Line(s) if s.column == 0 => write!(f, "{}", s.line),
+            MeshPlace::Line(s) => write!(f, "{}:{}", s.line, s.column),
+            MeshPlace::Binary(w) => f.write_str(w),
+        }
+    }
 }
 
 /// A mesh file's format.
@@ -66,11 +94,11 @@ impl Origins {
     fn push_byte(&mut self, byte: usize) {
         self.at.push((byte as u64, true));
     }
-    fn describe(&self, triangle: usize) -> String {
+    fn describe(&self, triangle: usize) -> MeshPlace {
         match self.at.get(triangle) {
-            Some(&(l, false)) => format!("{l}"),
-            Some(&(b, true)) => format!("triangle {} (byte {b})", triangle + 1),
-            None => format!("triangle {}", triangle + 1),
+            Some(&(l, false)) => MeshPlace::Line(Span::line_u64(l)),
+            Some(&(b, true)) => MeshPlace::Binary(format!("triangle {} (byte {b})", triangle + 1)),
+            None => MeshPlace::Binary(format!("triangle {}", triangle + 1)),
         }
     }
 }
@@ -95,19 +123,19 @@ pub struct PartFile {
 /// Read, check and index a design surface (STL, OBJ or PLY by extension).
 pub fn read_part(path: &Path) -> Result<PartFile, MeshFileError> {
     let file = path.display().to_string();
-    let err = |at: String, message: String| MeshFileError {
+    let err = |at: MeshPlace, message: String| MeshFileError {
         file: file.clone(),
         at,
         message,
     };
     let format = MeshFormat::from_path(path).ok_or_else(|| {
         err(
-            "1".into(),
+            MeshPlace::file(),
             "unknown mesh format (expected .stl, .obj or .ply)".into(),
         )
     })?;
     let bytes = super::input::read_staged(path, "mesh", |head| mesh_stage(format, head))
-        .map_err(|e| err("1".into(), e.detail()))?;
+        .map_err(|e| err(MeshPlace::file(), e.detail()))?;
     part_from_bytes(&bytes, format, &file)
 }
 
@@ -147,7 +175,7 @@ pub fn part_from_bytes(
     format: MeshFormat,
     file: &str,
 ) -> Result<PartFile, MeshFileError> {
-    let err = |at: String, message: String| MeshFileError {
+    let err = |at: MeshPlace, message: String| MeshFileError {
         file: file.to_string(),
         at,
         message,
@@ -187,7 +215,7 @@ pub fn part_from_bytes(
                 ),
             ),
         };
-        let at = t.map_or_else(|| "1".to_string(), |t| origins.describe(t));
+        let at = t.map_or_else(MeshPlace::file, |t| origins.describe(t));
         err(at, message)
     })?;
     let warnings = check
@@ -209,13 +237,13 @@ pub fn part_from_bytes(
     })
 }
 
-type ParseResult = Result<Parsed, (String, String)>;
+type ParseResult = Result<Parsed, (MeshPlace, String)>;
 
-fn at_line(line: usize) -> String {
-    format!("{line}")
+fn at_line(line: usize) -> MeshPlace {
+    MeshPlace::Line(Span::line(u32::try_from(line).unwrap_or(u32::MAX)))
 }
 
-fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (String, String)> {
+fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (MeshPlace, String)> {
     let t = tok.ok_or_else(|| {
         (
             at_line(line),
@@ -239,7 +267,7 @@ fn number(tok: Option<&str>, line: usize, what: &str) -> Result<f64, (String, St
 
 /// A vertex coordinate of a text mesh: a finite number within ±100 m
 /// ([`crate::math::limits::coordinates`]).
-fn coordinate(tok: Option<&str>, line: usize) -> Result<f64, (String, String)> {
+fn coordinate(tok: Option<&str>, line: usize) -> Result<f64, (MeshPlace, String)> {
     let v = number(tok, line, "a coordinate")?;
     crate::math::limits::coordinates(&[v]).map_err(|m| (at_line(line), m.to_string()))?;
     Ok(v)
@@ -272,14 +300,14 @@ fn parse_stl(bytes: &[u8]) -> ParseResult {
     }
     match binary_count {
         None => Err((
-            "1".into(),
+            MeshPlace::file(),
             format!(
                 "truncated STL: {} bytes, less than the 84-byte header",
                 bytes.len()
             ),
         )),
         Some(n) => Err((
-            "1".into(),
+            MeshPlace::file(),
             format!(
                 "binary STL whose header says {n} triangles ({} bytes) but the file has {} bytes",
                 84 + 50 * n,
@@ -309,19 +337,23 @@ fn parse_binary_stl(bytes: &[u8]) -> ParseResult {
             *p = Point3::new(f(b), f(b + 4), f(b + 8));
             if !p.coords.iter().all(|c| c.is_finite()) {
                 return Err((
-                    format!("triangle {} (byte {b})", t + 1),
+                    MeshPlace::Binary(format!("triangle {} (byte {b})", t + 1)),
                     format!("vertex {} is not finite", k + 1),
                 ));
             }
             crate::math::limits::coordinates(p.coords.as_slice()).map_err(|m| {
                 (
-                    format!("triangle {} (byte {b})", t + 1),
+                    MeshPlace::Binary(format!("triangle {} (byte {b})", t + 1)),
                     format!("vertex {}: {m}", k + 1),
                 )
             })?;
         }
-        check_stored_normal(&normal, &tri)
-            .map_err(|m| (format!("triangle {} (byte {o})", t + 1), m.to_string()))?;
+        check_stored_normal(&normal, &tri).map_err(|m| {
+            (
+                MeshPlace::Binary(format!("triangle {} (byte {o})", t + 1)),
+                m.to_string(),
+            )
+        })?;
         corners.push(tri);
         origins.push_byte(o);
     }
@@ -353,11 +385,12 @@ fn check_stored_normal(stored: &Vec3, tri: &[Point3; 3]) -> Result<(), NormalAga
 
 fn parse_ascii_stl(bytes: &[u8]) -> ParseResult {
     let text = std::str::from_utf8(bytes).map_err(|e| {
-        let (line, col) = crate::parse::line_column(
-            &String::from_utf8_lossy(&bytes[..e.valid_up_to()]),
-            e.valid_up_to(),
-        );
-        (format!("{line}:{col}"), "not UTF-8 text".to_string())
+        let at = e.valid_up_to();
+        let before = String::from_utf8_lossy(&bytes[..at]);
+        (
+            MeshPlace::Line(Span::of(&before, at..at + 1)),
+            "not UTF-8 text".to_string(),
+        )
     })?;
     let mut corners = Vec::new();
     let mut origins = Origins::default();
@@ -407,7 +440,10 @@ fn parse_ascii_stl(bytes: &[u8]) -> ParseResult {
             }
             other => {
                 return Err((
-                    format!("{line}:{}", raw.len() - raw.trim_start().len() + 1),
+                    MeshPlace::Line(Span::line_column(
+                        u32::try_from(line).unwrap_or(u32::MAX),
+                        u32::try_from(raw.len() - raw.trim_start().len() + 1).unwrap_or(u32::MAX),
+                    )),
                     format!("expected an STL keyword, found `{}`", short(other)),
                 ));
             }
@@ -426,7 +462,7 @@ fn parse_ascii_stl(bytes: &[u8]) -> ParseResult {
 }
 
 /// Resolve an OBJ vertex reference (`i`, `i/t`, `i//n`, `i/t/n`; negative = from the end).
-fn obj_index(tok: &str, count: usize, line: usize) -> Result<u32, (String, String)> {
+fn obj_index(tok: &str, count: usize, line: usize) -> Result<u32, (MeshPlace, String)> {
     let head = tok.split('/').next().unwrap_or("");
     let i: i64 = head.parse().map_err(|_| {
         (
@@ -560,7 +596,12 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
     let end = bytes
         .windows(10)
         .position(|w| w == b"end_header")
-        .ok_or_else(|| ("1".to_string(), "not a PLY file: no end_header".to_string()))?;
+        .ok_or_else(|| {
+            (
+                MeshPlace::file(),
+                "not a PLY file: no end_header".to_string(),
+            )
+        })?;
     let body_start = bytes[end..]
         .iter()
         .position(|&b| b == b'\n')
@@ -569,7 +610,7 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
     let mut lines = header.lines().enumerate();
     if lines.next().map(|(_, l)| l.trim()) != Some("ply") {
         return Err((
-            "1".into(),
+            MeshPlace::file(),
             "not a PLY file: the first line is not `ply`".into(),
         ));
     }
@@ -623,7 +664,7 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
         Some("binary_little_endian") => Some(false),
         Some("binary_big_endian") => Some(true),
         other => {
-            return Err(("1".into(), format!("unknown PLY format {other:?}")));
+            return Err((MeshPlace::file(), format!("unknown PLY format {other:?}")));
         }
     };
     let body = &bytes[body_start..];
@@ -640,7 +681,7 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
                 for _ in 0..e.count {
                     let Some((i, row)) = rows.next() else {
                         return Err((
-                            format!("{}", header_lines + 1),
+                            at_line(header_lines + 1),
                             format!("the file ends before its {} {} elements", e.count, e.name),
                         ));
                     };
@@ -676,17 +717,18 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
         }
         Some(big) => {
             let mut o = 0usize;
-            let take = |o: &mut usize, n: usize, what: &str| -> Result<usize, (String, String)> {
-                if *o + n > body.len() {
-                    return Err((
-                        format!("byte {}", body_start + *o),
-                        format!("the file ends inside {what}"),
-                    ));
-                }
-                let at = *o;
-                *o += n;
-                Ok(at)
-            };
+            let take =
+                |o: &mut usize, n: usize, what: &str| -> Result<usize, (MeshPlace, String)> {
+                    if *o + n > body.len() {
+                        return Err((
+                            MeshPlace::Binary(format!("byte {}", body_start + *o)),
+                            format!("the file ends inside {what}"),
+                        ));
+                    }
+                    let at = *o;
+                    *o += n;
+                    Ok(at)
+                };
             for e in &elements {
                 for k in 0..e.count {
                     let start = body_start + o;
@@ -706,7 +748,7 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
                                 let n = ct.read(&body[at..], big);
                                 if !(0.0..=1e6).contains(&n) {
                                     return Err((
-                                        format!("byte {start}"),
+                                        MeshPlace::Binary(format!("byte {start}")),
                                         format!("list length {n}"),
                                     ));
                                 }
@@ -715,7 +757,14 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
                                     if name.starts_with("vertex_ind") {
                                         let v = it.read(&body[at..], big);
                                         face.push(ply_index(v, 0).map_err(|(_, m)| {
-                                            (format!("{} {} (byte {start})", e.name, k + 1), m)
+                                            (
+                                                MeshPlace::Binary(format!(
+                                                    "{} {} (byte {start})",
+                                                    e.name,
+                                                    k + 1
+                                                )),
+                                                m,
+                                            )
                                         })?);
                                     }
                                 }
@@ -730,11 +779,11 @@ fn parse_ply(bytes: &[u8]) -> ParseResult {
     Ok(Parsed { mesh, origins })
 }
 
-fn ply_index(v: f64, at: usize) -> Result<u32, (String, String)> {
+fn ply_index(v: f64, at: usize) -> Result<u32, (MeshPlace, String)> {
     if v >= 0.0 && v < u32::MAX as f64 && v.fract() == 0.0 {
         Ok(v as u32)
     } else {
-        Err((format!("{at}"), format!("bad vertex index {v}")))
+        Err((at_line(at), format!("bad vertex index {v}")))
     }
 }
 
@@ -746,10 +795,10 @@ fn ply_item(
     origins: &mut Origins,
     at: usize,
     binary: bool,
-) -> Result<(), (String, String)> {
+) -> Result<(), (MeshPlace, String)> {
     let place = |at: usize| {
         if binary {
-            format!("byte {at}")
+            MeshPlace::Binary(format!("byte {at}"))
         } else {
             at_line(at)
         }
@@ -847,17 +896,17 @@ pub fn read_map_ply_column(path: &Path, column: &str) -> Result<Vec<MapPoint>, M
     })
     .map_err(|e| MeshFileError {
         file: file.clone(),
-        at: "1".into(),
+        at: MeshPlace::file(),
         message: e.detail(),
     })?;
     let text = String::from_utf8(bytes).map_err(|e| MeshFileError {
         file: file.clone(),
-        at: "1".into(),
+        at: MeshPlace::file(),
         message: format!("not UTF-8 text (byte {})", e.utf8_error().valid_up_to()),
     })?;
     let err = |line: usize, message: String| MeshFileError {
         file: file.clone(),
-        at: format!("{line}"),
+        at: at_line(line),
         message,
     };
     let mut lines = text.lines().enumerate();

@@ -1,18 +1,79 @@
 //! Series read back for plots: a two-column numeric table (x, y), and the planned feed that
 //! `crest feed -o POSES.csv` writes, so that one command's output is the next one's input.
 
+use crate::parse::Span;
 use std::collections::HashMap;
 use std::path::Path;
 
 /// A table that could not be read: the message names the file, the line and the column.
 #[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct SeriesError(pub String);
+#[non_exhaustive]
+pub enum SeriesError {
+    /// The file could not be read as text (the message names it).
+    #[error("{0}")]
+    Read(String),
+    /// The table as a whole (no data rows).
+    #[error("{file}: {message}")]
+    Table {
+        /// File name as given.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A line of the table.
+    #[error("{file}:{}: {message}", at.line)]
+    Line {
+        /// File name as given.
+        file: String,
+        /// The line.
+        at: Span,
+        /// What is wrong.
+        message: String,
+    },
+    /// A field of a line.
+    #[error("{file}:{}:{}: {message}", at.line, at.column)]
+    Field {
+        /// File name as given.
+        file: String,
+        /// The line and the field's column.
+        at: Span,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl SeriesError {
+    fn table(file: &str, message: &str) -> SeriesError {
+        SeriesError::Table {
+            file: file.to_string(),
+            message: message.to_string(),
+        }
+    }
+
+    fn line(file: &str, line: u64, message: String) -> SeriesError {
+        SeriesError::Line {
+            file: file.to_string(),
+            at: Span::line_u64(line),
+            message,
+        }
+    }
+
+    fn field(file: &str, line: u64, column: usize, message: String) -> SeriesError {
+        SeriesError::Field {
+            file: file.to_string(),
+            at: Span::line_column(
+                u32::try_from(line).unwrap_or(u32::MAX),
+                u32::try_from(column).unwrap_or(u32::MAX),
+            ),
+            message,
+        }
+    }
+}
 
 fn read_text(path: &Path) -> Result<String, SeriesError> {
     // `text::read_text` records the path as an input.
     super::text::read_text(path, "table", super::input::TABLE)
-        .map_err(|e| SeriesError(e.to_string()))
+        .map_err(|e| SeriesError::Read(e.to_string()))
 }
 
 /// A two-column numeric table: optional header line, `#` comments, fields separated by
@@ -38,27 +99,28 @@ pub(crate) fn two_columns(text: &str, name: &str) -> Result<(Vec<f64>, Vec<f64>)
             continue; // header
         }
         if fields.len() < 2 {
-            return Err(SeriesError(format!(
-                "{name}:{}: expected two numbers, found {}",
-                i + 1,
-                fields.len()
-            )));
+            return Err(SeriesError::line(
+                name,
+                i as u64 + 1,
+                format!("expected two numbers, found {}", fields.len()),
+            ));
         }
         for (k, v) in parsed.iter().take(2).enumerate() {
             if v.is_none() {
                 let col = line.find(fields[k]).unwrap_or(0) + 1;
-                return Err(SeriesError(format!(
-                    "{name}:{}:{col}: expected a number, found '{}'",
-                    i + 1,
-                    fields[k]
-                )));
+                return Err(SeriesError::field(
+                    name,
+                    i as u64 + 1,
+                    col,
+                    format!("expected a number, found '{}'", fields[k]),
+                ));
             }
         }
         xs.push(parsed[0].unwrap_or(f64::NAN));
         ys.push(parsed[1].unwrap_or(f64::NAN));
     }
     if xs.is_empty() {
-        return Err(SeriesError(format!("{name}: no data rows")));
+        return Err(SeriesError::table(name, "no data rows"));
     }
     Ok((xs, ys))
 }
@@ -91,13 +153,13 @@ fn planned_feed(text: &str, name: &str) -> Result<Option<PlannedFeeds>, SeriesEr
     for record in reader.records() {
         let record = record.map_err(|e| {
             let line = e.position().map(|p| p.line()).unwrap_or(0);
-            SeriesError(format!("{name}:{line}: {e}"))
+            SeriesError::line(name, line, e.to_string())
         })?;
         let line_no = record.position().map(|p| p.line()).unwrap_or(0);
         let field = |k: usize, what: &str| -> Result<&str, SeriesError> {
-            record
-                .get(k)
-                .ok_or_else(|| SeriesError(format!("{name}:{line_no}: missing the {what} column")))
+            record.get(k).ok_or_else(|| {
+                SeriesError::line(name, line_no, format!("missing the {what} column"))
+            })
         };
         let column_of = |k: usize| -> usize {
             // 1-based character column of field k in the raw line.
@@ -109,23 +171,29 @@ fn planned_feed(text: &str, name: &str) -> Result<Option<PlannedFeeds>, SeriesEr
                 + 1
         };
         let line: u32 = field(cl, "line")?.trim().parse().map_err(|_| {
-            SeriesError(format!(
-                "{name}:{line_no}:{}: expected a source line number, found '{}'",
+            SeriesError::field(
+                name,
+                line_no,
                 column_of(cl),
-                record.get(cl).unwrap_or("")
-            ))
+                format!(
+                    "expected a source line number, found '{}'",
+                    record.get(cl).unwrap_or("")
+                ),
+            )
         })?;
         let raw = field(cf, "feed_mm_min")?.trim();
         let feed: f64 = raw.parse().map_err(|_| {
-            SeriesError(format!(
-                "{name}:{line_no}:{}: expected a feed in mm/min, found '{raw}'",
-                column_of(cf)
-            ))
+            SeriesError::field(
+                name,
+                line_no,
+                column_of(cf),
+                format!("expected a feed in mm/min, found '{raw}'"),
+            )
         })?;
         out.insert((field(cp, "path")?.to_string(), line), feed);
     }
     if out.is_empty() {
-        return Err(SeriesError(format!("{name}: no data rows")));
+        return Err(SeriesError::table(name, "no data rows"));
     }
     Ok(Some(out))
 }
@@ -142,6 +210,10 @@ mod tests {
         let e = two_columns("0,1\n2,x\n", "t.csv").unwrap_err();
         assert_eq!(e.to_string(), "t.csv:2:3: expected a number, found 'x'");
         assert!(two_columns("a,b\n", "t.csv").is_err());
+        let e = two_columns("0,1\n2\n", "t.csv").unwrap_err();
+        assert_eq!(e.to_string(), "t.csv:2: expected two numbers, found 1");
+        let e = two_columns("a,b\n", "t.csv").unwrap_err();
+        assert_eq!(e.to_string(), "t.csv: no data rows");
     }
 
     #[test]

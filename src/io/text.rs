@@ -1,6 +1,7 @@
 //! Reading a whole text file (configs, tables): UTF-8 checked with the line and column of the
 //! first invalid byte, a leading byte-order mark dropped, errors naming the file.
 
+use crate::parse::Span;
 use std::path::Path;
 
 /// Why a text file could not be read.
@@ -10,16 +11,18 @@ pub enum TextError {
     #[error(transparent)]
     Input(Box<super::input::InputError>),
     /// The file is not UTF-8 text.
-    #[error("{file}:{line}:{column}: the {what} is not UTF-8 text (invalid byte 0x{byte:02X})")]
+    #[error(
+        "{file}:{}:{}: the {what} is not UTF-8 text (invalid byte 0x{byte:02X})",
+        at.line,
+        at.column
+    )]
     Encoding {
         /// File name as given.
         file: String,
         /// What the file is.
         what: String,
-        /// 1-based line of the first invalid byte.
-        line: usize,
-        /// 1-based column (characters) of the first invalid byte.
-        column: usize,
+        /// The first invalid byte.
+        at: Span,
         /// The byte.
         byte: u8,
     },
@@ -46,12 +49,10 @@ pub fn decode(bytes: Vec<u8>, file: &str, what: &str) -> Result<String, TextErro
         let at = e.utf8_error().valid_up_to();
         let bytes = e.into_bytes();
         let before = String::from_utf8_lossy(&bytes[..at]);
-        let (line, column) = crate::parse::line_column(&before, before.len());
         TextError::Encoding {
             file: file.to_string(),
             what: what.to_string(),
-            line,
-            column,
+            at: Span::of(&before, at..at + 1),
             byte: bytes[at],
         }
     })?;

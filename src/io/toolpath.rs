@@ -12,12 +12,13 @@ use super::input::Bounded;
 use crate::kinematics::Machine;
 use crate::nc::{NcReader, Rtcp};
 use crate::parse::Written;
+use crate::parse::position::Frame;
 use crate::parse::{
-    ClsfReader, Contact12Reader, GcodeReader, ParseError, SyntaxError, looks_like_contact12,
-    looks_like_gcode,
+    ClsfReader, Contact12Reader, GcodeReader, Located, ParseError, Problem, Span,
+    looks_like_contact12, looks_like_gcode,
 };
 use crate::toolpath::{LowerError, LowerOptions, Lowerer, Posture, PostureSink, Program, Toolpath};
-use miette::{Diagnostic, MietteError, MietteSpanContents, SourceCode, SourceSpan, SpanContents};
+use miette::Diagnostic;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -64,56 +65,24 @@ impl From<LowerOptions> for ReadOptions {
     }
 }
 
-/// The text of one line, reported with its real line number in code frames.
-#[derive(Debug)]
-pub struct LineSource {
-    name: String,
-    text: String,
-    /// 0-based line number of `text`'s first line.
-    first_line: usize,
-}
-
-impl SourceCode for LineSource {
-    fn read_span<'a>(
-        &'a self,
-        span: &SourceSpan,
-        context_lines_before: usize,
-        context_lines_after: usize,
-    ) -> Result<Box<dyn SpanContents<'a> + 'a>, MietteError> {
-        let inner = self
-            .text
-            .read_span(span, context_lines_before, context_lines_after)?;
-        Ok(Box::new(MietteSpanContents::new_named(
-            self.name.clone(),
-            inner.data(),
-            *inner.span(),
-            inner.line() + self.first_line,
-            inner.column(),
-            inner.line_count(),
-        )))
-    }
-}
-
 /// A bad-input error: file, line, column, what was expected and what was found, with a
-/// code frame of the offending line.
-#[derive(Debug, thiserror::Error, Diagnostic)]
-#[error("{file}:{line}:{column}: expected {expected}, found {found}")]
-#[diagnostic(code(crate::input))]
-pub struct InputError {
-    /// File name as given.
-    pub file: String,
-    /// 1-based line.
-    pub line: u32,
-    /// 1-based column.
-    pub column: u32,
-    /// What was expected.
-    pub expected: String,
-    /// What was found.
-    pub found: String,
-    #[source_code]
-    src: Option<LineSource>,
-    #[label("expected {expected}")]
-    span: Option<SourceSpan>,
+/// code frame of the offending line (a [`Located`] in the file).
+#[derive(Debug, thiserror::Error)]
+#[error("{}:{}:{}: {}", .0.file.as_deref().unwrap_or_default(), .0.span.line, .0.span.column, .0.problem)]
+pub struct InputError(pub Located);
+
+impl Diagnostic for InputError {
+    fn code<'a>(&'a self) -> Option<Box<dyn std::fmt::Display + 'a>> {
+        Some(Box::new("crate::input"))
+    }
+
+    fn source_code(&self) -> Option<&dyn miette::SourceCode> {
+        self.0.source_code()
+    }
+
+    fn labels(&self) -> Option<Box<dyn Iterator<Item = miette::LabeledSpan> + '_>> {
+        self.0.labels()
+    }
 }
 
 /// At most this many characters of an offending line (or token) are shown in a message,
@@ -141,10 +110,14 @@ fn window(text: &str, col: usize) -> (String, usize) {
 }
 
 impl InputError {
-    fn new(file: &Path, s: &SyntaxError) -> InputError {
-        let (line_text, col) = window(&s.line_text, s.column.saturating_sub(1) as usize);
-        let (src, span) = if line_text.is_empty() {
-            (None, None)
+    /// The syntax error `s` in `file`, its line and found token cut to [`SHOW_CHARS`]
+    /// characters around the column, the frame pointing at the token.
+    fn new(file: &Path, s: &Located) -> InputError {
+        let name = file.display().to_string();
+        let column = s.span.column;
+        let (line_text, col) = window(s.line_text(), column.saturating_sub(1) as usize);
+        let (frame, offset, len) = if line_text.is_empty() {
+            (None, 0, 0)
         } else {
             let byte = line_text
                 .char_indices()
@@ -160,24 +133,31 @@ impl InputError {
                 .find([',', ' ', '\t', '/', ';'])
                 .unwrap_or(text.len() - byte)
                 .max(1);
-            (
-                Some(LineSource {
-                    name: file.display().to_string(),
-                    text,
-                    first_line: s.line.saturating_sub(1) as usize,
-                }),
-                Some(SourceSpan::new(byte.into(), len)),
-            )
+            let frame = Frame {
+                name: name.clone(),
+                text,
+                first_line: s.span.line.saturating_sub(1) as usize,
+            };
+            (Some(frame), byte, len)
         };
-        InputError {
-            file: file.display().to_string(),
-            line: s.line,
-            column: s.column,
-            expected: s.expected.clone(),
-            found: window(&s.found, 0).0,
-            src,
-            span,
-        }
+        let problem = match &s.problem {
+            Problem::Expected { expected, found } => Problem::Expected {
+                expected: expected.clone(),
+                found: window(found, 0).0,
+            },
+            Problem::Message(m) => Problem::Message(m.clone()),
+        };
+        InputError(Located {
+            file: Some(name),
+            span: Span {
+                offset,
+                len,
+                line: s.span.line,
+                column,
+            },
+            problem,
+            frame,
+        })
     }
 }
 
@@ -204,21 +184,7 @@ pub fn parse_diagnostic(file: &Path, e: ParseError) -> miette::Report {
 /// Turn a lowering error into a diagnostic naming the file.
 pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
     match e {
-        LowerError::Invalid {
-            line,
-            column,
-            expected,
-            found,
-        } => miette::Report::new(InputError::new(
-            file,
-            &SyntaxError {
-                line,
-                column,
-                expected,
-                found,
-                line_text: String::new(),
-            },
-        )),
+        LowerError::Invalid(s) => miette::Report::new(InputError::new(file, &s)),
         LowerError::Output(io) => miette::Report::new(IoFailure {
             context: OUTPUT_FAILED.into(),
             source: io,

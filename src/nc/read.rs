@@ -6,7 +6,7 @@ use super::{Rtcp, joint_letters};
 use crate::kinematics::{Joints, Machine};
 use crate::math::{Point3, Vec3, normalize_or_none};
 use crate::parse::gcode::{Block, Word};
-use crate::parse::{Arg, FeedUnit, Numbers, Record, RecordKind};
+use crate::parse::{Arg, FeedUnit, Numbers, Record, RecordKind, Span};
 use crate::toolpath::{ArcMove, LowerError, Lowerer, PostureSink};
 
 /// mm per inch.
@@ -30,12 +30,7 @@ enum FeedMode {
 }
 
 fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError {
-    LowerError::Invalid {
-        line,
-        column,
-        expected: expected.to_string(),
-        found,
-    }
+    LowerError::invalid(Span::line_column(line, column), expected, found)
 }
 
 /// The modal state of the NC and the bookkeeping of the paths it opens (see the module
@@ -880,7 +875,7 @@ mod tests {
         let msgs: Vec<(u32, String)> = p
             .warnings
             .iter()
-            .map(|w| (w.line, w.message.clone()))
+            .map(|w| (w.at.line, w.message.clone()))
             .collect();
         assert!(
             msgs[0].1.contains("axis Y, Z, A, C not programmed"),
@@ -896,8 +891,8 @@ mod tests {
             ("F-5\n", (1, 1)),
         ] {
             match read(text, Rtcp::Auto) {
-                Err(LowerError::Invalid { line, column, .. }) => {
-                    assert_eq!((line, column), at, "{text}")
+                Err(LowerError::Invalid(e)) => {
+                    assert_eq!((e.span.line, e.span.column), at, "{text}")
                 }
                 other => panic!("{text}: {other:?}"),
             }

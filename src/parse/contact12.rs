@@ -77,7 +77,7 @@ fn is_missing(s: &str) -> bool {
     s.is_empty() || s.eq_ignore_ascii_case("NA") || s.eq_ignore_ascii_case("N/A")
 }
 
-use super::position::column_in_line as column_of;
+use super::position::{Span, column_in_line as column_of};
 
 /// Parse one data line (not a header). `line_no` is 1-based.
 pub fn parse_row(line: &str, line_no: u32) -> Result<Contact12Row, ParseError> {
@@ -91,8 +91,7 @@ pub fn parse_row(line: &str, line_no: u32) -> Result<Contact12Row, ParseError> {
     for k in 0..12 {
         let Some(&(start, text)) = f.get(k) else {
             return Err(ParseError::at(
-                line_no,
-                column_of(line, line.len()),
+                Span::in_line(line_no, line, line.len()..line.len()),
                 format!(
                     "12 fields (CL x y z, axis i j k, CC x y z, normal), field {}",
                     k + 1
@@ -108,8 +107,7 @@ pub fn parse_row(line: &str, line_no: u32) -> Result<Contact12Row, ParseError> {
                 Some(v) => row.cl_axis[k] = v,
                 None => {
                     return Err(ParseError::at(
-                        line_no,
-                        row.columns[k],
+                        Span::in_line(line_no, line, start..start + text.len()),
                         "a number",
                         if text.is_empty() {
                             "an empty field".to_string()
@@ -126,8 +124,7 @@ pub fn parse_row(line: &str, line_no: u32) -> Result<Contact12Row, ParseError> {
                 None if is_missing(text) => row.contact[k - 6] = None,
                 None => {
                     return Err(ParseError::at(
-                        line_no,
-                        row.columns[k],
+                        Span::in_line(line_no, line, start..start + text.len()),
                         "a number, NA, N/A or an empty field",
                         describe_found(text),
                         line,
@@ -193,13 +190,13 @@ impl<R: BufRead> Contact12Reader<R> {
             let text = match std::str::from_utf8(&self.buf[..end]) {
                 Ok(t) => t,
                 Err(e) => {
-                    let good = String::from_utf8_lossy(&self.buf[..e.valid_up_to()]);
+                    let at = e.valid_up_to();
+                    let shown = String::from_utf8_lossy(&self.buf[..end]);
                     return Err(ParseError::at(
-                        self.line,
-                        good.chars().count() as u32 + 1,
+                        Span::in_line(self.line, &shown, at..at + 1),
                         "ASCII or UTF-8 text",
-                        format!("byte 0x{:02X}", self.buf[e.valid_up_to()]),
-                        &String::from_utf8_lossy(&self.buf[..end]),
+                        format!("byte 0x{:02X}", self.buf[at]),
+                        &shown,
                     ));
                 }
             };
@@ -296,12 +293,13 @@ mod tests {
     fn errors_name_line_and_column() {
         let e = rows("1 2 3 0 0 1 1 2 3 0 0 1\n1 2 3 0 x 1 1 2 3 0 0 1\n").unwrap_err();
         let s = e.syntax().unwrap();
-        assert_eq!((s.line, s.column), (2, 9));
-        assert_eq!(s.found, "`x`");
+        assert_eq!((s.span.line, s.span.column), (2, 9));
+        assert_eq!((s.span.offset, s.span.len), (8, 1));
+        assert_eq!(s.found(), Some("`x`"));
         let e = rows("1 2 3 0 0 1 1 2 3\n").unwrap_err();
-        assert_eq!(e.syntax().unwrap().found, "end of line");
+        assert_eq!(e.syntax().unwrap().found(), Some("end of line"));
         let e = rows("1,2,,0,0,1,1,2,3,0,0,1\n").unwrap_err();
-        assert_eq!(e.syntax().unwrap().column, 5);
+        assert_eq!(e.syntax().unwrap().span.column, 5);
     }
 
     #[test]

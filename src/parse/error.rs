@@ -1,28 +1,15 @@
-//! Errors of the parse stage: where (1-based line and column), what was expected, what
-//! was found, and the text of the offending line for a code frame.
+//! Errors of the parse stage: a syntax error is a [`Located`] (where, what was expected,
+//! what was found, and the text of the offending line for a code frame).
 
-/// A syntax error with its position.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SyntaxError {
-    /// 1-based line of the error.
-    pub line: u32,
-    /// 1-based column (characters) of the error.
-    pub column: u32,
-    /// What the grammar expected there, e.g. "a number".
-    pub expected: String,
-    /// What was found there, e.g. "`abc`" or "end of line".
-    pub found: String,
-    /// The text of the physical line, without its line ending.
-    pub line_text: String,
-}
+use super::position::{Located, Span};
 
 /// Why reading a CLSF or contact12 text failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum ParseError {
     /// Malformed text.
-    #[error("line {}, column {}: expected {}, found {}", .0.line, .0.column, .0.expected, .0.found)]
-    Syntax(Box<SyntaxError>),
+    #[error("line {}, column {}: {}", .0.span.line, .0.span.column, .0.problem)]
+    Syntax(Box<Located>),
     /// The underlying reader failed.
     #[error("reading failed: {0}")]
     Io(#[from] std::io::Error),
@@ -30,28 +17,23 @@ pub enum ParseError {
 
 impl ParseError {
     /// The syntax error, if this is one.
-    pub fn syntax(&self) -> Option<&SyntaxError> {
+    pub fn syntax(&self) -> Option<&Located> {
         match self {
             ParseError::Syntax(s) => Some(s),
             ParseError::Io(_) => None,
         }
     }
 
-    /// Build a syntax error.
+    /// A syntax error at `span` of the line `line_text`.
     pub fn at(
-        line: u32,
-        column: u32,
+        span: Span,
         expected: impl Into<String>,
         found: impl Into<String>,
         line_text: &str,
     ) -> ParseError {
-        ParseError::Syntax(Box::new(SyntaxError {
-            line,
-            column,
-            expected: expected.into(),
-            found: found.into(),
-            line_text: line_text.to_string(),
-        }))
+        ParseError::Syntax(Box::new(Located::expected(
+            span, expected, found, line_text,
+        )))
     }
 }
 

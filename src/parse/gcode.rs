@@ -8,6 +8,7 @@
 
 use super::clsf::{RecordKind, parse_line};
 use super::error::{ParseError, describe_found};
+use super::position::Problem;
 use std::io::BufRead;
 
 /// One address word: a letter and its number.
@@ -81,7 +82,7 @@ impl Block {
     }
 }
 
-use super::position::column_in_line as column_of;
+use super::position::{Span, column_in_line as column_of};
 
 /// The number of an address word: `[+|-] (digits [. [digits]] | . digits)`, no exponent
 /// (`E` is an address letter). Returns the value and the bytes used.
@@ -119,7 +120,7 @@ pub fn parse_block(text: &str, line: u32) -> Result<Block, ParseError> {
         ..Default::default()
     };
     let err = |at: usize, expected: &str, found: String| {
-        ParseError::at(line, column_of(text, at), expected, found, text)
+        ParseError::at(Span::in_line(line, text, at..at), expected, found, text)
     };
     let mut i = 0;
     let skip_blanks = |i: &mut usize| {
@@ -252,9 +253,14 @@ fn comment(
         let at = body_start + lead;
         let rec = parse_line(t, line).map_err(|e| match e {
             ParseError::Syntax(s) => {
-                // Columns of the comment text → columns of the G-code line.
-                let prefix = text[..at].chars().count() as u32;
-                ParseError::at(line, s.column + prefix, s.expected, s.found, text)
+                // Bytes of the comment text → bytes of the G-code line.
+                let range = s.span.range();
+                let span = Span::in_line(line, text, at + range.start..at + range.end);
+                let (expected, found) = match s.problem {
+                    Problem::Expected { expected, found } => (expected, found),
+                    Problem::Message(m) => (m, String::new()),
+                };
+                ParseError::at(span, expected, found, text)
             }
             other => other,
         })?;
@@ -297,14 +303,14 @@ impl<R: BufRead> GcodeReader<R> {
             let text = match std::str::from_utf8(&self.buf) {
                 Ok(t) => t,
                 Err(e) => {
-                    let good = String::from_utf8_lossy(&self.buf[..e.valid_up_to()]).into_owned();
+                    let at = e.valid_up_to();
                     let shown = String::from_utf8_lossy(&self.buf).into_owned();
+                    let shown = shown.trim_end_matches(['\r', '\n']);
                     return Err(ParseError::at(
-                        self.line,
-                        good.chars().count() as u32 + 1,
+                        Span::in_line(self.line, shown, at..at + 1),
                         "ASCII or UTF-8 text",
-                        format!("byte 0x{:02X}", self.buf[e.valid_up_to()]),
-                        shown.trim_end_matches(['\r', '\n']),
+                        format!("byte 0x{:02X}", self.buf[at]),
+                        shown,
                     ));
                 }
             };
@@ -392,8 +398,13 @@ mod tests {
 
     fn err(s: &str) -> (u32, String, String) {
         let e = parse_block(s, 1).unwrap_err();
-        let s = e.syntax().unwrap().clone();
-        (s.column, s.expected, s.found)
+        let s = e.syntax().unwrap();
+        let found = s.found().unwrap_or_default().to_string();
+        (
+            s.span.column,
+            s.expected_text().unwrap_or_default().to_string(),
+            found,
+        )
     }
 
     #[test]

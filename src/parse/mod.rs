@@ -5,7 +5,8 @@
 //! The accepted grammars are written in `grammars/clsf.ebnf`, `grammars/contact12.ebnf`
 //! and `grammars/gcode.ebnf`.
 //! Both readers stream: they hold one line at a time, so any file size reads in constant
-//! memory. Errors carry the 1-based line and column, what was expected and what was found.
+//! memory. A syntax error is a [`Located`]: the [`Span`] (1-based line and column), what was
+//! expected, what was found and the offending line.
 //!
 //! ```
 //! use crest::parse::clsf::{parse_str, RecordKind};
@@ -24,6 +25,6 @@ pub mod position;
 
 pub use clsf::{Arg, ClsfReader, FeedUnit, LengthUnit, Numbers, Record, RecordKind, Written};
 pub use contact12::{Contact12Reader, Contact12Row, looks_like_contact12};
-pub use error::{ParseError, SyntaxError};
+pub use error::ParseError;
 pub use gcode::{Block, GcodeReader, looks_like_gcode};
-pub use position::line_column;
+pub use position::{Located, Problem, Span, line_column};

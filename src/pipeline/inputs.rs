@@ -5,38 +5,29 @@
 use crate::config::{ConfigError, MachineError, ProcessConfig, ToolConfigError};
 use crate::io::text::read_text;
 use crate::kinematics::Machine;
+use crate::parse::{Located, Span};
 use crate::tool::Cutter;
-use miette::{NamedSource, SourceSpan};
 use std::path::{Path, PathBuf};
 
-/// A rejected `tool.toml`, with the file name, line and column, and the offending text.
+/// A rejected `tool.toml`: a [`Located`] message in the file, the file's text for the frame.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
-#[error("{file}:{line}:{column}: {message}")]
-pub struct ToolFileError {
-    file: String,
-    line: usize,
-    column: usize,
-    message: String,
-    #[source_code]
-    src: NamedSource<String>,
-    #[label("here")]
-    span: Option<SourceSpan>,
-}
+#[error("{}:{}:{}: {}", .0.file.as_deref().unwrap_or_default(), .0.span.line, .0.span.column, .0.problem)]
+#[diagnostic(transparent)]
+pub struct ToolFileError(pub Located);
 
 impl ToolFileError {
     /// A [`ToolConfigError`] on `text`, read from `file`.
     pub fn new(file: &str, text: &str, e: &ToolConfigError) -> ToolFileError {
-        ToolFileError {
-            file: file.to_string(),
-            line: e.line(),
-            column: e.column(),
-            message: e.message(),
-            src: NamedSource::new(file, text.to_string()),
-            span: e
-                .span()
-                .map(|s| SourceSpan::from((s.start, s.end.saturating_sub(s.start)))),
-        }
+        ToolFileError(located_in(file, text, e.span(), e.message()))
     }
+}
+
+/// `message` at `span` of the configuration file `file` whose text is `text` (shown in the
+/// code frame).
+pub(crate) fn located_in(file: &str, text: &str, span: Span, message: String) -> Located {
+    Located::message(span, message)
+        .in_file(file)
+        .with_text(text)
 }
 
 /// Read `path` as a `tool.toml`.
@@ -98,7 +89,8 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
     let file = path.display().to_string();
     Machine::from_toml_str(&text).map_err(|e| {
         let e = match &e {
-            MachineError::Missing { line, .. } | MachineError::Invalid { line, .. } => {
+            MachineError::Missing { at, .. } | MachineError::Invalid { at, .. } => {
+                let line = at.line;
                 let msg = e.to_string();
                 let msg = msg
                     .strip_prefix(&format!("line {line}: "))
@@ -107,25 +99,12 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
                 // The column of the line's first character (the key or table).
                 let column = text
                     .lines()
-                    .nth(line.saturating_sub(1))
+                    .nth(line.saturating_sub(1) as usize)
                     .map_or(1, |l| l.len() - l.trim_start().len() + 1);
-                ConfigError {
-                    file: file.clone(),
-                    line: *line,
-                    column,
-                    message: msg,
-                }
+                let column = u32::try_from(column).unwrap_or(u32::MAX);
+                ConfigError::new(&file, Span::line_column(line, column), msg)
             }
-            MachineError::Toml {
-                line,
-                column,
-                message,
-            } => ConfigError {
-                file: file.clone(),
-                line: *line,
-                column: *column,
-                message: message.clone(),
-            },
+            MachineError::Toml { at, message } => ConfigError::new(&file, *at, message.clone()),
             _ => ConfigError::whole(&file, e.to_string()),
         };
         e.into()

@@ -16,6 +16,7 @@ pub mod contact;
 pub mod design;
 pub mod feed;
 pub mod fields;
+pub mod located;
 pub mod patch;
 pub mod prepare;
 pub mod progress;

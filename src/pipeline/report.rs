@@ -15,12 +15,12 @@ use std::path::Path;
 #[non_exhaustive]
 pub enum MeasuredFileError {
     /// The file is missing or cannot be read as a height map.
-    #[error("{table}:{line}: measured_file `{file}` cannot be read")]
+    #[error("{table}:{}: measured_file `{file}` cannot be read", at.line)]
     Read {
         /// The measured table, as given.
         table: String,
-        /// 1-based line of the row.
-        line: u64,
+        /// The row's line.
+        at: crate::parse::Span,
         /// The file as written in the table.
         file: String,
         /// The reader's error (it names the path relative to the working directory).
@@ -28,12 +28,12 @@ pub enum MeasuredFileError {
         source: Box<crate::io::HeightMapError>,
     },
     /// The map was read but its parameters cannot be computed.
-    #[error("{table}:{line}: measured_file `{file}` cannot be measured")]
+    #[error("{table}:{}: measured_file `{file}` cannot be measured", at.line)]
     Measure {
         /// The measured table, as given.
         table: String,
-        /// 1-based line of the row.
-        line: u64,
+        /// The row's line.
+        at: crate::parse::Span,
         /// The file as written in the table.
         file: String,
         /// Why.
@@ -58,14 +58,14 @@ pub fn measure_files(
         let map = crate::io::read_heightmap(&dir.join(&file), &crate::io::ReadOptions::default())
             .map_err(|source| MeasuredFileError::Read {
             table: name.clone(),
-            line: row.line,
+            at: crate::parse::Span::line_u64(row.line),
             file: file.clone(),
             source: Box::new(source),
         })?;
         let values = crate::study::measured::measure_map(&map).map_err(|source| {
             MeasuredFileError::Measure {
                 table: name.clone(),
-                line: row.line,
+                at: crate::parse::Span::line_u64(row.line),
                 file: file.clone(),
                 source,
             }

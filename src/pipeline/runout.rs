@@ -4,24 +4,17 @@
 //! the sweep splits into tasks evaluated elsewhere ([`super::tasks::runout`]).
 
 use crate::io::text::read_text;
+use crate::parse::Located;
 use crate::study::runout::{LateralCurve, RunoutRow, Study, lateral_curves, run_study};
 use crate::tool::Cutter;
-use miette::{NamedSource, SourceSpan};
 use std::path::{Path, PathBuf};
 
-/// A rejected run-out study file, with the file name, line and column and the text.
+/// A rejected run-out study file: a [`Located`] message in the file, the file's text for
+/// the frame.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
-#[error("{file}:{line}:{column}: {message}")]
-pub struct StudyFileError {
-    file: String,
-    line: usize,
-    column: usize,
-    message: String,
-    #[source_code]
-    src: NamedSource<String>,
-    #[label("here")]
-    span: Option<SourceSpan>,
-}
+#[error("{}:{}:{}: {}", .0.file.as_deref().unwrap_or_default(), .0.span.line, .0.span.column, .0.problem)]
+#[diagnostic(transparent)]
+pub struct StudyFileError(pub Located);
 
 /// A finished run-out study.
 #[derive(Debug, Clone)]
@@ -72,18 +65,8 @@ pub struct Prepared {
 }
 
 fn parse(text: &str, file: &str) -> miette::Result<Study> {
-    Ok(
-        crate::config::runout::parse_study(text).map_err(|e| StudyFileError {
-            file: file.to_string(),
-            line: e.line,
-            column: e.column,
-            message: e.message,
-            src: NamedSource::new(file, text.to_string()),
-            span: e
-                .span
-                .map(|s| SourceSpan::from((s.start, s.end.saturating_sub(s.start)))),
-        })?,
-    )
+    Ok(crate::config::runout::parse_study(text)
+        .map_err(|e| StudyFileError(super::inputs::located_in(file, text, e.at, e.message)))?)
 }
 
 /// Read the study `path` and the tool file it names (relative to the study file).

@@ -177,7 +177,7 @@ pub fn unit_findings(program: &Program) -> Vec<String> {
         .warnings
         .iter()
         .filter(|w| w.message.starts_with(crate::toolpath::CONTRADICTORY_UNITS))
-        .map(|w| format!("line {}, column {}: {}", w.line, w.column, w.message))
+        .map(|w| format!("line {}, column {}: {}", w.at.line, w.at.column, w.message))
         .collect()
 }
 

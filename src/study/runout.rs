@@ -372,11 +372,11 @@ mod tests {
             "tool = \"t.toml\"\nap_mm = 0.4\n[sweep]\nlead_deg = [5]\nfz_mm = [0.05, -1]\n",
         )
         .unwrap_err();
-        assert_eq!(e.line, 5);
+        assert_eq!(e.at.line, 5);
         assert!(e.message.contains("fz_mm"), "{e}");
         let e = parse_study("tool = \"t.toml\"\nap_mm = 0.4\n[sweep]\nlead_deg = [5]\nfz_mm = [0.05]\nrunout = [1]\n")
             .unwrap_err();
-        assert_eq!(e.line, 6);
+        assert_eq!(e.at.line, 6);
         assert!(e.message.contains("runout"), "{e}");
     }
 

@@ -22,7 +22,9 @@ use super::{
     ArcMove, Contact, MotionKind, Posture, Program, RawRecord, ToolData, Toolpath, Warning,
 };
 use crate::math::{Point3, Vec3, normalize_or_none};
-use crate::parse::{Arg, Contact12Row, FeedUnit, LengthUnit, Numbers, Record, RecordKind};
+use crate::parse::{
+    Arg, Contact12Row, FeedUnit, LengthUnit, Located, Numbers, Problem, Record, RecordKind, Span,
+};
 use std::collections::HashMap;
 
 /// mm per inch.
@@ -64,28 +66,27 @@ impl Default for LowerOptions {
 #[non_exhaustive]
 pub enum LowerError {
     /// A record that parses but cannot mean anything geometric (zero axis, radius ≤ 0, …).
-    #[error("line {line}, column {column}: expected {expected}, found {found}")]
-    Invalid {
-        /// 1-based line.
-        line: u32,
-        /// 1-based column.
-        column: u32,
-        /// What was expected.
-        expected: String,
-        /// What was found.
-        found: String,
-    },
+    #[error("line {}, column {}: {}", .0.span.line, .0.span.column, .0.problem)]
+    Invalid(Box<Located>),
     /// The posture callback failed (e.g. writing the output).
     #[error("writing failed: {0}")]
     Output(#[from] std::io::Error),
 }
 
 fn invalid(line: u32, column: u32, expected: &str, found: String) -> LowerError {
-    LowerError::Invalid {
-        line,
-        column,
-        expected: expected.to_string(),
-        found,
+    LowerError::invalid(Span::line_column(line, column), expected, found)
+}
+
+impl LowerError {
+    /// A record at `at` that means nothing geometric: what was `expected`, what was `found`.
+    pub fn invalid(at: Span, expected: &str, found: String) -> LowerError {
+        LowerError::Invalid(Box::new(Located::new(
+            at,
+            Problem::Expected {
+                expected: expected.to_string(),
+                found,
+            },
+        )))
     }
 }
 
@@ -305,8 +306,7 @@ impl Lowerer {
         *count += 1;
         if *count <= WARNINGS_PER_KIND {
             self.warnings.push(Warning {
-                line,
-                column,
+                at: Span::line_column(line, column),
                 message,
             });
         }
@@ -1019,8 +1019,7 @@ impl Lowerer {
         counts.sort();
         for (kind, c) in counts {
             self.warnings.push(Warning {
-                line: 0,
-                column: 0,
+                at: Span::NONE,
                 message: format!(
                     "{} more warnings of kind {kind} not shown",
                     c - WARNINGS_PER_KIND

@@ -51,13 +51,12 @@ pub struct Program {
     pub warnings: Vec<Warning>,
 }
 
-/// A non-fatal finding, with the 1-based line (and column) it refers to.
+/// A non-fatal finding, with the place in the source file it refers to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Warning {
-    /// 1-based line in the source file (0 when not tied to a line).
-    pub line: u32,
-    /// 1-based column (0 when not tied to a column).
-    pub column: u32,
+    /// Where: line and column (line 0 when not tied to a line, column 0 when not tied to a
+    /// column).
+    pub at: crate::parse::Span,
     /// What was found, lower case.
     pub message: String,
 }

@@ -991,3 +991,153 @@ fn one_request_per_command_one_builder_per_front_end() {
         "where Python spells simulate's keywords"
     );
 }
+
+/// The items of `text` (non-test code) that derive an error type (`thiserror::Error`), each
+/// as its name and its body from the `struct`/`enum` line to the closing brace.
+fn error_items(text: &str) -> Vec<(String, String)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k < lines.len() {
+        let l = lines[k].trim_start();
+        if !(l.starts_with("#[derive(") && l.contains("Error")) {
+            k += 1;
+            continue;
+        }
+        // The item after its attributes (which may span lines).
+        let is_item = |l: &str| {
+            let t = l.trim_start();
+            let t = t.strip_prefix("pub(crate) ").unwrap_or(t);
+            let t = t.strip_prefix("pub ").unwrap_or(t);
+            t.starts_with("struct ") || t.starts_with("enum ")
+        };
+        let mut i = k + 1;
+        while i < lines.len() && !is_item(lines[i]) {
+            i += 1;
+        }
+        // Its body: to the brace that closes it, or the `;` of a tuple or unit struct.
+        let (mut depth, mut opened) = (0i64, false);
+        let mut body = String::new();
+        let mut j = i;
+        while j < lines.len() {
+            body.push_str(lines[j]);
+            body.push('\n');
+            depth += lines[j].matches('{').count() as i64;
+            depth -= lines[j].matches('}').count() as i64;
+            opened |= lines[j].contains('{');
+            if depth <= 0 && (opened || lines[j].trim_end().ends_with(';')) {
+                break;
+            }
+            j += 1;
+        }
+        let name = lines
+            .get(i)
+            .and_then(|l| {
+                l.split_whitespace()
+                    .skip_while(|w| *w != "struct" && *w != "enum")
+                    .nth(1)
+            })
+            .map_or_else(String::new, |w| {
+                w.chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect()
+            });
+        out.push((name, body));
+        k = j.max(k + 1);
+    }
+    out
+}
+
+/// The error types of `text` that keep a line or a column of their own (an integer field
+/// `line` or `column`), not a `parse::Span`.
+fn errors_with_own_position(text: &str) -> Vec<String> {
+    error_items(text)
+        .into_iter()
+        .filter(|(_, body)| {
+            body.lines().any(|l| {
+                let t = l.trim_start().trim_start_matches("pub ");
+                ["line", "column"].iter().any(|field| {
+                    ["u32", "u64", "usize"]
+                        .iter()
+                        .any(|ty| t.starts_with(&format!("{field}: {ty}")))
+                })
+            })
+        })
+        .map(|(name, _)| name)
+        .collect()
+}
+
+/// Errors that name a posture by its source line (the number `toolpath::Posture::line`
+/// carries), not a place a reader found in an input.
+const POSTURE_LINE_ERRORS: [&str; 2] = ["KinematicsError", "ResampleError"];
+
+/// One span type: every error that says where in an input something is carries a
+/// `parse::Span` (inside a `parse::Located` or on its own), none a line or column of its
+/// own. Only `src/parse/position.rs`, which defines the span, declares such fields, and the
+/// errors about a posture keep its source line.
+#[test]
+fn errors_carry_a_span_not_their_own_line_and_column() {
+    let mut files = Vec::new();
+    rust_files(&root().join("src"), &mut files);
+    let (mut bad, mut posture) = (Vec::new(), Vec::new());
+    for p in files
+        .iter()
+        .filter(|p| !p.ends_with("src/parse/position.rs"))
+    {
+        for name in errors_with_own_position(&code(p)) {
+            if POSTURE_LINE_ERRORS.contains(&name.as_str()) {
+                posture.push(name);
+            } else {
+                bad.push(format!("{}: {name}", p.display()));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "error types with a line or column of their own (carry a parse::Span): {bad:?}"
+    );
+    posture.sort();
+    assert_eq!(
+        posture, POSTURE_LINE_ERRORS,
+        "the list of posture-line errors is stale"
+    );
+}
+
+#[test]
+fn the_span_check_finds_an_error_with_its_own_line_or_column() {
+    let text = r#"
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum OldError {
+    #[error("line {line}, column {column}: {message}")]
+    At {
+        /// 1-based line.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        message: String,
+    },
+}
+
+#[derive(Debug, thiserror::Error)]
+#[error("{file}:{}:{}: {message}", at.line, at.column)]
+pub struct NewError {
+    pub file: String,
+    pub at: Span,
+    pub message: String,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub line: u32,
+    pub column: u32,
+}
+"#;
+    assert_eq!(errors_with_own_position(text), ["OldError"]);
+    let tuple = "#[derive(Debug, thiserror::Error)]\n#[error(\"{0}\")]\npub struct E(pub Located);\n\n#[derive(thiserror::Error)]\nstruct F{\n    pub column: u32,\n}\n";
+    assert_eq!(errors_with_own_position(tuple), ["F"]);
+    let names: Vec<String> = error_items(tuple).into_iter().map(|(n, _)| n).collect();
+    assert_eq!(names, ["E", "F"]);
+    let line_only = "#[derive(Debug, thiserror::Error)]\n#[error(\"line {line}\")]\npub struct G {\n    line: u64,\n}\n";
+    assert_eq!(errors_with_own_position(line_only), ["G"]);
+}

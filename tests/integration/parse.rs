@@ -113,7 +113,7 @@ fn summary(program: &Program) -> String {
         s += &format!("cutting runs {}\n", t.cutting_runs().len());
     }
     for w in &program.warnings {
-        s += &format!("warning {}:{} {}\n", w.line, w.column, w.message);
+        s += &format!("warning {}:{} {}\n", w.at.line, w.at.column, w.message);
     }
     s
 }
@@ -448,7 +448,7 @@ proptest! {
         for r in ClsfReader::new(&bytes[..]) {
             match r {
                 Ok(r) => { if low.push(&r, &mut sink).is_err() { break; } }
-                Err(e) => { let s = e.syntax().map(|s| s.line).unwrap_or(1); prop_assert!(s >= 1); break; }
+                Err(e) => { let s = e.syntax().map(|s| s.span.line).unwrap_or(1); prop_assert!(s >= 1); break; }
             }
         }
         let _ = low.finish(&mut sink);

@@ -38,6 +38,8 @@ fn one(s: &str) -> RecordKind {
 #[cfg(test)]
 fn err(s: &str) -> (u32, u32, String, String) {
     let e = parse_str(s).unwrap_err();
-    let s = e.syntax().unwrap().clone();
-    (s.line, s.column, s.expected, s.found)
+    let s = e.syntax().unwrap();
+    let expected = s.expected_text().unwrap_or_default().to_string();
+    let found = s.found().unwrap_or_default().to_string();
+    (s.span.line, s.span.column, expected, found)
 }

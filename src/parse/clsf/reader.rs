@@ -4,6 +4,7 @@
 use super::grammar::{Span, goto_numbers, goto_numbers_with_forms, parse_record};
 use super::record::{Numbers, Record, RecordKind, Written};
 use crate::parse::error::{ParseError, describe_found};
+use crate::parse::position::Span as At;
 use std::io::BufRead;
 
 /// One physical line that went into a logical record: where it starts in the joined text.
@@ -158,15 +159,12 @@ impl<R: BufRead> ClsfReader<R> {
             let text = match std::str::from_utf8(&self.buf[..end]) {
                 Ok(t) => t,
                 Err(e) => {
-                    let good = &self.buf[..e.valid_up_to()];
-                    let good = String::from_utf8_lossy(good).into_owned();
-                    let column = good.chars().count() as u32 + 1;
+                    let bad = e.valid_up_to();
                     let shown = String::from_utf8_lossy(&self.buf[..end]).into_owned();
                     return Err(ParseError::at(
-                        self.line,
-                        column,
+                        At::in_line(self.line, &shown, bad..bad + 1),
                         "ASCII or UTF-8 text",
-                        format!("byte 0x{:02X}", self.buf[e.valid_up_to()]),
+                        format!("byte 0x{:02X}", self.buf[bad]),
                         &shown,
                     ));
                 }
@@ -226,7 +224,7 @@ impl<R: BufRead> ClsfReader<R> {
         let joined = std::mem::take(&mut self.joined);
         let pieces = std::mem::take(&mut self.pieces);
         let lines = std::mem::take(&mut self.joined_lines);
-        let locate = |offset: usize| -> (u32, u32, &str) {
+        let locate = |offset: usize| -> (u32, u32, At, &str) {
             let k = pieces.iter().rposition(|p| p.offset <= offset).unwrap_or(0);
             let p = pieces.get(k).copied().unwrap_or(Piece {
                 offset: 0,
@@ -236,34 +234,24 @@ impl<R: BufRead> ClsfReader<R> {
             let line_text = lines.get(k).map(String::as_str).unwrap_or("");
             let in_piece = offset - p.offset;
             let byte_col = p.column_base + in_piece;
-            let col = line_text
-                .get(..byte_col.min(line_text.len()))
-                .map(|s| s.chars().count())
-                .unwrap_or(byte_col) as u32
-                + 1;
-            (p.line, col, line_text)
+            let at = At::in_line(p.line, line_text, byte_col..byte_col);
+            (p.line, at.column, at, line_text)
         };
         let span = Span::new(joined.as_str());
         let start = joined.len() - joined.trim_start_matches([' ', '\t']).len();
         match parse_record(span) {
             Ok((_, kind)) => {
-                let (line, column, _) = locate(start);
+                let (line, column, _, _) = locate(start);
                 Ok(Record { kind, line, column })
             }
             Err(nom::Err::Error(e) | nom::Err::Failure(e)) => {
-                let (line, column, text) = locate(e.at.location_offset());
+                let (_, _, at, text) = locate(e.at.location_offset());
                 let found = e.found.unwrap_or_else(|| describe_found(e.at.fragment()));
-                Err(ParseError::at(line, column, e.expected, found, text))
+                Err(ParseError::at(at, e.expected, found, text))
             }
             Err(nom::Err::Incomplete(_)) => {
-                let (line, column, text) = locate(joined.len());
-                Err(ParseError::at(
-                    line,
-                    column,
-                    "more input",
-                    "end of line",
-                    text,
-                ))
+                let (_, _, at, text) = locate(joined.len());
+                Err(ParseError::at(at, "more input", "end of line", text))
             }
         }
     }
@@ -285,32 +273,24 @@ fn parse_physical(code: &str, line: u32, lead: usize, full: &str) -> Result<Reco
             column: lead as u32 + 1,
         });
     }
-    let column_of = |byte: usize| -> u32 {
-        let byte = lead + byte;
-        full.get(..byte.min(full.len()))
-            .map(|s| s.chars().count())
-            .unwrap_or(byte) as u32
-            + 1
-    };
+    let at = |byte: usize| At::in_line(line, full, lead + byte..lead + byte);
     match parse_record(Span::new(code)) {
         Ok((_, kind)) => Ok(Record {
             kind,
             line,
-            column: column_of(0),
+            column: at(0).column,
         }),
         Err(nom::Err::Error(e) | nom::Err::Failure(e)) => {
             let found = e.found.unwrap_or_else(|| describe_found(e.at.fragment()));
             Err(ParseError::at(
-                line,
-                column_of(e.at.location_offset()),
+                at(e.at.location_offset()),
                 e.expected,
                 found,
                 full,
             ))
         }
         Err(nom::Err::Incomplete(_)) => Err(ParseError::at(
-            line,
-            column_of(code.len()),
+            at(code.len()),
             "more input",
             "end of line",
             full,

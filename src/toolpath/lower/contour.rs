@@ -129,7 +129,7 @@ mod tests {
         assert_eq!(ps[3].position, Point3::new(3.0, 0.0, 0.0));
         assert!(ps[3].contact.is_none());
         assert_eq!(p.warnings.len(), 1, "{:?}", p.warnings);
-        assert_eq!(p.warnings[0].line, 9);
+        assert_eq!(p.warnings[0].at.line, 9);
         assert!(p.warnings[0].message.contains("without its surface normal"));
     }
 

@@ -153,7 +153,7 @@ fn several_paths_reset_state() {
 fn bad_geometry_is_an_error_with_position() {
     let recs = parse_str("TOOL PATH/A,TOOL,T\nGOTO/0,0,0,0,0,0\n").unwrap_or_default();
     match lower_records(&recs, LowerOptions::default()) {
-        Err(LowerError::Invalid { line, column, .. }) => assert_eq!((line, column), (2, 1)),
+        Err(LowerError::Invalid(e)) => assert_eq!((e.span.line, e.span.column), (2, 1)),
         other => panic!("{other:?}"),
     }
 }
