@@ -722,6 +722,30 @@ fn miette_fancy_only_in_the_binary() {
 
 /// Library errors are typed: no function outside the binary returns `Result<_, String>`
 /// (files still to convert would be listed in `pending`; none are).
+/// Untyped reports (`miette::Report`) only where ARCHITECTURE.md says: the pipeline and the
+/// readers of tool-path files and measured profiles; every other library error is typed.
+#[test]
+fn untyped_reports_only_in_the_pipeline_and_the_path_readers() {
+    let mut found = Vec::new();
+    for (path, stage) in library_files() {
+        let text = code(&path);
+        let untyped = ["miette::Result", "miette::Report", "miette!("]
+            .iter()
+            .any(|k| text.contains(k));
+        let rel = path
+            .strip_prefix(root())
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let allowed =
+            stage == "pipeline" || rel == "src/io/toolpath.rs" || rel == "src/io/profile_csv.rs";
+        if untyped && !allowed {
+            found.push(rel);
+        }
+    }
+    assert!(found.is_empty(), "untyped library errors: {found:?}");
+}
+
 #[test]
 fn library_errors_are_not_strings() {
     let pending: [&str; 0] = [];
