@@ -292,7 +292,10 @@ pub fn place(pred: &HeightMap, grid: &HeightMap, pl: &Placement) -> HeightMap {
 
 /// The shift (µm) that best lays `placed` onto `measured` (the same grid): the peak of their
 /// linear cross-correlation, refined by a parabola through its neighbours in each axis; and
-/// the peak's normalised height (1 for identical maps).
+/// the peak's normalised height (1 for identical maps): for maps over [`COARSE_NODES`] the
+/// correlation coefficient over the common nodes at the best whole lag
+/// ([`shift_peak_is_coefficient`]), for smaller ones the biased correlation over the norms
+/// of both whole maps.
 pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2], f64)> {
     let (nx, ny) = (measured.nx, measured.ny);
     if placed.nx != nx || placed.ny != ny || nx < 2 || ny < 2 {
@@ -365,6 +368,14 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         [snap(tx) * measured.dx_um, snap(ty) * measured.dy_um],
         peak / norm,
     ))
+}
+
+/// Whether [`correlation_shift`] on maps of `measured`'s grid returns the correlation
+/// coefficient over the common nodes (maps over [`COARSE_NODES`], registered coarse to fine),
+/// which ranks two placements as their correlation over the common nodes does; a smaller
+/// map's normalised peak leans with the size of the overlap.
+pub fn shift_peak_is_coefficient(measured: &HeightMap) -> bool {
+    measured.nx * measured.ny > COARSE_NODES
 }
 
 /// The whole lag (columns, rows) of the peak of the linear cross-correlation
