@@ -104,7 +104,8 @@ fn centred(map: &HeightMap, window: bool) -> Vec<f64> {
     out
 }
 
-/// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)`.
+/// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)` (the padding rows are zero
+/// and stay so: only the field's rows are transformed along).
 fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
     let mut buf = vec![Complex64::default(); px * py];
     for r in 0..ny {
@@ -113,7 +114,7 @@ fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Com
         }
     }
     let mut f = Fft2::new(py, px, FftDirection::Forward);
-    f.rows(&mut buf);
+    f.rows(&mut buf[..ny * px]);
     f.columns(&mut buf);
     buf
 }
@@ -230,21 +231,40 @@ pub struct Placement {
     pub shift_um: [f64; 2],
 }
 
-/// Bilinear value of `map` at fractional node (col `j`, row `i`); `NaN` outside the map or
-/// where a node with weight is missing.
-pub fn bilinear(map: &HeightMap, j: f64, i: f64) -> f64 {
-    let snap = |t: f64| {
-        if (t - t.round()).abs() < 1e-9 {
-            t.round()
+/// `t` put on the nearest whole number when within 1e-9 of it. For 0 ≤ t < 2⁵² from the
+/// truncation, whose remainder is exact (as is `t − round(t)` within that range), so the
+/// same values as `round` without its call into libm (the SSE2 target has no rounding
+/// instruction); other values through `round`.
+fn snap_node(t: f64) -> f64 {
+    const EXACT: f64 = (1u64 << 52) as f64;
+    if (0.0..EXACT).contains(&t) {
+        let f = t as u64 as f64;
+        let frac = t - f;
+        if frac == 0.0 {
+            t
+        } else if frac < 1e-9 {
+            f
+        } else if 1.0 - frac < 1e-9 {
+            f + 1.0
         } else {
             t
         }
-    };
-    let (j, i) = (snap(j), snap(i));
+    } else if (t - t.round()).abs() < 1e-9 {
+        t.round()
+    } else {
+        t
+    }
+}
+
+/// Bilinear value of `map` at fractional node (col `j`, row `i`); `NaN` outside the map or
+/// where a node with weight is missing.
+pub fn bilinear(map: &HeightMap, j: f64, i: f64) -> f64 {
+    let (j, i) = (snap_node(j), snap_node(i));
     if !(j >= 0.0 && i >= 0.0 && j <= (map.nx - 1) as f64 && i <= (map.ny - 1) as f64) {
         return f64::NAN;
     }
-    let (j0, i0) = (j.floor() as usize, i.floor() as usize);
+    // Truncation is the floor of these non-negative values (no call into libm).
+    let (j0, i0) = (j as usize, i as usize);
     let (tx, ty) = (j - j0 as f64, i - i0 as f64);
     let mut s = 0.0;
     for (di, wy) in [(0, 1.0 - ty), (1, ty)] {
@@ -848,6 +868,36 @@ mod tests {
         let (s0, c) = correlation_shift(&n, &n).unwrap();
         assert_eq!(s0, [0.0, 0.0]);
         assert!((c - 1.0).abs() < 1e-9);
+    }
+
+    /// `snap_node` gives the values of the rule through `round`, bit for bit.
+    #[test]
+    fn snapping_matches_round() {
+        let old = |t: f64| {
+            if (t - t.round()).abs() < 1e-9 {
+                t.round()
+            } else {
+                t
+            }
+        };
+        let mut ts = vec![0.0, -0.0, 1e-10, -1e-10, 0.5, 1.5, 2.5, 0.49999999999999994];
+        ts.extend([
+            f64::NAN,
+            f64::INFINITY,
+            -3.2,
+            4503599627370495.5,
+            9.007199254740992e15,
+        ]);
+        for k in 0..200_000u64 {
+            let base = (k % 5000) as f64;
+            for off in [1e-9, 9.99e-10, 1.0000001e-9, 0.3, 0.5, 0.7] {
+                ts.extend([base + off, base - off, base + 1.0 - off]);
+            }
+            ts.push(f64::from_bits(0x3ff0_0000_0000_0000 + k * 0x0123_4567_89ab));
+        }
+        for t in ts {
+            assert_eq!(snap_node(t).to_bits(), old(t).to_bits(), "{t:e}");
+        }
     }
 
     #[test]
