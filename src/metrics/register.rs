@@ -621,36 +621,61 @@ fn rotated_square(map: &HeightMap, feed_deg: f64) -> Option<(Vec<f64>, usize, f6
 }
 
 /// Mean power spectrum of lines (each mean-removed, missing values as its mean, Hann window,
-/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5).
+/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5). The lines are
+/// real, so two at a time go through one complex FFT (`a + i·b`; the conjugate symmetry of
+/// each one's spectrum separates them).
 fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
+    use rayon::prelude::*;
     let n = lines.first().map_or(0, Vec::len);
     let m = super::fft::fast_len(PAD_1D * n.max(1));
     let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(m);
     let mut power = vec![0.0; m / 2 + 1];
     let mut used = 0usize;
     let window: Vec<f64> = (0..n).map(|k| hann(k, n)).collect();
-    // The lines' spectra in parallel, a few at a time, summed in line order.
-    let spectrum = |line: &Vec<f64>| -> Option<Vec<Complex64>> {
+    // A line with at least half its values, mean-removed, missing values as 0, windowed.
+    let windowed = |line: &Vec<f64>| -> Option<Vec<f64>> {
         let valid = line.iter().filter(|v| v.is_finite()).count();
         if 2 * valid < n {
             return None;
         }
         let mean = finite_mean(line);
+        Some(
+            line.iter()
+                .zip(&window)
+                .map(|(v, w)| if v.is_finite() { (v - mean) * w } else { 0.0 })
+                .collect(),
+        )
+    };
+    // |FFT|² over 0..=m/2 of one or two lines.
+    let spectra = |pair: &[Vec<f64>]| -> Vec<Vec<f64>> {
         let mut buf = vec![Complex64::default(); m];
-        for ((k, v), w) in line.iter().enumerate().zip(&window) {
-            let v = if v.is_finite() { v - mean } else { 0.0 };
-            buf[k] = Complex64::new(v * w, 0.0);
+        for (k, v) in pair[0].iter().enumerate() {
+            buf[k].re = *v;
+        }
+        if let Some(b) = pair.get(1) {
+            for (k, v) in b.iter().enumerate() {
+                buf[k].im = *v;
+            }
         }
         fft.process(&mut buf);
-        buf.truncate(m / 2 + 1);
-        Some(buf)
+        if pair.len() == 1 {
+            return vec![buf[..=m / 2].iter().map(|z| z.norm_sqr()).collect()];
+        }
+        let (mut pa, mut pb) = (Vec::with_capacity(m / 2 + 1), Vec::with_capacity(m / 2 + 1));
+        for k in 0..=m / 2 {
+            let (z, zm) = (buf[k], buf[(m - k) % m].conj());
+            pa.push((z + zm).norm_sqr() / 4.0);
+            pb.push((z - zm).norm_sqr() / 4.0);
+        }
+        vec![pa, pb]
     };
+    // The lines' spectra in parallel, a few at a time, summed in line order.
     for group in lines.chunks(LINES_AT_ONCE) {
-        use rayon::prelude::*;
-        let spectra: Vec<Option<Vec<Complex64>>> = group.par_iter().map(spectrum).collect();
-        for buf in spectra.into_iter().flatten() {
-            for (p, b) in power.iter_mut().zip(&buf) {
-                *p += b.norm_sqr() / (n as f64).powi(2);
+        let kept: Vec<Vec<f64>> = group.par_iter().filter_map(windowed).collect();
+        let powers: Vec<Vec<Vec<f64>>> = kept.par_chunks(2).map(spectra).collect();
+        for line in powers.into_iter().flatten() {
+            for (p, b) in power.iter_mut().zip(&line) {
+                *p += b / (n as f64).powi(2);
             }
             used += 1;
         }
@@ -831,6 +856,63 @@ mod tests {
         HeightMap::from_rows(nx, ny, 1.0, 1.0, z).unwrap()
     }
 
+    /// `snap_node` gives the values of the rule through `round`, bit for bit.
+    #[test]
+    fn snapping_matches_round() {
+        let old = |t: f64| {
+            if (t - t.round()).abs() < 1e-9 {
+                t.round()
+            } else {
+                t
+            }
+        };
+        let mut ts = vec![0.0, -0.0, 1e-10, -1e-10, 0.5, 1.5, 2.5, 0.49999999999999994];
+        ts.extend([
+            f64::NAN,
+            f64::INFINITY,
+            -3.2,
+            4503599627370495.5,
+            9.007199254740992e15,
+        ]);
+        for k in 0..200_000u64 {
+            let base = (k % 5000) as f64;
+            for off in [1e-9, 9.99e-10, 1.0000001e-9, 0.3, 0.5, 0.7] {
+                ts.extend([base + off, base - off, base + 1.0 - off]);
+            }
+            ts.push(f64::from_bits(0x3ff0_0000_0000_0000 + k * 0x0123_4567_89ab));
+        }
+        for t in ts {
+            assert_eq!(snap_node(t).to_bits(), old(t).to_bits(), "{t:e}");
+        }
+    }
+
+    /// Two lines through one complex FFT give each line's power spectrum to rounding.
+    #[test]
+    fn lines_in_pairs_give_their_own_spectra() {
+        let line = |f: f64, g: f64| -> Vec<f64> {
+            (0..301)
+                .map(|k| {
+                    let x = k as f64;
+                    if k % 37 == 5 {
+                        f64::NAN
+                    } else {
+                        (x / f).sin() + 0.2 * (x / g).cos() + 1e-3 * (x * x / 7.0).sin()
+                    }
+                })
+                .collect()
+        };
+        let (a, b, c) = (line(3.1, 17.0), line(5.3, 2.2), line(1.7, 40.0));
+        let both = line_spectrum(&[a.clone(), b.clone(), c.clone()], 0.5);
+        let one = |l: &Vec<f64>| line_spectrum(std::slice::from_ref(l), 0.5);
+        let (pa, pb, pc) = (one(&a), one(&b), one(&c));
+        let top = both.power.iter().cloned().fold(0.0, f64::max);
+        for k in 0..both.power.len() {
+            let mean = (pa.power[k] + pb.power[k] + pc.power[k]) / 3.0;
+            assert!((both.power[k] - mean).abs() <= 1e-13 * top, "{k}");
+        }
+        assert_eq!(both.freq_per_um, pa.freq_per_um);
+    }
+
     #[test]
     fn direction_of_stripes() {
         for deg in [0.0, 17.3, 45.0, 90.0, 121.7, 179.0] {
@@ -868,36 +950,6 @@ mod tests {
         let (s0, c) = correlation_shift(&n, &n).unwrap();
         assert_eq!(s0, [0.0, 0.0]);
         assert!((c - 1.0).abs() < 1e-9);
-    }
-
-    /// `snap_node` gives the values of the rule through `round`, bit for bit.
-    #[test]
-    fn snapping_matches_round() {
-        let old = |t: f64| {
-            if (t - t.round()).abs() < 1e-9 {
-                t.round()
-            } else {
-                t
-            }
-        };
-        let mut ts = vec![0.0, -0.0, 1e-10, -1e-10, 0.5, 1.5, 2.5, 0.49999999999999994];
-        ts.extend([
-            f64::NAN,
-            f64::INFINITY,
-            -3.2,
-            4503599627370495.5,
-            9.007199254740992e15,
-        ]);
-        for k in 0..200_000u64 {
-            let base = (k % 5000) as f64;
-            for off in [1e-9, 9.99e-10, 1.0000001e-9, 0.3, 0.5, 0.7] {
-                ts.extend([base + off, base - off, base + 1.0 - off]);
-            }
-            ts.push(f64::from_bits(0x3ff0_0000_0000_0000 + k * 0x0123_4567_89ab));
-        }
-        for t in ts {
-            assert_eq!(snap_node(t).to_bits(), old(t).to_bits(), "{t:e}");
-        }
     }
 
     #[test]
