@@ -7,14 +7,14 @@ use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftDirection, FftPlanner};
 
 /// Columns gathered into one contiguous block for their FFTs.
-const BLOCK: usize = 16;
+const BLOCK: usize = 64;
 
 /// Rows of a column block gathered at a time.
 const TILE: usize = 8;
 
 /// Column blocks transformed in parallel before they are written back (bounds the memory
 /// held at once to this many blocks).
-const BLOCKS_AT_ONCE: usize = 16;
+const BLOCKS_AT_ONCE: usize = 4;
 
 /// The smallest length at least `n` whose only prime factors are 2, 3 and 5 (rustfft's
 /// fast sizes; a zero padding to it gives the same linear correlation as any other).
