@@ -129,9 +129,36 @@ fn linear_autocorr_pair(
     buf
 }
 
-/// The normalised ACF on the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
-/// `(ny−1, nx−1)`.
-pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
+/// The normalised ACF in the padded lattice's own layout (lag (ty, tx) at row ty mod py and
+/// column tx mod px), written over the transform's buffer (no second field).
+struct Lags {
+    r: Vec<f64>,
+    px: usize,
+    py: usize,
+    nx: usize,
+    ny: usize,
+}
+
+impl Lags {
+    /// The value at node (i, j) of the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
+    /// `(ny−1, nx−1)`.
+    fn at(&self, i: usize, j: usize) -> f64 {
+        let ry = if i + 1 < self.ny {
+            i + self.py + 1 - self.ny
+        } else {
+            i + 1 - self.ny
+        };
+        let rx = if j + 1 < self.nx {
+            j + self.px + 1 - self.nx
+        } else {
+            j + 1 - self.nx
+        };
+        self.r[ry * self.px + rx]
+    }
+}
+
+/// The normalised ACF of a map ([`Lags`]).
+fn lags(map: &HeightMap) -> Lags {
     let (nx, ny) = (map.nx, map.ny);
     // Any padding to 2n − 1 or more gives the linear ACF; lengths of factors 2, 3, 5 are fast.
     let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
@@ -149,32 +176,43 @@ pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
     } else {
         linear_autocorr(e, nx, ny, px, py)
     };
-    let (wy, wx) = (2 * ny - 1, 2 * nx - 1);
-    // Zeroed by the allocator (fresh pages), every value written below, rows in parallel.
-    let mut out = vec![0.0; wy * wx];
-    use rayon::prelude::*;
-    out.par_chunks_exact_mut(wx)
+    // Collected in place (the same allocation); lags beyond ±(n − 1) have no pair.
+    let r = sums
+        .into_iter()
         .enumerate()
-        .for_each(|(i, row)| {
-            let ty = i as isize - (ny as isize - 1);
-            let ry = ty.rem_euclid(py as isize) as usize;
-            for (j, o) in row.iter_mut().enumerate() {
-                let tx = j as isize - (nx as isize - 1);
-                let rx = tx.rem_euclid(px as isize) as usize;
-                let v = sums[ry * px + rx];
-                let cnt = if missing {
-                    round_count(v.im * scale)
+        .map(|(k, v)| {
+            let cnt = if missing {
+                round_count(v.im * scale)
+            } else {
+                let (ry, rx) = (k / px, k % px);
+                let ay = if ry < ny { ry } else { py - ry };
+                let ax = if rx < nx { rx } else { px - rx };
+                if ay < ny && ax < nx {
+                    ((ny - ay) * (nx - ax)) as f64
                 } else {
-                    ((ny - ty.unsigned_abs()) * (nx - tx.unsigned_abs())) as f64
-                };
-                *o = if cnt >= 1.0 {
-                    v.re * scale / cnt
-                } else {
-                    f64::NAN
-                };
+                    0.0
+                }
+            };
+            if cnt >= 1.0 {
+                v.re * scale / cnt
+            } else {
+                f64::NAN
             }
-        });
-    out
+        })
+        .collect();
+    Lags { r, px, py, nx, ny }
+}
+
+/// The normalised ACF on the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
+/// `(ny−1, nx−1)`.
+#[cfg(test)]
+pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
+    let l = lags(map);
+    let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
+    (0..wy)
+        .flat_map(|i| (0..wx).map(move |j| (i, j)))
+        .map(|(i, j)| l.at(i, j))
+        .collect()
 }
 
 /// `c.round()` where it is at least 1, else 0 (or `NaN`): a count of valid pairs. From the
@@ -203,10 +241,10 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
     if map.nx < 2 || map.ny < 2 {
         return undefined;
     }
-    let r = acf(map);
+    let r = lags(map);
     let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
     let (cy, cx) = (map.ny - 1, map.nx - 1);
-    let r0 = r[cy * wx + cx];
+    let r0 = r.at(cy, cx);
     if r0.is_nan() || r0 <= 0.0 {
         return undefined;
     }
@@ -222,7 +260,7 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
         }
         let mut visit = |a: usize, b: usize| {
             let k = a * wx + b;
-            if !region[k] && r[k] > thr {
+            if !region[k] && r.at(a, b) > thr {
                 region[k] = true;
                 stack.push((a, b));
             }
@@ -247,10 +285,10 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
         let (fy, fx) = (y - y0, x - x0);
         let i1 = (i + 1).min(wy - 1);
         let j1 = (j + 1).min(wx - 1);
-        let v00 = r[i * wx + j];
-        let v01 = r[i * wx + j1];
-        let v10 = r[i1 * wx + j];
-        let v11 = r[i1 * wx + j1];
+        let v00 = r.at(i, j);
+        let v01 = r.at(i, j1);
+        let v10 = r.at(i1, j);
+        let v11 = r.at(i1, j1);
         (1.0 - fy) * ((1.0 - fx) * v00 + fx * v01) + fy * ((1.0 - fx) * v10 + fx * v11)
     };
     // The rays of each row of the lag field in parallel: the shortest and longest are the
@@ -422,6 +460,56 @@ mod tests {
         }
         for c in cs {
             assert_eq!(new(c).to_bits(), old(c).to_bits(), "{c:e}");
+        }
+    }
+
+    /// The lag field against the sums over valid pairs taken directly, with and without
+    /// missing nodes, on a field of unequal sides (lags at every offset of both signs).
+    #[test]
+    fn acf_is_the_mean_over_valid_pairs() {
+        let (nx, ny) = (7, 5);
+        for holes in [false, true] {
+            let z: Vec<f64> = (0..nx * ny)
+                .map(|k| {
+                    if holes && k % 6 == 4 {
+                        f64::NAN
+                    } else {
+                        ((k * 37 % 11) as f64 - 5.0) * 0.3
+                    }
+                })
+                .collect();
+            let m = HeightMap::from_rows(nx, ny, 1.0, 1.0, z.clone()).unwrap();
+            let (e, _) = centred(&m);
+            let r = acf(&m);
+            let (wy, wx) = (2 * ny - 1, 2 * nx - 1);
+            for i in 0..wy {
+                for j in 0..wx {
+                    let (ty, tx) = (i as isize - ny as isize + 1, j as isize - nx as isize + 1);
+                    let (mut sum, mut n) = (0.0, 0usize);
+                    for y in 0..ny as isize {
+                        for x in 0..nx as isize {
+                            let (y2, x2) = (y + ty, x + tx);
+                            if y2 < 0 || x2 < 0 || y2 >= ny as isize || x2 >= nx as isize {
+                                continue;
+                            }
+                            let (a, b) = (
+                                (y * nx as isize + x) as usize,
+                                (y2 * nx as isize + x2) as usize,
+                            );
+                            if z[a].is_finite() && z[b].is_finite() {
+                                sum += e[a] * e[b];
+                                n += 1;
+                            }
+                        }
+                    }
+                    let got = r[i * wx + j];
+                    if n == 0 {
+                        assert!(got.is_nan(), "{holes} {ty},{tx}: {got}");
+                    } else {
+                        assert!((got - sum / n as f64).abs() < 1e-12, "{holes} {ty},{tx}");
+                    }
+                }
+            }
         }
     }
 
