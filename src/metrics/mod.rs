@@ -47,7 +47,7 @@ pub use areal::{
 pub use filter::{EndEffects, gaussian_filter_map, gaussian_lowpass_line, gaussian_sigma};
 pub use form::{Level, LevelError, fit_remove_line, fit_remove_map};
 pub use material::{MaterialRatio, material_ratio};
-pub use pair::{Evaluation, Prepared, evaluate_pair, prepare_pair};
+pub use pair::{Evaluation, Prepared, evaluate_pair, prepare_pair, shifts_at_rotations};
 pub use params::{
     AREAL_PARAMS, PASS_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters,
     areal_parameters_of, preprocess_map, preprocess_profile, profile_parameters,

@@ -1,10 +1,13 @@
 //! Two height maps put through the same chain side by side (`rayon::join`): a comparison's
 //! prediction and measurement, each levelled and filtered, then its parameters and its 1-D
-//! spectra. Each map's values are those of the functions called one after the other.
+//! spectra; and the two turns of a registration. Each value is that of the functions called
+//! one after the other.
 
 use super::MetricsError;
 use super::params::{Param, ParamSet, Preprocess, areal_parameters, preprocess_map};
-use super::register::{LaySpectra, feed_direction_deg, lay_spectra};
+use super::register::{
+    LaySpectra, Placement, correlation_shift, feed_direction_deg, lay_spectra, place,
+};
 use crate::surface::HeightMap;
 
 /// A map put through a preprocessing chain, and its feed direction (`NaN` when none is
@@ -20,6 +23,28 @@ pub fn prepare_pair(maps: [&HeightMap; 2], pp: &Preprocess) -> [Prepared; 2] {
         Ok((m, d))
     };
     let (a, b) = rayon::join(|| one(maps[0]), || one(maps[1]));
+    [a, b]
+}
+
+/// The prediction `pred` turned by each of `rotations_deg` onto `meas`'s grid ([`place`],
+/// no shift) and its [`correlation_shift`] against `meas`, both turns side by side.
+pub fn shifts_at_rotations(
+    pred: &HeightMap,
+    meas: &HeightMap,
+    rotations_deg: [f64; 2],
+) -> [Option<([f64; 2], f64)>; 2] {
+    let one = |rotation_deg: f64| {
+        let turned = place(
+            pred,
+            meas,
+            &Placement {
+                rotation_deg,
+                shift_um: [0.0, 0.0],
+            },
+        );
+        correlation_shift(meas, &turned)
+    };
+    let (a, b) = rayon::join(|| one(rotations_deg[0]), || one(rotations_deg[1]));
     [a, b]
 }
 
@@ -94,5 +119,19 @@ mod tests {
         assert!(ea.lay.is_some());
         assert_eq!(text(&ea.lay), text(&lay_spectra(&alone, 0.0)));
         assert!(eb.lay.is_none());
+        // The two turns side by side are each turn alone.
+        let rots = [3.0, -177.0];
+        let found = shifts_at_rotations(&a, &b, rots);
+        for (rot, got) in rots.into_iter().zip(found) {
+            let turned = place(
+                &a,
+                &b,
+                &Placement {
+                    rotation_deg: rot,
+                    shift_um: [0.0, 0.0],
+                },
+            );
+            assert_eq!(text(&got), text(&correlation_shift(&b, &turned)));
+        }
     }
 }

@@ -9,8 +9,8 @@ use miette::miette;
 
 use crate::io::{ReadOptions, read_heightmap};
 use crate::metrics::{
-    LaySpectra, Param, ParamSet, Placement, Preprocess, correlation_shift, evaluate_pair,
-    height_stats, place, prepare_pair, shift_peak_is_coefficient,
+    LaySpectra, Param, ParamSet, Placement, Preprocess, evaluate_pair, height_stats, place,
+    prepare_pair, shift_peak_is_coefficient, shifts_at_rotations,
 };
 use crate::surface::HeightMap;
 
@@ -42,25 +42,19 @@ fn preprocess(opts: &CompareOptions) -> Preprocess {
 /// The rotation (degrees, in (−180, 180]) and shift (µm) that lay the prediction onto the
 /// measurement; of the two rotations that align the feed directions, the one whose
 /// placement correlates better with the measurement over their common nodes: for large maps
-/// the coefficient the shift search ([`correlation_shift`]) returns (at its best whole lag,
+/// the coefficient the shift search ([`crate::metrics::correlation_shift`]) returns (at its best whole lag,
 /// so no second placement), for the others that of the placed map.
 fn register(pred: &HeightMap, meas: &HeightMap, dirs: [f64; 2]) -> Placement {
     let base = dirs[1] - dirs[0];
+    let rots = [0.0, 180.0].map(|turn| {
+        let rot = (base + turn + 180.0).rem_euclid(360.0) - 180.0;
+        if rot.abs() < 1e-9 { 0.0 } else { rot }
+    });
+    // Both turns placed and searched side by side.
+    let found = shifts_at_rotations(pred, meas, rots);
     let mut best: Option<(f64, Placement)> = None;
-    for turn in [0.0, 180.0] {
-        let mut rot = (base + turn + 180.0).rem_euclid(360.0) - 180.0;
-        if rot.abs() < 1e-9 {
-            rot = 0.0;
-        }
-        let rotated = place(
-            pred,
-            meas,
-            &Placement {
-                rotation_deg: rot,
-                shift_um: [0.0, 0.0],
-            },
-        );
-        if let Some((shift_um, r)) = correlation_shift(meas, &rotated) {
+    for (rot, found) in rots.into_iter().zip(found) {
+        if let Some((shift_um, r)) = found {
             let pl = Placement {
                 rotation_deg: rot,
                 shift_um,
