@@ -7,11 +7,14 @@ use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftDirection, FftPlanner};
 
 /// Columns gathered into one contiguous block for their FFTs.
-const BLOCK: usize = 16;
+const BLOCK: usize = 64;
+
+/// Rows of a column block gathered at a time.
+const TILE: usize = 8;
 
 /// Column blocks transformed in parallel before they are written back (bounds the memory
 /// held at once to this many blocks).
-const BLOCKS_AT_ONCE: usize = 16;
+const BLOCKS_AT_ONCE: usize = 4;
 
 /// The smallest length at least `n` whose only prime factors are 2, 3 and 5 (rustfft's
 /// fast sizes; a zero padding to it gives the same linear correlation as any other).
@@ -67,7 +70,10 @@ impl Fft2 {
     }
 
     /// The FFT of every column, in place (each column is copied out, transformed and copied
-    /// back, so it gets the values a transposed buffer would give it, bit for bit).
+    /// back, so it gets the values a transposed buffer would give it, bit for bit). A block's
+    /// columns are gathered [`TILE`] rows at a time (runs of `TILE` contiguous writes rather
+    /// than `BLOCK` writes a column apart, which share a cache set), and written back row by
+    /// row in parallel.
     pub(crate) fn columns(&mut self, data: &mut [Complex64]) {
         use rayon::prelude::*;
         let (rows, cols) = (self.rows, self.cols);
@@ -84,10 +90,13 @@ impl Fft2 {
                         |scratch, &c0| {
                             let w = BLOCK.min(cols - c0);
                             let mut block = vec![Complex64::default(); w * rows];
-                            for r in 0..rows {
-                                let row = &data[r * cols + c0..r * cols + c0 + w];
-                                for (k, v) in row.iter().enumerate() {
-                                    block[k * rows + r] = *v;
+                            for r0 in (0..rows).step_by(TILE) {
+                                let r1 = (r0 + TILE).min(rows);
+                                for k in 0..w {
+                                    let col = &mut block[k * rows + r0..k * rows + r1];
+                                    for (r, v) in (r0..r1).zip(col) {
+                                        *v = data[r * cols + c0 + k];
+                                    }
                                 }
                             }
                             for col in block.chunks_exact_mut(rows) {
@@ -98,14 +107,15 @@ impl Fft2 {
                     )
                     .collect()
             };
-            for (c0, w, block) in blocks {
-                for r in 0..rows {
-                    let row = &mut data[r * cols + c0..r * cols + c0 + w];
-                    for (k, v) in row.iter_mut().enumerate() {
-                        *v = block[k * rows + r];
+            data.par_chunks_exact_mut(cols)
+                .enumerate()
+                .for_each(|(r, row)| {
+                    for (c0, w, block) in &blocks {
+                        for (k, v) in row[*c0..c0 + w].iter_mut().enumerate() {
+                            *v = block[k * rows + r];
+                        }
                     }
-                }
-            }
+                });
         }
     }
 }

@@ -33,6 +33,7 @@ mod fft;
 mod filter;
 mod form;
 mod material;
+mod pair;
 mod params;
 mod profile;
 mod register;
@@ -46,6 +47,7 @@ pub use areal::{
 pub use filter::{EndEffects, gaussian_filter_map, gaussian_lowpass_line, gaussian_sigma};
 pub use form::{Level, LevelError, fit_remove_line, fit_remove_map};
 pub use material::{MaterialRatio, material_ratio};
+pub use pair::{Evaluation, Prepared, evaluate_pair, prepare_pair, shifts_at_rotations};
 pub use params::{
     AREAL_PARAMS, PASS_PARAMS, PROFILE_PARAMS, Param, ParamSet, Preprocess, areal_parameters,
     areal_parameters_of, preprocess_map, preprocess_profile, profile_parameters,
@@ -56,7 +58,8 @@ pub use profile::{
 };
 pub use register::{
     LaySpectra, LineSpectrum, Placement, ProfileAlignment, align_profile, bilinear,
-    correlation_shift, feed_direction_deg, lay_spectra, place, spectral_peak,
+    correlation_shift, feed_direction_deg, lay_spectra, place, shift_peak_is_coefficient,
+    spectral_peak,
 };
 pub use spatial::{AcfLengths, Spectrum, acf_lengths, spectrum_direction};
 pub use stream::RowStream;

@@ -104,7 +104,8 @@ fn centred(map: &HeightMap, window: bool) -> Vec<f64> {
     out
 }
 
-/// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)`.
+/// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)` (the padding rows are zero
+/// and stay so: only the field's rows are transformed along).
 fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
     let mut buf = vec![Complex64::default(); px * py];
     for r in 0..ny {
@@ -113,7 +114,7 @@ fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Com
         }
     }
     let mut f = Fft2::new(py, px, FftDirection::Forward);
-    f.rows(&mut buf);
+    f.rows(&mut buf[..ny * px]);
     f.columns(&mut buf);
     buf
 }
@@ -230,21 +231,40 @@ pub struct Placement {
     pub shift_um: [f64; 2],
 }
 
-/// Bilinear value of `map` at fractional node (col `j`, row `i`); `NaN` outside the map or
-/// where a node with weight is missing.
-pub fn bilinear(map: &HeightMap, j: f64, i: f64) -> f64 {
-    let snap = |t: f64| {
-        if (t - t.round()).abs() < 1e-9 {
-            t.round()
+/// `t` put on the nearest whole number when within 1e-9 of it. For 0 ≤ t < 2⁵² from the
+/// truncation, whose remainder is exact (as is `t − round(t)` within that range), so the
+/// same values as `round` without its call into libm (the SSE2 target has no rounding
+/// instruction); other values through `round`.
+fn snap_node(t: f64) -> f64 {
+    const EXACT: f64 = (1u64 << 52) as f64;
+    if (0.0..EXACT).contains(&t) {
+        let f = t as u64 as f64;
+        let frac = t - f;
+        if frac == 0.0 {
+            t
+        } else if frac < 1e-9 {
+            f
+        } else if 1.0 - frac < 1e-9 {
+            f + 1.0
         } else {
             t
         }
-    };
-    let (j, i) = (snap(j), snap(i));
+    } else if (t - t.round()).abs() < 1e-9 {
+        t.round()
+    } else {
+        t
+    }
+}
+
+/// Bilinear value of `map` at fractional node (col `j`, row `i`); `NaN` outside the map or
+/// where a node with weight is missing.
+pub fn bilinear(map: &HeightMap, j: f64, i: f64) -> f64 {
+    let (j, i) = (snap_node(j), snap_node(i));
     if !(j >= 0.0 && i >= 0.0 && j <= (map.nx - 1) as f64 && i <= (map.ny - 1) as f64) {
         return f64::NAN;
     }
-    let (j0, i0) = (j.floor() as usize, i.floor() as usize);
+    // Truncation is the floor of these non-negative values (no call into libm).
+    let (j0, i0) = (j as usize, i as usize);
     let (tx, ty) = (j - j0 as f64, i - i0 as f64);
     let mut s = 0.0;
     for (di, wy) in [(0, 1.0 - ty), (1, ty)] {
@@ -292,7 +312,10 @@ pub fn place(pred: &HeightMap, grid: &HeightMap, pl: &Placement) -> HeightMap {
 
 /// The shift (µm) that best lays `placed` onto `measured` (the same grid): the peak of their
 /// linear cross-correlation, refined by a parabola through its neighbours in each axis; and
-/// the peak's normalised height (1 for identical maps).
+/// the peak's normalised height (1 for identical maps): for maps over [`COARSE_NODES`] the
+/// correlation coefficient over the common nodes at the best whole lag
+/// ([`shift_peak_is_coefficient`]), for smaller ones the biased correlation over the norms
+/// of both whole maps.
 pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2], f64)> {
     let (nx, ny) = (measured.nx, measured.ny);
     if placed.nx != nx || placed.ny != ny || nx < 2 || ny < 2 {
@@ -365,6 +388,14 @@ pub fn correlation_shift(measured: &HeightMap, placed: &HeightMap) -> Option<([f
         [snap(tx) * measured.dx_um, snap(ty) * measured.dy_um],
         peak / norm,
     ))
+}
+
+/// Whether [`correlation_shift`] on maps of `measured`'s grid returns the correlation
+/// coefficient over the common nodes (maps over [`COARSE_NODES`], registered coarse to fine),
+/// which ranks two placements as their correlation over the common nodes does; a smaller
+/// map's normalised peak leans with the size of the overlap.
+pub fn shift_peak_is_coefficient(measured: &HeightMap) -> bool {
+    measured.nx * measured.ny > COARSE_NODES
 }
 
 /// The whole lag (columns, rows) of the peak of the linear cross-correlation
@@ -590,36 +621,61 @@ fn rotated_square(map: &HeightMap, feed_deg: f64) -> Option<(Vec<f64>, usize, f6
 }
 
 /// Mean power spectrum of lines (each mean-removed, missing values as its mean, Hann window,
-/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5).
+/// padded [`PAD_1D`] times, up to the next length of factors 2, 3 and 5). The lines are
+/// real, so two at a time go through one complex FFT (`a + i·b`; the conjugate symmetry of
+/// each one's spectrum separates them).
 fn line_spectrum(lines: &[Vec<f64>], d: f64) -> LineSpectrum {
+    use rayon::prelude::*;
     let n = lines.first().map_or(0, Vec::len);
     let m = super::fft::fast_len(PAD_1D * n.max(1));
     let fft = rustfft::FftPlanner::<f64>::new().plan_fft_forward(m);
     let mut power = vec![0.0; m / 2 + 1];
     let mut used = 0usize;
     let window: Vec<f64> = (0..n).map(|k| hann(k, n)).collect();
-    // The lines' spectra in parallel, a few at a time, summed in line order.
-    let spectrum = |line: &Vec<f64>| -> Option<Vec<Complex64>> {
+    // A line with at least half its values, mean-removed, missing values as 0, windowed.
+    let windowed = |line: &Vec<f64>| -> Option<Vec<f64>> {
         let valid = line.iter().filter(|v| v.is_finite()).count();
         if 2 * valid < n {
             return None;
         }
         let mean = finite_mean(line);
+        Some(
+            line.iter()
+                .zip(&window)
+                .map(|(v, w)| if v.is_finite() { (v - mean) * w } else { 0.0 })
+                .collect(),
+        )
+    };
+    // |FFT|² over 0..=m/2 of one or two lines.
+    let spectra = |pair: &[Vec<f64>]| -> Vec<Vec<f64>> {
         let mut buf = vec![Complex64::default(); m];
-        for ((k, v), w) in line.iter().enumerate().zip(&window) {
-            let v = if v.is_finite() { v - mean } else { 0.0 };
-            buf[k] = Complex64::new(v * w, 0.0);
+        for (k, v) in pair[0].iter().enumerate() {
+            buf[k].re = *v;
+        }
+        if let Some(b) = pair.get(1) {
+            for (k, v) in b.iter().enumerate() {
+                buf[k].im = *v;
+            }
         }
         fft.process(&mut buf);
-        buf.truncate(m / 2 + 1);
-        Some(buf)
+        if pair.len() == 1 {
+            return vec![buf[..=m / 2].iter().map(|z| z.norm_sqr()).collect()];
+        }
+        let (mut pa, mut pb) = (Vec::with_capacity(m / 2 + 1), Vec::with_capacity(m / 2 + 1));
+        for k in 0..=m / 2 {
+            let (z, zm) = (buf[k], buf[(m - k) % m].conj());
+            pa.push((z + zm).norm_sqr() / 4.0);
+            pb.push((z - zm).norm_sqr() / 4.0);
+        }
+        vec![pa, pb]
     };
+    // The lines' spectra in parallel, a few at a time, summed in line order.
     for group in lines.chunks(LINES_AT_ONCE) {
-        use rayon::prelude::*;
-        let spectra: Vec<Option<Vec<Complex64>>> = group.par_iter().map(spectrum).collect();
-        for buf in spectra.into_iter().flatten() {
-            for (p, b) in power.iter_mut().zip(&buf) {
-                *p += b.norm_sqr() / (n as f64).powi(2);
+        let kept: Vec<Vec<f64>> = group.par_iter().filter_map(windowed).collect();
+        let powers: Vec<Vec<Vec<f64>>> = kept.par_chunks(2).map(spectra).collect();
+        for line in powers.into_iter().flatten() {
+            for (p, b) in power.iter_mut().zip(&line) {
+                *p += b / (n as f64).powi(2);
             }
             used += 1;
         }
@@ -798,6 +854,63 @@ mod tests {
             }
         }
         HeightMap::from_rows(nx, ny, 1.0, 1.0, z).unwrap()
+    }
+
+    /// `snap_node` gives the values of the rule through `round`, bit for bit.
+    #[test]
+    fn snapping_matches_round() {
+        let old = |t: f64| {
+            if (t - t.round()).abs() < 1e-9 {
+                t.round()
+            } else {
+                t
+            }
+        };
+        let mut ts = vec![0.0, -0.0, 1e-10, -1e-10, 0.5, 1.5, 2.5, 0.49999999999999994];
+        ts.extend([
+            f64::NAN,
+            f64::INFINITY,
+            -3.2,
+            4503599627370495.5,
+            9.007199254740992e15,
+        ]);
+        for k in 0..200_000u64 {
+            let base = (k % 5000) as f64;
+            for off in [1e-9, 9.99e-10, 1.0000001e-9, 0.3, 0.5, 0.7] {
+                ts.extend([base + off, base - off, base + 1.0 - off]);
+            }
+            ts.push(f64::from_bits(0x3ff0_0000_0000_0000 + k * 0x0123_4567_89ab));
+        }
+        for t in ts {
+            assert_eq!(snap_node(t).to_bits(), old(t).to_bits(), "{t:e}");
+        }
+    }
+
+    /// Two lines through one complex FFT give each line's power spectrum to rounding.
+    #[test]
+    fn lines_in_pairs_give_their_own_spectra() {
+        let line = |f: f64, g: f64| -> Vec<f64> {
+            (0..301)
+                .map(|k| {
+                    let x = k as f64;
+                    if k % 37 == 5 {
+                        f64::NAN
+                    } else {
+                        (x / f).sin() + 0.2 * (x / g).cos() + 1e-3 * (x * x / 7.0).sin()
+                    }
+                })
+                .collect()
+        };
+        let (a, b, c) = (line(3.1, 17.0), line(5.3, 2.2), line(1.7, 40.0));
+        let both = line_spectrum(&[a.clone(), b.clone(), c.clone()], 0.5);
+        let one = |l: &Vec<f64>| line_spectrum(std::slice::from_ref(l), 0.5);
+        let (pa, pb, pc) = (one(&a), one(&b), one(&c));
+        let top = both.power.iter().cloned().fold(0.0, f64::max);
+        for k in 0..both.power.len() {
+            let mean = (pa.power[k] + pb.power[k] + pc.power[k]) / 3.0;
+            assert!((both.power[k] - mean).abs() <= 1e-13 * top, "{k}");
+        }
+        assert_eq!(both.freq_per_um, pa.freq_per_um);
     }
 
     #[test]

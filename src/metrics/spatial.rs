@@ -48,22 +48,38 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
     (e, missing)
 }
 
-/// Linear autocorrelation of a `ny × nx` field on the padded `py × px` lattice (unnormalised).
+/// The `py × px` lattice with `value(r·nx + c)` at the field's nodes (row r < ny, column
+/// c < nx) and zero elsewhere, written once in order (no zeroing pass first).
+fn padded(
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+    value: impl Fn(usize) -> Complex64,
+) -> Vec<Complex64> {
+    let mut buf = Vec::with_capacity(px * py);
+    for r in 0..ny {
+        buf.extend((r * nx..(r + 1) * nx).map(&value));
+        buf.resize((r + 1) * px, Complex64::default());
+    }
+    buf.resize(px * py, Complex64::default());
+    buf
+}
+
+/// Linear autocorrelation of a `ny × nx` field on the padded `py × px` lattice, unscaled
+/// (the real parts times `1 / (px·py)` are the correlation sums).
 ///
 /// One complex buffer of the padded lattice (16 bytes per lattice node), transformed in
 /// place: rows then columns forward, columns then rows back (the order of the 1-D FFTs of
-/// the former transposing form, so the same values bit for bit). `field` is dropped once
+/// the former transposing form, so the same values bit for bit). The forward rows past the
+/// field's are zero and stay so (their transforms are left out). `field` is dropped once
 /// copied in.
-fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) -> Vec<f64> {
-    let mut buf = vec![Complex64::default(); px * py];
-    for r in 0..ny {
-        for c in 0..nx {
-            buf[r * px + c] = Complex64::new(field[r * nx + c], 0.0);
-        }
-    }
+fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
+    let buf = padded(nx, ny, px, py, |k| Complex64::new(field[k], 0.0));
     drop(field);
+    let mut buf = buf;
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
-    fwd.rows(&mut buf);
+    fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
     for v in buf.iter_mut() {
         *v = Complex64::new(v.norm_sqr(), 0.0);
@@ -71,14 +87,13 @@ fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) 
     let mut inv = Fft2::new(py, px, FftDirection::Inverse);
     inv.columns(&mut buf);
     inv.rows(&mut buf);
-    let scale = 1.0 / (px * py) as f64;
-    buf.iter().map(|v| v.re * scale).collect()
+    buf
 }
 
 /// [`linear_autocorr`] of two real fields at once: one complex field `a + i·b`, whose
 /// spectrum gives both power spectra by its conjugate symmetry, and one inverse transform of
 /// `|A|² + i·|B|²` (both even and real, so the real and imaginary parts of the result are
-/// the two autocorrelations). Half the transforms of two separate calls.
+/// the two autocorrelations, unscaled). Half the transforms of two separate calls.
 fn linear_autocorr_pair(
     a: &[f64],
     b: &[f64],
@@ -86,15 +101,10 @@ fn linear_autocorr_pair(
     ny: usize,
     px: usize,
     py: usize,
-) -> (Vec<f64>, Vec<f64>) {
-    let mut buf = vec![Complex64::default(); px * py];
-    for r in 0..ny {
-        for c in 0..nx {
-            buf[r * px + c] = Complex64::new(a[r * nx + c], b[r * nx + c]);
-        }
-    }
+) -> Vec<Complex64> {
+    let mut buf = padded(nx, ny, px, py, |k| Complex64::new(a[k], b[k]));
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
-    fwd.rows(&mut buf);
+    fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
     // A = (Z[k] + conj Z[−k]) / 2, B = (Z[k] − conj Z[−k]) / 2i: |A|² and |B|² at k and −k
     // (the same values), written in place pair by pair.
@@ -116,49 +126,108 @@ fn linear_autocorr_pair(
     let mut inv = Fft2::new(py, px, FftDirection::Inverse);
     inv.columns(&mut buf);
     inv.rows(&mut buf);
-    let scale = 1.0 / (px * py) as f64;
-    (
-        buf.iter().map(|v| v.re * scale).collect(),
-        buf.iter().map(|v| v.im * scale).collect(),
-    )
+    buf
 }
 
-/// The normalised ACF on the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
-/// `(ny−1, nx−1)`.
-pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
+/// The normalised ACF in the padded lattice's own layout (lag (ty, tx) at row ty mod py and
+/// column tx mod px), written over the transform's buffer (no second field).
+struct Lags {
+    r: Vec<f64>,
+    px: usize,
+    py: usize,
+    nx: usize,
+    ny: usize,
+}
+
+impl Lags {
+    /// The value at node (i, j) of the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
+    /// `(ny−1, nx−1)`.
+    fn at(&self, i: usize, j: usize) -> f64 {
+        let ry = if i + 1 < self.ny {
+            i + self.py + 1 - self.ny
+        } else {
+            i + 1 - self.ny
+        };
+        let rx = if j + 1 < self.nx {
+            j + self.px + 1 - self.nx
+        } else {
+            j + 1 - self.nx
+        };
+        self.r[ry * self.px + rx]
+    }
+}
+
+/// The normalised ACF of a map ([`Lags`]).
+fn lags(map: &HeightMap) -> Lags {
     let (nx, ny) = (map.nx, map.ny);
     // Any padding to 2n − 1 or more gives the linear ACF; lengths of factors 2, 3, 5 are fast.
     let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
     let (e, missing) = centred(map);
-    let (raw, counts) = if missing {
+    let scale = 1.0 / (px * py) as f64;
+    // The sums (real parts) and, with missing nodes, the counts of valid pairs (imaginary
+    // parts), scaled as they are read.
+    let sums = if missing {
         let mask: Vec<f64> = map
             .z_um
             .iter()
             .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
             .collect();
-        let (raw, counts) = linear_autocorr_pair(&e, &mask, nx, ny, px, py);
-        (raw, Some(counts))
+        linear_autocorr_pair(&e, &mask, nx, ny, px, py)
     } else {
-        (linear_autocorr(e, nx, ny, px, py), None)
+        linear_autocorr(e, nx, ny, px, py)
     };
-    let (wy, wx) = (2 * ny - 1, 2 * nx - 1);
-    let mut out = vec![f64::NAN; wy * wx];
-    for i in 0..wy {
-        let ty = i as isize - (ny as isize - 1);
-        let ry = ty.rem_euclid(py as isize) as usize;
-        for j in 0..wx {
-            let tx = j as isize - (nx as isize - 1);
-            let rx = tx.rem_euclid(px as isize) as usize;
-            let cnt = match &counts {
-                Some(c) => c[ry * px + rx].round(),
-                None => ((ny - ty.unsigned_abs()) * (nx - tx.unsigned_abs())) as f64,
+    // Collected in place (the same allocation); lags beyond ±(n − 1) have no pair.
+    let r = sums
+        .into_iter()
+        .enumerate()
+        .map(|(k, v)| {
+            let cnt = if missing {
+                round_count(v.im * scale)
+            } else {
+                let (ry, rx) = (k / px, k % px);
+                let ay = if ry < ny { ry } else { py - ry };
+                let ax = if rx < nx { rx } else { px - rx };
+                if ay < ny && ax < nx {
+                    ((ny - ay) * (nx - ax)) as f64
+                } else {
+                    0.0
+                }
             };
             if cnt >= 1.0 {
-                out[i * wx + j] = raw[ry * px + rx] / cnt;
+                v.re * scale / cnt
+            } else {
+                f64::NAN
             }
-        }
+        })
+        .collect();
+    Lags { r, px, py, nx, ny }
+}
+
+/// The normalised ACF on the centred lag field `(2ny−1) × (2nx−1)`, zero lag at
+/// `(ny−1, nx−1)`.
+#[cfg(test)]
+pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
+    let l = lags(map);
+    let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
+    (0..wy)
+        .flat_map(|i| (0..wx).map(move |j| (i, j)))
+        .map(|(i, j)| l.at(i, j))
+        .collect()
+}
+
+/// `c.round()` where it is at least 1, else 0 (or `NaN`): a count of valid pairs. From the
+/// truncation for 0.5 ≤ c < 2⁵² (its remainder is exact, ties away from zero like `round`)
+/// without `round`'s call into libm; `round` beyond.
+fn round_count(c: f64) -> f64 {
+    const EXACT: f64 = (1u64 << 52) as f64;
+    if c < 0.5 {
+        0.0
+    } else if c < EXACT {
+        let f = c as u64 as f64;
+        if c - f >= 0.5 { f + 1.0 } else { f }
+    } else {
+        c.round()
     }
-    out
 }
 
 /// Sal, Str (threshold `s`, normally 0.2) of a height map.
@@ -172,10 +241,10 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
     if map.nx < 2 || map.ny < 2 {
         return undefined;
     }
-    let r = acf(map);
+    let r = lags(map);
     let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
     let (cy, cx) = (map.ny - 1, map.nx - 1);
-    let r0 = r[cy * wx + cx];
+    let r0 = r.at(cy, cx);
     if r0.is_nan() || r0 <= 0.0 {
         return undefined;
     }
@@ -191,7 +260,7 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
         }
         let mut visit = |a: usize, b: usize| {
             let k = a * wx + b;
-            if !region[k] && r[k] > thr {
+            if !region[k] && r.at(a, b) > thr {
                 region[k] = true;
                 stack.push((a, b));
             }
@@ -209,20 +278,24 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
             visit(i, j + 1);
         }
     }
+    // y, x ≥ 0 (on the rays from the centre to nodes of the field): truncation is the floor.
     let at = |y: f64, x: f64| -> f64 {
-        let (y0, x0) = (y.floor(), x.floor());
-        let (i, j) = (y0 as usize, x0 as usize);
+        let (i, j) = (y as usize, x as usize);
+        let (y0, x0) = (i as f64, j as f64);
         let (fy, fx) = (y - y0, x - x0);
         let i1 = (i + 1).min(wy - 1);
         let j1 = (j + 1).min(wx - 1);
-        let v00 = r[i * wx + j];
-        let v01 = r[i * wx + j1];
-        let v10 = r[i1 * wx + j];
-        let v11 = r[i1 * wx + j1];
+        let v00 = r.at(i, j);
+        let v01 = r.at(i, j1);
+        let v10 = r.at(i1, j);
+        let v11 = r.at(i1, j1);
         (1.0 - fy) * ((1.0 - fx) * v00 + fx * v01) + fy * ((1.0 - fx) * v10 + fx * v11)
     };
-    let (mut shortest, mut longest) = (f64::INFINITY, f64::NEG_INFINITY);
-    for i in 0..wy {
+    // The rays of each row of the lag field in parallel: the shortest and longest are the
+    // same in any order.
+    use rayon::prelude::*;
+    let row_rays = |i: usize| -> (f64, f64) {
+        let (mut shortest, mut longest) = (f64::INFINITY, f64::NEG_INFINITY);
         for j in 0..wx {
             if region[i * wx + j] {
                 continue;
@@ -259,7 +332,12 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
             shortest = shortest.min(len);
             longest = longest.max(len);
         }
-    }
+        (shortest, longest)
+    };
+    let (shortest, longest) = (0..wy).into_par_iter().map(row_rays).reduce(
+        || (f64::INFINITY, f64::NEG_INFINITY),
+        |a, b| (a.0.min(b.0), a.1.max(b.1)),
+    );
     if !shortest.is_finite() {
         return undefined;
     }
@@ -350,6 +428,89 @@ mod tests {
         assert!((r[2 * wx + 1] - 1.0).abs() < 1e-12);
         assert!((r[2 * wx + 2] + 1.0).abs() < 1e-12);
         assert!((r[2 * wx] + 1.0).abs() < 1e-12);
+    }
+
+    /// `round_count` is `round` wherever the count is used (at least 1), bit for bit.
+    #[test]
+    fn counts_round_like_round() {
+        let old = |c: f64| {
+            let r = c.round();
+            if r >= 1.0 { r } else { f64::NAN }
+        };
+        let new = |c: f64| {
+            let r = round_count(c);
+            if r >= 1.0 { r } else { f64::NAN }
+        };
+        let mut cs = vec![
+            f64::NAN,
+            -0.0,
+            0.0,
+            0.4999999999999999,
+            0.5,
+            1.5,
+            2.5,
+            1e300,
+        ];
+        for k in 0..100_000u64 {
+            let base = (k % 3000) as f64;
+            for off in [-0.5, 0.5, -1e-9, 1e-9, 0.49999999999, -0.4999999, 0.0] {
+                cs.push(base + off);
+            }
+            cs.push(f64::from_bits(0x4000_0000_0000_0000 + k * 0x3123_4567_89ab));
+        }
+        for c in cs {
+            assert_eq!(new(c).to_bits(), old(c).to_bits(), "{c:e}");
+        }
+    }
+
+    /// The lag field against the sums over valid pairs taken directly, with and without
+    /// missing nodes, on a field of unequal sides (lags at every offset of both signs).
+    #[test]
+    fn acf_is_the_mean_over_valid_pairs() {
+        let (nx, ny) = (7, 5);
+        for holes in [false, true] {
+            let z: Vec<f64> = (0..nx * ny)
+                .map(|k| {
+                    if holes && k % 6 == 4 {
+                        f64::NAN
+                    } else {
+                        ((k * 37 % 11) as f64 - 5.0) * 0.3
+                    }
+                })
+                .collect();
+            let m = HeightMap::from_rows(nx, ny, 1.0, 1.0, z.clone()).unwrap();
+            let (e, _) = centred(&m);
+            let r = acf(&m);
+            let (wy, wx) = (2 * ny - 1, 2 * nx - 1);
+            for i in 0..wy {
+                for j in 0..wx {
+                    let (ty, tx) = (i as isize - ny as isize + 1, j as isize - nx as isize + 1);
+                    let (mut sum, mut n) = (0.0, 0usize);
+                    for y in 0..ny as isize {
+                        for x in 0..nx as isize {
+                            let (y2, x2) = (y + ty, x + tx);
+                            if y2 < 0 || x2 < 0 || y2 >= ny as isize || x2 >= nx as isize {
+                                continue;
+                            }
+                            let (a, b) = (
+                                (y * nx as isize + x) as usize,
+                                (y2 * nx as isize + x2) as usize,
+                            );
+                            if z[a].is_finite() && z[b].is_finite() {
+                                sum += e[a] * e[b];
+                                n += 1;
+                            }
+                        }
+                    }
+                    let got = r[i * wx + j];
+                    if n == 0 {
+                        assert!(got.is_nan(), "{holes} {ty},{tx}: {got}");
+                    } else {
+                        assert!((got - sum / n as f64).abs() < 1e-12, "{holes} {ty},{tx}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

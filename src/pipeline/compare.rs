@@ -9,8 +9,8 @@ use miette::miette;
 
 use crate::io::{ReadOptions, read_heightmap};
 use crate::metrics::{
-    LaySpectra, ParamSet, Placement, Preprocess, areal_parameters, correlation_shift,
-    feed_direction_deg, height_stats, lay_spectra, place, preprocess_map,
+    LaySpectra, Param, ParamSet, Placement, Preprocess, evaluate_pair, height_stats, place,
+    prepare_pair, shift_peak_is_coefficient, shifts_at_rotations,
 };
 use crate::surface::HeightMap;
 
@@ -30,42 +30,40 @@ fn read(path: &Path) -> miette::Result<HeightMap> {
     })
 }
 
-fn chain(map: &HeightMap, opts: &CompareOptions, name: &str) -> miette::Result<HeightMap> {
-    let pp = Preprocess {
+fn preprocess(opts: &CompareOptions) -> Preprocess {
+    Preprocess {
         level: opts.level,
         lambda_s_um: opts.lambda_s_um,
         lambda_c_um: opts.lambda_c_um,
         ends: Default::default(),
-    };
-    preprocess_map(map, &pp).map_err(|e| miette!("{name}: {e}"))
+    }
 }
 
 /// The rotation (degrees, in (−180, 180]) and shift (µm) that lay the prediction onto the
 /// measurement; of the two rotations that align the feed directions, the one whose
-/// placement correlates better with the measurement.
+/// placement correlates better with the measurement over their common nodes: for large maps
+/// the coefficient the shift search ([`crate::metrics::correlation_shift`]) returns (at its best whole lag,
+/// so no second placement), for the others that of the placed map.
 fn register(pred: &HeightMap, meas: &HeightMap, dirs: [f64; 2]) -> Placement {
     let base = dirs[1] - dirs[0];
+    let rots = [0.0, 180.0].map(|turn| {
+        let rot = (base + turn + 180.0).rem_euclid(360.0) - 180.0;
+        if rot.abs() < 1e-9 { 0.0 } else { rot }
+    });
+    // Both turns placed and searched side by side.
+    let found = shifts_at_rotations(pred, meas, rots);
     let mut best: Option<(f64, Placement)> = None;
-    for turn in [0.0, 180.0] {
-        let mut rot = (base + turn + 180.0).rem_euclid(360.0) - 180.0;
-        if rot.abs() < 1e-9 {
-            rot = 0.0;
-        }
-        let rotated = place(
-            pred,
-            meas,
-            &Placement {
-                rotation_deg: rot,
-                shift_um: [0.0, 0.0],
-            },
-        );
-        if let Some((shift_um, _)) = correlation_shift(meas, &rotated) {
+    for (rot, found) in rots.into_iter().zip(found) {
+        if let Some((shift_um, r)) = found {
             let pl = Placement {
                 rotation_deg: rot,
                 shift_um,
             };
-            // Judged by the correlation of the placed maps over their common nodes.
-            let r = pearson(&place(pred, meas, &pl).z_um, &meas.z_um);
+            let r = if shift_peak_is_coefficient(meas) {
+                r
+            } else {
+                pearson(&place(pred, meas, &pl).z_um, &meas.z_um)
+            };
             if best.is_none_or(|b| r > b.0) {
                 best = Some((r, pl));
             }
@@ -107,20 +105,19 @@ fn overlap(a: &HeightMap, b: &HeightMap) -> Option<(HeightMap, HeightMap)> {
     Some((crop(a)?, crop(b)?))
 }
 
-/// Pearson correlation of the nodes valid in both.
+/// Pearson correlation of the nodes valid in both (three passes over the pairs, in order; no
+/// copy of them).
 fn pearson(a: &[f64], b: &[f64]) -> f64 {
-    let pairs: Vec<(f64, f64)> = a
-        .iter()
-        .zip(b)
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-        .map(|(x, y)| (*x, *y))
-        .collect();
-    let n = pairs.len() as f64;
-    let (ma, mb) = pairs
-        .iter()
-        .fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
+    let pairs = || {
+        a.iter()
+            .zip(b)
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .map(|(x, y)| (*x, *y))
+    };
+    let n = pairs().count() as f64;
+    let (ma, mb) = pairs().fold((0.0, 0.0), |s, p| (s.0 + p.0 / n, s.1 + p.1 / n));
     let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in &pairs {
+    for (x, y) in pairs() {
         sab += (x - ma) * (y - mb);
         saa += (x - ma) * (x - ma);
         sbb += (y - mb) * (y - mb);
@@ -128,17 +125,16 @@ fn pearson(a: &[f64], b: &[f64]) -> f64 {
     sab / (saa * sbb).sqrt()
 }
 
-fn parameters(map: &HeightMap, name: &str) -> miette::Result<Vec<f64>> {
-    let set = ParamSet::parse(&COMPARED.join(","), false).map_err(|e| miette!("{e}"))?;
-    let vals = areal_parameters(map, &set).map_err(|e| miette!("{name}: {e}"))?;
-    Ok(COMPARED
+/// The values of [`COMPARED`], in that order, from a map's parameters.
+fn compared(vals: &[(Param, f64)]) -> Vec<f64> {
+    COMPARED
         .iter()
         .map(|s| {
             vals.iter()
                 .find(|(p, _)| p.symbol() == *s)
                 .map_or(f64::NAN, |v| v.1)
         })
-        .collect())
+        .collect()
 }
 
 /// Compare the prediction in `predicted` with the measurement in `measured`.
@@ -152,10 +148,12 @@ pub fn compare(
         measured.display().to_string(),
     );
     let (pred_raw, meas_raw) = (read(predicted)?, read(measured)?);
-    let reg_p = chain(&pred_raw, opts, &pname)?;
-    let reg_m = chain(&meas_raw, opts, &mname)?;
-    let dir = |m: &HeightMap| feed_direction_deg(m).unwrap_or(f64::NAN);
-    let dirs = [dir(&reg_p), dir(&reg_m)];
+    let pp = preprocess(opts);
+    // Both maps' chains for registration and their feed directions, side by side.
+    let [prep_p, prep_m] = prepare_pair([&pred_raw, &meas_raw], &pp);
+    let (reg_p, dir_p) = prep_p.map_err(|e| miette!("{pname}: {e}"))?;
+    let (reg_m, dir_m) = prep_m.map_err(|e| miette!("{mname}: {e}"))?;
+    let dirs = [dir_p, dir_m];
     let placement = if opts.register && dirs.iter().all(|d| d.is_finite()) {
         register(&reg_p, &reg_m, dirs)
     } else {
@@ -165,8 +163,20 @@ pub fn compare(
     let (cp, cm) = overlap(&placed, &meas_raw).ok_or_else(|| {
         miette!("{pname} and {mname}: the prediction, placed on the measurement, overlaps fewer than 8 × 8 of its valid nodes")
     })?;
-    let proc_p = chain(&cp, opts, &pname)?;
-    let proc_m = chain(&cm, opts, &mname)?;
+    let pred_dir = if placement == Placement::default() {
+        dirs[0]
+    } else {
+        dirs[1]
+    };
+    let set = ParamSet::parse(&COMPARED.join(","), false).map_err(|e| miette!("{e}"))?;
+    // Both overlaps through the chain, their parameters and 1-D spectra, side by side.
+    let [eval_p, eval_m] = evaluate_pair([&cp, &cm], &pp, &set, [pred_dir, dirs[1]]);
+    let eval_p = eval_p.map_err(|e| miette!("{pname}: {e}"))?;
+    let eval_m = eval_m.map_err(|e| miette!("{mname}: {e}"))?;
+    let vp = compared(&eval_p.params.map_err(|e| miette!("{pname}: {e}"))?);
+    let vm = compared(&eval_m.params.map_err(|e| miette!("{mname}: {e}"))?);
+    let (proc_p, proc_m) = (eval_p.map, eval_m.map);
+    let (lay_predicted, lay_measured) = (eval_p.lay, eval_m.lay);
     let mut difference = proc_m.clone();
     for (d, (p, m)) in difference
         .z_um
@@ -175,25 +185,11 @@ pub fn compare(
     {
         *d = p - m;
     }
-    let (vp, vm) = (parameters(&proc_p, &pname)?, parameters(&proc_m, &mname)?);
     let params: Vec<(&'static str, Pair)> = COMPARED
         .iter()
         .zip(vp.iter().zip(&vm))
         .map(|(s, (p, m))| (*s, Pair::new(*p, *m)))
         .collect();
-    let pred_dir = if placement == Placement::default() {
-        dirs[0]
-    } else {
-        dirs[1]
-    };
-    let lay_predicted = pred_dir
-        .is_finite()
-        .then(|| lay_spectra(&proc_p, pred_dir))
-        .flatten();
-    let lay_measured = dirs[1]
-        .is_finite()
-        .then(|| lay_spectra(&proc_m, dirs[1]))
-        .flatten();
     let period = |l: &Option<LaySpectra>, along: bool| {
         l.as_ref().map_or(f64::NAN, |l| {
             if along {
