@@ -332,16 +332,8 @@ impl RunWalker {
         match self.params.mode {
             Mode::FeedPerTooth if far && mv.va == mv.vb => self.skip_far(&mv, s_end, stats, emit),
             Mode::FeedPerTooth => {
-                let step = self.params.fz_mm;
-                loop {
-                    let s = self.k as f64 * step;
-                    if s >= s_end {
-                        break;
-                    }
-                    let sigma = (s - mv.s0).max(0.0);
-                    let tau = mv.tau_at(sigma);
-                    let theta = mv.theta0 + self.clock.omega * tau;
-                    self.push(&mv, s, sigma, tau, theta, far, stats, emit);
+                while (self.k as f64 * self.params.fz_mm) < s_end {
+                    self.fz_sample(&mv, far, stats, emit);
                 }
             }
             Mode::SpindleStep { dtheta_rad } => loop {
@@ -383,7 +375,7 @@ impl RunWalker {
         }
         if end <= self.k + 1 {
             if end == self.k + 1 {
-                self.far_sample(mv, stats, emit);
+                self.fz_sample(mv, true, stats, emit);
             }
             return;
         }
@@ -392,12 +384,17 @@ impl RunWalker {
             emit(p.streamed(), &self.clock, stats);
         }
         let last = end - 2;
-        let (t, _) = self.far_clock(mv, last as f64 * step);
+        let timeless = self.clock.timeless;
+        let sigma = (last as f64 * step - mv.s0).max(0.0);
         let batch = FarRun {
             run: self.run_idx,
             count: last + 1 - self.k,
-            t_s: t,
-            feed_mm_min: if self.clock.timeless {
+            t_s: if timeless {
+                f64::NAN
+            } else {
+                mv.t0 + mv.tau_at(sigma)
+            },
+            feed_mm_min: if timeless {
                 f64::NAN
             } else {
                 mv.feed_at(0.0) * 60.0
@@ -405,24 +402,14 @@ impl RunWalker {
         };
         emit(Streamed::FarRun(&batch), &self.clock, stats);
         self.k = end - 1;
-        self.far_sample(mv, stats, emit);
+        self.fz_sample(mv, true, stats, emit);
     }
 
-    /// Time of the far sample at run-relative arc length `s`, and its τ into the move.
-    fn far_clock(&self, mv: &Move, s: f64) -> (f64, f64) {
-        let tau = mv.tau_at((s - mv.s0).max(0.0));
-        let t = if self.clock.timeless {
-            f64::NAN
-        } else {
-            mv.t0 + tau
-        };
-        (t, tau)
-    }
-
-    /// [`RunWalker::push`] of the far sample `k` of the fz grid.
-    fn far_sample(
+    /// [`RunWalker::push`] of sample `k` of the fz grid (built unless `far`).
+    fn fz_sample(
         &mut self,
         mv: &Move,
+        far: bool,
         stats: &mut Stats,
         emit: &mut impl FnMut(Streamed<'_>, &Clock, &mut Stats),
     ) {
@@ -430,7 +417,7 @@ impl RunWalker {
         let sigma = (s - mv.s0).max(0.0);
         let tau = mv.tau_at(sigma);
         let theta = mv.theta0 + self.clock.omega * tau;
-        self.push(mv, s, sigma, tau, theta, true, stats, emit);
+        self.push(mv, s, sigma, tau, theta, far, stats, emit);
     }
 
     /// Build the sample at run-relative arc length `s` (σ into the move, τ after its
