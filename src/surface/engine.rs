@@ -1133,7 +1133,11 @@ impl Setup<'_> {
         let k = s.k as usize;
         let (lo, hi) = (s.lo as usize, s.hi as usize);
         let j = s.tooth as usize;
-        let Scratch { pts: cols, poses } = scratch;
+        let Scratch {
+            pts: cols,
+            poses,
+            levels,
+        } = scratch;
         cols.clear();
         let mut pose = |c: i64, n: u32, with_angle: bool| {
             let key = (s.k, c, n, with_angle);
@@ -1157,15 +1161,20 @@ impl Setup<'_> {
             Model::Dome => {
                 // The end face's levels strictly between the stretch's ends lie on the
                 // segment between them: the quads they make are one plane's fan.
-                let keep = |i: &usize| self.profile.dome_keeps(*i, lo, hi);
                 let body = &self.profile.body[j];
+                levels.clear();
+                levels.extend(
+                    (lo..=hi)
+                        .filter(|i| self.profile.dome_keeps(*i, lo, hi))
+                        .map(|i| body[i]),
+                );
                 let base = pose(0, 1, false);
                 let step = TAU / s.n as f64;
                 for m in s.a..=s.b {
                     let p = base.rotated(m as f64 * step);
-                    cols.extend((lo..=hi).filter(keep).map(|i| p.apply(&body[i])));
+                    cols.extend(levels.iter().map(|e| p.apply(e)));
                 }
-                ((s.b - s.a + 1) as usize, (lo..=hi).filter(keep).count())
+                ((s.b - s.a + 1) as usize, levels.len())
             }
             Model::Swept => unreachable!("the swept model has no triangles"),
         }
@@ -1175,6 +1184,8 @@ impl Setup<'_> {
 /// Scratch space of [`Setup::strip_triangles`]: strip points and the last poses used.
 struct Scratch {
     pts: Vec<[f64; 3]>,
+    /// The body points a dome strip meshes (its kept levels).
+    levels: Vec<Vec3>,
     /// (sample, step, steps, with angle) and the pose, most recent first.
     poses: [((u32, i64, u32, bool), Pose); 2],
 }
@@ -1187,6 +1198,7 @@ impl Default for Scratch {
         };
         Scratch {
             pts: Vec::new(),
+            levels: Vec::new(),
             poses: [((u32::MAX, 0, 0, false), none); 2],
         }
     }

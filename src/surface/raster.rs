@@ -21,6 +21,9 @@ pub(crate) struct Tile {
     /// block since.
     bmax: Vec<f64>,
     dirty: Vec<bool>,
+    /// Per row and block column: the largest height of the row's piece of the block (its
+    /// up to `BLOCK` nodes), always exact (recomputed whenever a node of it is lowered).
+    smax: Vec<f64>,
     /// Blocks per row.
     bw: usize,
     /// The blocks the triangle being drawn has written (marked dirty when it is done).
@@ -44,6 +47,7 @@ impl Tile {
             z: vec![f64::INFINITY; w * h],
             bmax: vec![f64::INFINITY; nb],
             dirty: vec![false; nb],
+            smax: vec![f64::INFINITY; bw * h],
             bw,
             written: Vec::new(),
         }
@@ -55,7 +59,7 @@ impl Tile {
         let mut top = f64::NEG_INFINITY;
         for b in 0..self.bmax.len() {
             if self.dirty[b] {
-                self.bmax[b] = block_max(&self.z, self.w, b % self.bw, b / self.bw);
+                self.bmax[b] = block_max(&self.smax, self.bw, b % self.bw, b / self.bw);
                 self.dirty[b] = false;
             }
             top = top.max(self.bmax[b]);
@@ -74,38 +78,40 @@ impl Tile {
         if misses(rect, &[a, b, c], cull_w) {
             return;
         }
-        let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
+        let (bmax, dirty, bw, smax) = (&mut self.bmax, &mut self.dirty, self.bw, &self.smax);
         let w = self.w;
-        let mut occluded =
-            |cols: (usize, usize), rows: (usize, usize), low: f64, z: &[f64], refresh: bool| {
-                let (bx0, bx1) = (cols.0 / BLOCK, cols.1 / BLOCK);
-                let (by0, by1) = (rows.0 / BLOCK, rows.1 / BLOCK);
-                // Bounds as they stand first; then refresh the stale ones one at a time.
-                for by in by0..=by1 {
-                    for bx in bx0..=bx1 {
-                        let b = by * bw + bx;
-                        if bmax[b] > low && (!dirty[b] || !refresh) {
+        let mut occluded = |cols: (usize, usize), rows: (usize, usize), low: f64, refresh: bool| {
+            let (bx0, bx1) = (cols.0 / BLOCK, cols.1 / BLOCK);
+            let (by0, by1) = (rows.0 / BLOCK, rows.1 / BLOCK);
+            // Bounds as they stand first; then refresh the stale ones one at a time.
+            for by in by0..=by1 {
+                for bx in bx0..=bx1 {
+                    let b = by * bw + bx;
+                    if bmax[b] > low && (!dirty[b] || !refresh) {
+                        return false;
+                    }
+                }
+            }
+            for by in by0..=by1 {
+                for bx in bx0..=bx1 {
+                    let b = by * bw + bx;
+                    if bmax[b] > low {
+                        bmax[b] = block_max(smax, bw, bx, by);
+                        dirty[b] = false;
+                        if bmax[b] > low {
                             return false;
                         }
                     }
                 }
-                for by in by0..=by1 {
-                    for bx in bx0..=bx1 {
-                        let b = by * bw + bx;
-                        if bmax[b] > low {
-                            bmax[b] = block_max(z, w, bx, by);
-                            dirty[b] = false;
-                            if bmax[b] > low {
-                                return false;
-                            }
-                        }
-                    }
-                }
-                true
-            };
-        if let Some((cols, rows)) = reach(rect, &a, &b, &c, cull_w)
-            && let Some(low) = lower_bound(&a, &b, &c)
-        {
+            }
+            true
+        };
+        // No node within reach: `spans` would find none either (its rows and columns lie
+        // within these).
+        let Some((cols, rows)) = reach(rect, &a, &b, &c, cull_w) else {
+            return;
+        };
+        if let Some(low) = lower_bound(&a, &b, &c) {
             // Columns one node wider than the box: the edge crossings are rounded.
             let lc = (
                 cols.0.max(self.i0 + 1) - 1 - self.i0,
@@ -114,7 +120,7 @@ impl Tile {
             let lr = (rows.0 - self.j0, rows.1 - self.j0);
             // Refreshing bounds pays only for triangles that span several nodes.
             let big = (lc.1 - lc.0 + 1) * (lr.1 - lr.0 + 1) >= MIN_REFRESH_NODES;
-            if occluded(lc, lr, low, &z[..], big) {
+            if occluded(lc, lr, low, big) {
                 return;
             }
         }
@@ -129,7 +135,7 @@ impl Tile {
     fn lower(&mut self, a: [f64; 3], b: [f64; 3], c: [f64; 3], cull_w: f64) {
         let rect = (self.i0, self.j0, self.w, self.h);
         let (i0, j0, w) = (self.i0, self.j0, self.w);
-        let (bmax, dirty, bw, z) = (&mut self.bmax, &mut self.dirty, self.bw, &mut self.z);
+        let (dirty, bw, z, smax) = (&mut self.dirty, self.bw, &mut self.z, &mut self.smax);
         let written = &mut self.written;
         written.clear();
         spans(rect, a, b, c, cull_w, |row, c0, c1, base, gx| {
@@ -139,26 +145,30 @@ impl Tile {
             let mut p0 = c0 - i0;
             let last = c1 - i0;
             while p0 <= last {
-                let blk = by * bw + p0 / BLOCK;
-                let p1 = ((p0 / BLOCK + 1) * BLOCK - 1).min(last);
+                let bx = p0 / BLOCK;
+                let seg = r * bw + bx;
+                let p1 = ((bx + 1) * BLOCK - 1).min(last);
                 let (w0, w1) = (base + gx * (i0 + p0) as f64, base + gx * (i0 + p1) as f64);
-                if dirty[blk] {
-                    bmax[blk] = block_max(z, w, blk % bw, blk / bw);
-                    dirty[blk] = false;
-                }
-                if w0.min(w1) < bmax[blk] {
+                if w0.min(w1) < smax[seg] {
                     let mut x = (i0 + p0) as f64;
                     let mut any = false;
                     for zi in &mut z[off + p0..=off + p1] {
                         let wv = base + gx * x;
-                        if wv < *zi {
-                            *zi = wv;
-                            any = true;
-                        }
+                        let lowers = wv < *zi;
+                        any |= lowers;
+                        *zi = if lowers { wv } else { *zi };
                         x += 1.0;
                     }
-                    if any && !written.contains(&blk) {
-                        written.push(blk);
+                    if any {
+                        let s0 = bx * BLOCK;
+                        let s1 = (s0 + BLOCK).min(w);
+                        smax[seg] = z[off + s0..off + s1]
+                            .iter()
+                            .fold(f64::NEG_INFINITY, |m, v| m.max(*v));
+                        let blk = by * bw + bx;
+                        if !written.contains(&blk) {
+                            written.push(blk);
+                        }
                     }
                 }
                 p0 = p1 + 1;
@@ -258,15 +268,12 @@ pub(crate) fn grow(bb: &mut [f64; 4], p: &[f64; 3]) {
     bb[3] = bb[3].max(p[1]);
 }
 
-/// The largest height of block (bx, by) of a tile `w` nodes wide.
-fn block_max(z: &[f64], w: usize, bx: usize, by: usize) -> f64 {
-    let h = z.len() / w;
-    let (c0, c1) = (bx * BLOCK, ((bx + 1) * BLOCK).min(w));
+/// The largest height of block (bx, by), from the row pieces' maxima `smax` (`bw` per row).
+fn block_max(smax: &[f64], bw: usize, bx: usize, by: usize) -> f64 {
+    let h = smax.len() / bw;
     let mut m = f64::NEG_INFINITY;
     for r in by * BLOCK..((by + 1) * BLOCK).min(h) {
-        for &v in &z[r * w + c0..r * w + c1] {
-            m = m.max(v);
-        }
+        m = m.max(smax[r * bw + bx]);
     }
     m
 }
@@ -292,10 +299,23 @@ fn reach(
     let (tx0, ty0) = (i0 as f64, j0 as f64);
     let tx1 = (i0 + w) as f64 - 1.0;
     let ty1 = (j0 + h) as f64 - 1.0;
-    let c0 = ceil_fast(xmin - EPS).max(tx0);
-    let c1 = floor_fast(xmax + EPS).min(tx1);
-    let r0 = ceil_fast(ymin - EPS).max(ty0);
-    let r1 = floor_fast(ymax + EPS).min(ty1);
+    let mut c0 = ceil_fast(xmin - EPS).max(tx0);
+    let mut c1 = floor_fast(xmax + EPS).min(tx1);
+    let mut r0 = ceil_fast(ymin - EPS).max(ty0);
+    let mut r1 = floor_fast(ymax + EPS).min(ty1);
+    // A triangle beyond the tile's columns reaches only the rows where it meets them (the
+    // rows `spans` scans), and across the same for columns.
+    let v = [*a, *b, *c];
+    if xmin < tx0 - SLAB || xmax > tx1 + SLAB {
+        let (ylo, yhi) = slab_rows(&v, tx0 - SLAB, tx1 + SLAB)?;
+        r0 = r0.max(ceil_fast(ylo - ROW_SLACK));
+        r1 = r1.min(floor_fast(yhi + ROW_SLACK));
+    }
+    if ymin < ty0 - SLAB || ymax > ty1 + SLAB {
+        let (xlo, xhi) = slab_cols(&v, ty0 - SLAB, ty1 + SLAB)?;
+        c0 = c0.max(ceil_fast(xlo - ROW_SLACK));
+        c1 = c1.min(floor_fast(xhi + ROW_SLACK));
+    }
     // (Also false for NaN.)
     if c0 <= c1 && r0 <= r1 {
         Some(((c0 as usize, c1 as usize), (r0 as usize, r1 as usize)))
@@ -367,6 +387,77 @@ fn spans(
     b: [f64; 3],
     c: [f64; 3],
     cull_w: f64,
+    f: impl FnMut(usize, usize, usize, f64, f64),
+) {
+    spans_of(rect, a, b, c, cull_w, true, f);
+}
+
+/// Half-width beyond the tile's outer columns of the slab [`slab_rows`] clips to: twice the
+/// node tolerance, so that a row whose crossings reach a column within the tolerance lies
+/// within the slab's rows whatever the rounding of the crossings (1e-13 of a node).
+const SLAB: f64 = 2.0 * EPS;
+/// Rows added on each side of the slab's rows: the vertex band of [`spans`] (`EPS`) and
+/// the rounding of the clipped edges' ends, generously.
+const ROW_SLACK: f64 = 1e-6;
+
+/// The range of Y of the part of triangle `v` with X in `[x0, x1]` (`None` when it has
+/// none): the part is a convex polygon whose corners lie on the triangle's edges clipped
+/// to the slab, so their Y bound it.
+#[inline]
+fn slab_rows(v: &[[f64; 3]; 3], x0: f64, x1: f64) -> Option<(f64, f64)> {
+    slab_range::<0, 1>(v, x0, x1)
+}
+
+/// [`slab_rows`] across: the range of X of the part of `v` with Y in `[y0, y1]`.
+#[inline]
+fn slab_cols(v: &[[f64; 3]; 3], y0: f64, y1: f64) -> Option<(f64, f64)> {
+    slab_range::<1, 0>(v, y0, y1)
+}
+
+/// The range of coordinate `O` of the part of triangle `v` whose coordinate `S` lies in
+/// `[s0, s1]`.
+#[inline]
+fn slab_range<const S: usize, const O: usize>(
+    v: &[[f64; 3]; 3],
+    s0: f64,
+    s1: f64,
+) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for k in 0..3 {
+        let (p, q) = (v[k], v[(k + 1) % 3]);
+        let ds = q[S] - p[S];
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        if ds == 0.0 {
+            if p[S] < s0 || p[S] > s1 {
+                continue;
+            }
+        } else {
+            let (ta, tb) = ((s0 - p[S]) / ds, (s1 - p[S]) / ds);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+            if t0 > t1 {
+                continue;
+            }
+        }
+        let d = q[O] - p[O];
+        let (oa, ob) = (p[O] + t0 * d, p[O] + t1 * d);
+        lo = lo.min(oa.min(ob));
+        hi = hi.max(oa.max(ob));
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// [`spans`], with the rows first clipped to those where the triangle meets the tile's
+/// columns (`clip`) or not (the plain scan, for tests): the same spans either way.
+#[inline]
+fn spans_of(
+    rect: (usize, usize, usize, usize),
+    a: [f64; 3],
+    b: [f64; 3],
+    c: [f64; 3],
+    cull_w: f64,
+    clip: bool,
     mut f: impl FnMut(usize, usize, usize, f64, f64),
 ) {
     let (i0, j0, w, h) = rect;
@@ -385,12 +476,22 @@ fn spans(
         if xmax < tx0 - EPS || xmin > tx1 + EPS || ymax < ty0 - EPS || ymin > ty1 + EPS {
             return;
         }
-        let ry0 = ceil_fast(ymin - EPS).max(ty0) as usize;
-        let ry1 = floor_fast(ymax + EPS).min(ty1);
-        if ry1 < ry0 as f64 {
+        let (mut ry0, mut ry1) = (
+            ceil_fast(ymin - EPS).max(ty0),
+            floor_fast(ymax + EPS).min(ty1),
+        );
+        if clip && (xmin < tx0 - SLAB || xmax > tx1 + SLAB) {
+            // Only the rows where the triangle meets the tile's columns.
+            let Some((ylo, yhi)) = slab_rows(&[a, b, c], tx0 - SLAB, tx1 + SLAB) else {
+                return;
+            };
+            ry0 = ry0.max(ceil_fast(ylo - ROW_SLACK));
+            ry1 = ry1.min(floor_fast(yhi + ROW_SLACK));
+        }
+        if ry1 < ry0 {
             return;
         }
-        let ry1 = ry1 as usize;
+        let (ry0, ry1) = (ry0 as usize, ry1 as usize);
         // No node column within reach (a triangle smaller than the node spacing): the edge
         // crossings below lie within [xmin, xmax] up to their rounding, `slack`.
         let slack = EPS + 1e-6 + 4.0 * f64::EPSILON * xmin.abs().max(xmax.abs());
@@ -532,6 +633,97 @@ mod tests {
         }
         // Where nothing ties, the minimum is kept bit for bit.
         assert!(exact > plain.len() / 2, "{exact} of {}", plain.len());
+    }
+
+    /// Random triangles about a tile: long slivers across it, edges upright or level at
+    /// its outer columns and rows give or take the node tolerance and a few ulp, vertices
+    /// on rows.
+    fn awkward_triangles() -> Vec<[[f64; 3]; 3]> {
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (x0, x1, y0, y1) = (5.0, 30.0, 3.0, 60.0);
+        let near =
+            |v: f64, r: f64| v + [0.0, 1e-9, -1e-9, 2e-9, -2e-9, 1e-13, -1e-13][(r * 7.0) as usize];
+        let mut out = Vec::new();
+        for n in 0..20_000 {
+            let mut p = || [rnd() * 60.0 - 15.0, rnd() * 90.0 - 15.0, rnd()];
+            let (mut a, mut b, mut c) = (p(), p(), p());
+            match n % 5 {
+                // A sliver: c next to b.
+                0 => {
+                    c = [
+                        b[0] + (rnd() - 0.5) * 0.3,
+                        b[1] + (rnd() - 0.5) * 0.3,
+                        rnd(),
+                    ]
+                }
+                // An upright edge at an outer column.
+                1 => {
+                    let x = near(if rnd() < 0.5 { x0 } else { x1 }, rnd());
+                    a[0] = x;
+                    b[0] = near(x, rnd());
+                }
+                // A level edge at an outer row.
+                2 => {
+                    let y = near(if rnd() < 0.5 { y0 } else { y1 }, rnd());
+                    a[1] = y;
+                    b[1] = near(y, rnd());
+                }
+                // Vertices on rows and columns.
+                3 => {
+                    for v in [&mut a, &mut b, &mut c] {
+                        v[0] = near(v[0].round(), rnd());
+                        v[1] = near(v[1].round(), rnd());
+                    }
+                }
+                _ => {}
+            }
+            out.push([a, b, c]);
+        }
+        out
+    }
+
+    #[test]
+    fn clipped_rows_give_the_same_spans_as_the_plain_scan() {
+        let rect = (5, 3, 26, 58);
+        let mut rows = 0;
+        for [a, b, c] in awkward_triangles() {
+            let mut clipped = Vec::new();
+            let mut plain = Vec::new();
+            let key = |r: usize, c0: usize, c1: usize, base: f64, gx: f64| {
+                (r, c0, c1, base.to_bits(), gx.to_bits())
+            };
+            spans_of(rect, a, b, c, 2.0, true, |r, c0, c1, base, gx| {
+                clipped.push(key(r, c0, c1, base, gx))
+            });
+            spans_of(rect, a, b, c, 2.0, false, |r, c0, c1, base, gx| {
+                plain.push(key(r, c0, c1, base, gx))
+            });
+            assert_eq!(clipped, plain, "{a:?} {b:?} {c:?}");
+            rows += plain.len();
+        }
+        assert!(rows > 100_000, "{rows}");
+    }
+
+    #[test]
+    fn the_reach_holds_every_node_a_triangle_covers() {
+        let rect = (5, 3, 26, 58);
+        let mut covered = 0;
+        for [a, b, c] in awkward_triangles() {
+            let got = reach(rect, &a, &b, &c, 2.0);
+            spans_of(rect, a, b, c, 2.0, false, |r, c0, c1, _, _| {
+                let ((x0, x1), (y0, y1)) = got.expect("a reach");
+                assert!((y0..=y1).contains(&r), "row {r} {a:?} {b:?} {c:?}");
+                assert!(x0 <= c0 && c1 <= x1, "{c0}..{c1} {a:?} {b:?} {c:?}");
+                covered += 1;
+            });
+        }
+        assert!(covered > 100_000, "{covered}");
     }
 
     #[test]
