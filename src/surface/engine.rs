@@ -29,6 +29,8 @@ const MAX_NODES: usize = 400_000_000;
 const MAX_SUBSTEPS: f64 = 1.0e6;
 /// Angular steps per dome strip.
 const DOME_CHUNK: i64 = 32;
+/// Angles per run whose box [`Setup::raster_strip`] tests against the tile.
+const DOME_RUN: i64 = 4;
 /// Nodes per coarse cell of the nominal surface.
 const NOMINAL_STRIDE: usize = 32;
 
@@ -724,9 +726,16 @@ impl Setup<'_> {
                 if c - r * amp > thr {
                     continue;
                 }
+                // The end face's levels between the first below `thr` and its rim share
+                // `c`, and `r` grows along them: their half-widths lie between the two
+                // ends', so only the ends need one.
+                let inner = lo < i && i < self.profile.flat;
                 lo = lo.min(i);
                 hi = i;
                 r_max = r_max.max(r);
+                if inner {
+                    continue;
+                }
                 let h = if r * amp < 1e-12 {
                     PI
                 } else {
@@ -744,10 +753,7 @@ impl Setup<'_> {
                 r_max = r_max.max(e.y);
             }
             // The points the mesh uses (its boxes are theirs).
-            let kept: Vec<Vec3> = (lo..=hi)
-                .filter(|i| self.profile.dome_keeps(*i, lo, hi))
-                .map(|i| body[i])
-                .collect();
+            let kept: Vec<Vec3> = self.profile.dome_levels(lo, hi).map(|i| body[i]).collect();
             let dphi = (8.0 * self.opts.chord_tol_mm / r_max.max(1e-6))
                 .sqrt()
                 .clamp(1e-4, 1f64.to_radians());
@@ -761,11 +767,18 @@ impl Setup<'_> {
                 let m1 = ((phi_star + half) / step).ceil() as i64 + 1;
                 if m1 - m0 >= n { (0, n) } else { (m0, m1) }
             };
+            let sweep = super::envelope::DomeSweep::new(&base.m, &base.b, &kept);
+            let (gx, gy) = ((self.nx - 1) as f64 + 1e-9, (self.ny - 1) as f64 + 1e-9);
             let mut c0 = m0;
             while c0 < m1 {
                 let c1 = (c0 + DOME_CHUNK).min(m1);
                 let (t0, t1) = (c0 as f64 * step, c1 as f64 * step);
-                let bb = super::envelope::dome_box(&base.m, &base.b, &kept, t0, t1);
+                let bb = sweep.dome_box(t0, t1);
+                // Beyond the grid: no tile would take it.
+                if bb[2] < -1e-9 || bb[3] < -1e-9 || bb[0] > gx || bb[1] > gy {
+                    c0 = c1;
+                    continue;
+                }
                 strips.push(Strip {
                     k: k as u32,
                     a: c0,
@@ -1102,8 +1115,36 @@ impl Setup<'_> {
                 return;
             };
             (s.a, s.b, s.hi, s.lo) = (a, b, s.lo + l1 as u16, s.lo + l0 as u16);
+            // Only the angles whose points can reach the tile's nodes, by the boxes of
+            // runs of a few angles (the triangles of the others lie beyond the tile).
+            if s.b - s.a > DOME_RUN {
+                let (lo, hi) = (s.lo as usize, s.hi as usize);
+                let body = &self.profile.body[s.tooth as usize];
+                let kept = &mut cols.levels;
+                kept.clear();
+                kept.extend(self.profile.dome_levels(lo, hi).map(|i| body[i]));
+                let sweep = super::envelope::DomeSweep::new(&base.m, &base.b, kept);
+                let (x0, y0) = (tile.i0 as f64 - 1e-6, tile.j0 as f64 - 1e-6);
+                let x1 = (tile.i0 + tile.w - 1) as f64 + 1e-6;
+                let y1 = (tile.j0 + tile.h - 1) as f64 + 1e-6;
+                let mut hit: Option<(i64, i64)> = None;
+                let mut m = s.a;
+                while m < s.b {
+                    let e = (m + DOME_RUN).min(s.b);
+                    let bb = sweep.dome_box(m as f64 * step, e as f64 * step);
+                    if !(bb[2] < x0 || bb[3] < y0 || bb[0] > x1 || bb[1] > y1) {
+                        hit = Some(hit.map_or((m, e), |(h0, _)| (h0, e)));
+                    }
+                    m = e;
+                }
+                let Some((a, b)) = hit else {
+                    return;
+                };
+                (s.a, s.b) = (a, b);
+            }
         }
         let (ncols, nl) = self.strip_points(&s, cols);
+
         tile.quads(&cols.pts, ncols, nl, cull);
     }
 
@@ -1163,11 +1204,7 @@ impl Setup<'_> {
                 // segment between them: the quads they make are one plane's fan.
                 let body = &self.profile.body[j];
                 levels.clear();
-                levels.extend(
-                    (lo..=hi)
-                        .filter(|i| self.profile.dome_keeps(*i, lo, hi))
-                        .map(|i| body[i]),
-                );
+                levels.extend(self.profile.dome_levels(lo, hi).map(|i| body[i]));
                 let base = pose(0, 1, false);
                 let step = TAU / s.n as f64;
                 for m in s.a..=s.b {

@@ -37,31 +37,55 @@ fn cos_range(t0: f64, t1: f64, psi: f64) -> (f64, f64) {
 /// The node-space box (X0, Y0, X1, Y1) holding every point `b + M rot(θ) e` of the body
 /// points `body` (each (0, r, z)) for the spindle angles θ in [t0, t1]: a box at least as
 /// large as the one of the meshed points at the angles of the mesh within that interval.
+#[cfg(test)]
 pub(crate) fn dome_box(m: &Matrix3<f64>, b: &Vec3, body: &[Vec3], t0: f64, t1: f64) -> [f64; 4] {
-    let mut bb = [
-        f64::INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::NEG_INFINITY,
-    ];
-    for k in 0..2 {
-        let (a, c) = (m[(k, 0)], m[(k, 1)]);
-        let amp = a.hypot(c);
-        // a sin θ + c cos θ = amp cos(θ − ψ).
-        let psi = a.atan2(c);
-        let (lo, hi) = cos_range(t0, t1, psi);
-        for e in body {
-            let centre = b[k] + m[(k, 2)] * e.z;
-            let r = e.y.max(0.0) * amp;
-            bb[k] = bb[k].min(centre + r * lo);
-            bb[k + 2] = bb[k + 2].max(centre + r * hi);
+    DomeSweep::new(m, b, body).dome_box(t0, t1)
+}
+
+/// One pose's revolved body points, for the boxes of many angle intervals ([`dome_box`]):
+/// what does not depend on the interval is worked out once.
+pub(crate) struct DomeSweep<'a> {
+    m: &'a Matrix3<f64>,
+    b: &'a Vec3,
+    body: &'a [Vec3],
+    /// Per coordinate X, Y: the amplitude and phase of `a sin θ + c cos θ = amp cos(θ − ψ)`.
+    wave: [(f64, f64); 2],
+}
+
+impl<'a> DomeSweep<'a> {
+    pub(crate) fn new(m: &'a Matrix3<f64>, b: &'a Vec3, body: &'a [Vec3]) -> DomeSweep<'a> {
+        let wave = [0, 1].map(|k| {
+            let (a, c) = (m[(k, 0)], m[(k, 1)]);
+            (a.hypot(c), a.atan2(c))
+        });
+        DomeSweep { m, b, body, wave }
+    }
+
+    /// [`dome_box`] of angles [t0, t1].
+    pub(crate) fn dome_box(&self, t0: f64, t1: f64) -> [f64; 4] {
+        let (m, b) = (self.m, self.b);
+        let mut bb = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for k in 0..2 {
+            let (amp, psi) = self.wave[k];
+            let (lo, hi) = cos_range(t0, t1, psi);
+            for e in self.body {
+                let centre = b[k] + m[(k, 2)] * e.z;
+                let r = e.y.max(0.0) * amp;
+                bb[k] = bb[k].min(centre + r * lo);
+                bb[k + 2] = bb[k + 2].max(centre + r * hi);
+            }
         }
+        for k in 0..2 {
+            bb[k] -= SLACK_ABS + SLACK_REL * bb[k].abs();
+            bb[k + 2] += SLACK_ABS + SLACK_REL * bb[k + 2].abs();
+        }
+        bb
     }
-    for k in 0..2 {
-        bb[k] -= SLACK_ABS + SLACK_REL * bb[k].abs();
-        bb[k + 2] += SLACK_ABS + SLACK_REL * bb[k + 2].abs();
-    }
-    bb
 }
 
 /// Of a dome strip (mesh angles `a..=b` of `step`, body points `body`, pose `m`, `bz`), the

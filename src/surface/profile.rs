@@ -167,11 +167,21 @@ impl Profile {
         ))
     }
 
-    /// Whether a dome mesh of levels `lo..=hi` uses level `i`: the end face's levels strictly
-    /// inside the stretch lie on the segment between its ends, so their quads are one
-    /// plane's fan and their points add nothing to any bound of the mesh.
-    pub fn dome_keeps(&self, i: usize, lo: usize, hi: usize) -> bool {
+    /// Whether a dome mesh of levels `lo..=hi` uses level `i` (the test's plain statement
+    /// of [`Profile::dome_levels`]).
+    #[cfg(test)]
+    fn dome_keeps(&self, i: usize, lo: usize, hi: usize) -> bool {
         i == lo || i == hi || i == 0 || i >= self.flat
+    }
+
+    /// The levels a dome mesh of levels `lo..=hi` uses, in order: its ends and every level
+    /// off the end face. The end face's levels strictly inside the stretch lie on the
+    /// segment between its ends, so their quads are one plane's fan and their points add
+    /// nothing to any bound of the mesh; they are not even looked at.
+    pub fn dome_levels(&self, lo: usize, hi: usize) -> impl Iterator<Item = usize> {
+        let from = (lo + 1).max(self.flat);
+        let last = (hi > lo && hi < from).then_some(hi);
+        std::iter::once(lo).chain(from..=hi).chain(last)
     }
 
     fn finish(
@@ -230,8 +240,30 @@ pub(crate) fn scan_candidates(
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use crate::tool::Runout;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn dome_levels_are_the_kept_ones() {
+        let shape = Shape::Torus {
+            corner_radius_mm: 5.0,
+        };
+        let cutter = Cutter::new(shape, 16.0, 2, 30f64.to_radians());
+        let p = Profile::new(&cutter, 1e-3, 16.0).unwrap();
+        assert!(p.flat > 3);
+        let n = p.body[0].len();
+        for lo in 0..n {
+            for hi in lo..n {
+                let want: Vec<usize> = (lo..=hi).filter(|i| p.dome_keeps(*i, lo, hi)).collect();
+                assert_eq!(
+                    p.dome_levels(lo, hi).collect::<Vec<_>>(),
+                    want,
+                    "{lo}..={hi}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn rotated_angle_zero_point_is_the_edge_point() {

@@ -26,6 +26,9 @@ pub(crate) struct Tile {
     smax: Vec<f64>,
     /// Blocks per row.
     bw: usize,
+    /// An upper bound of `z` over the whole tile: its highest node when [`Tile::top`] last
+    /// looked (`z` only decreases since), `+∞` before.
+    top_bound: f64,
     /// The blocks the triangle being drawn has written (marked dirty when it is done).
     written: Vec<usize>,
 }
@@ -49,6 +52,7 @@ impl Tile {
             dirty: vec![false; nb],
             smax: vec![f64::INFINITY; bw * h],
             bw,
+            top_bound: f64::INFINITY,
             written: Vec::new(),
         }
     }
@@ -64,6 +68,7 @@ impl Tile {
             }
             top = top.max(self.bmax[b]);
         }
+        self.top_bound = top;
         top.is_finite().then_some(top)
     }
 
@@ -106,12 +111,17 @@ impl Tile {
             }
             true
         };
+        let low = lower_bound(&a, &b, &c);
+        // Above the whole tile: nothing else need be looked at.
+        if low.is_some_and(|low| self.top_bound <= low) {
+            return;
+        }
         // No node within reach: `spans` would find none either (its rows and columns lie
         // within these).
         let Some((cols, rows)) = reach(rect, &a, &b, &c, cull_w) else {
             return;
         };
-        if let Some(low) = lower_bound(&a, &b, &c) {
+        if let Some(low) = low {
             // Columns one node wider than the box: the edge crossings are rounded.
             let lc = (
                 cols.0.max(self.i0 + 1) - 1 - self.i0,
@@ -424,27 +434,29 @@ fn slab_range<const S: usize, const O: usize>(
 ) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
-    for k in 0..3 {
-        let (p, q) = (v[k], v[(k + 1) % 3]);
+    let mut edge = |p: &[f64; 3], q: &[f64; 3]| {
         let ds = q[S] - p[S];
         let (mut t0, mut t1) = (0.0f64, 1.0f64);
         if ds == 0.0 {
             if p[S] < s0 || p[S] > s1 {
-                continue;
+                return;
             }
         } else {
             let (ta, tb) = ((s0 - p[S]) / ds, (s1 - p[S]) / ds);
             t0 = t0.max(ta.min(tb));
             t1 = t1.min(ta.max(tb));
             if t0 > t1 {
-                continue;
+                return;
             }
         }
         let d = q[O] - p[O];
         let (oa, ob) = (p[O] + t0 * d, p[O] + t1 * d);
         lo = lo.min(oa.min(ob));
         hi = hi.max(oa.max(ob));
-    }
+    };
+    edge(&v[0], &v[1]);
+    edge(&v[1], &v[2]);
+    edge(&v[2], &v[0]);
     (lo <= hi).then_some((lo, hi))
 }
 
