@@ -1,9 +1,12 @@
 //! The place an error names: the one [`Located`] a front end's error carries, found in an
-//! error's chain of causes whatever the reader (tool paths, TOML files, study files), for the front
-//! ends that show it apart from the message (the Python package's `CrestError.file`,
-//! `.line`, `.column`).
+//! error's chain of causes whatever the reader (tool paths, TOML files, study files,
+//! tables), for the front ends that show it apart from the message (the Python package's
+//! `CrestError.file`, `.line`, `.column`).
 
 use crate::config::ConfigError;
+use crate::io::measured::MeasuredError;
+use crate::io::series::SeriesError;
+use crate::io::table_error::TableError;
 use crate::io::toolpath::{InputError, ReadError};
 use crate::parse::{Located, ParseError};
 use crate::pipeline::Error;
@@ -28,6 +31,15 @@ pub fn of_error<'a>(e: &'a (dyn std::error::Error + 'static)) -> Option<&'a Loca
     }
     if let Some(ReadError::Located(located)) = e.downcast_ref::<ReadError>() {
         return Some(&located.0);
+    }
+    if let Some(TableError(l)) = e.downcast_ref::<TableError>() {
+        return Some(l.as_ref());
+    }
+    if let Some(MeasuredError::At(TableError(l))) = e.downcast_ref::<MeasuredError>() {
+        return Some(l.as_ref());
+    }
+    if let Some(SeriesError::At(TableError(l))) = e.downcast_ref::<SeriesError>() {
+        return Some(l.as_ref());
     }
     if let Some(ToolFileError(l)) = e.downcast_ref::<ToolFileError>() {
         return Some(l);
@@ -80,5 +92,12 @@ mod tests {
         assert!(of_error(&e).is_none());
         assert_eq!(of_chain(&e).map(|l| l.span), Some(Span::NONE));
         assert!(of_chain(&Error::Input("no place".into())).is_none());
+        // A table's line or field.
+        let text = "lead_deg,side,sample,Ra_um\n1,concave,S1,x\n";
+        let e = crate::io::measured::parse_measured(text, "m.csv").unwrap_err();
+        let e = Error::from(e);
+        let l = of_chain(&e).unwrap();
+        assert_eq!(l.file.as_deref(), Some("m.csv"));
+        assert_eq!((l.span.line, l.span.column), (2, 14));
     }
 }
