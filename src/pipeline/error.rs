@@ -273,3 +273,49 @@ impl miette::Diagnostic for Error {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use miette::Diagnostic;
+
+    fn chain(e: &Error) -> Vec<String> {
+        std::iter::successors(Some(e as &dyn std::error::Error), |e| e.source())
+            .map(ToString::to_string)
+            .collect()
+    }
+
+    #[test]
+    fn a_typed_error_keeps_its_code_frame_under_a_step_line() {
+        let text = "shape = \"ball\"\nradius_mm = -5.0\nteeth = 2\nhelix_deg = 0.0\n";
+        let e = crate::pipeline::tool_from_text(text, "t.toml").unwrap_err();
+        assert!(e.labels().is_some() && e.source_code().is_some());
+        let first = e.to_string();
+        assert!(first.starts_with("t.toml:2:13: "), "{first}");
+        let wrapped = Error::DesignTool {
+            design: "d.toml".into(),
+            tool: "t.toml".into(),
+            source: Box::new(e),
+        };
+        assert!(wrapped.labels().is_some() && wrapped.source_code().is_some());
+        let lines = chain(&wrapped);
+        assert_eq!(
+            lines[0],
+            "d.toml: cannot read tool file t.toml (the path is relative to the design file)"
+        );
+        assert_eq!(lines[1], first);
+    }
+
+    #[test]
+    fn a_cause_named_on_the_same_line_is_not_repeated() {
+        let e = Error::within("f.cls", std::io::Error::other("bad"));
+        assert_eq!(chain(&e), ["f.cls: bad"]);
+        let e = Error::output("write runs.csv", std::io::Error::other("full"));
+        assert_eq!(chain(&e), ["cannot write runs.csv: full"]);
+        assert_eq!(
+            Error::field("grid_um", "must be positive, got -1").to_string(),
+            "‹grid_um› must be positive, got -1"
+        );
+        assert!(Error::Input("x".into()).labels().is_none());
+    }
+}
