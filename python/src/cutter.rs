@@ -80,7 +80,7 @@ impl Cutter {
     #[staticmethod]
     fn from_toml(path: PathBuf) -> PyResult<Cutter> {
         let text = crest::io::text::read_text(&path, "tool file", crest::io::input::CONFIG)
-            .map_err(|e| err(e.into()))?;
+            .map_err(err)?;
         Cutter::from_text(&text, &path.display().to_string())
     }
 

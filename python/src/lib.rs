@@ -18,13 +18,17 @@ create_exception!(
 /// command line prints them (without the code frame), and the place in an input it names
 /// (the error's `crest::parse::Located`, as the command line's frame) as `file`, `line` and
 /// `column`.
-fn err(e: miette::Report) -> PyErr {
+fn err(e: impl Into<miette::Report>) -> PyErr {
+    let e: miette::Report = e.into();
     let mut msg = e.to_string();
     for cause in e.chain().skip(1) {
         msg.push_str("\n  caused by: ");
         msg.push_str(&cause.to_string());
     }
-    let place = crest::pipeline::located::of_report(&e).map(|l| (l.file.clone(), l.span));
+    let place = e
+        .chain()
+        .find_map(crest::pipeline::located::of_error)
+        .map(|l| (l.file.clone(), l.span));
     let py_err = crest_error(msg);
     if let Some((file, span)) = place {
         Python::with_gil(|py| {

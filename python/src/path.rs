@@ -222,7 +222,7 @@ pub(crate) fn plan_feed<'py>(
         }
     };
     let plans = py
-        .allow_threads(|| -> miette::Result<_> {
+        .allow_threads(|| -> crest::pipeline::Result<_> {
             let machine = crest::pipeline::load_machine(&machine)?;
             crest::pipeline::feed::plan_file(&file, &machine, level, absolute, Default::default())
         })

@@ -26,11 +26,10 @@ pub(crate) fn study_tasks<'py>(
     seed: u64,
 ) -> PyResult<Bound<'py, PyAny>> {
     let texts = if design.contains('\n') || design.contains('=') {
-        let d =
-            crest::config::design::parse_design(design, "<design>").map_err(|e| err(e.into()))?;
+        let d = crest::config::design::parse_design(design, "<design>").map_err(err)?;
         let tool_file = d.tool.display().to_string();
         let tool_toml = crest::io::text::read_text(&d.tool, "tool file", crest::io::input::CONFIG)
-            .map_err(|e| err(e.into()))?;
+            .map_err(err)?;
         crest::pipeline::design::DesignTexts {
             design_file: "<design>".into(),
             design_toml: design.to_string(),

@@ -180,7 +180,7 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
         None => None,
     };
     let gcode_out = gcode.is_some();
-    let mut failure: Option<miette::Report> = None;
+    let mut failure: Option<crest::io::toolpath::ReadError> = None;
     let mut rows = 0usize;
     let mut postures = 0usize;
     let to_clsf = is_clsf_output(output);
@@ -263,7 +263,7 @@ pub fn convert(args: &Args) -> miette::Result<Converted> {
         }
     });
     if let Some(e) = failure {
-        return Err(crest::io::toolpath::name_output(e, output));
+        return Err(crest::io::toolpath::name_output(e, output).into());
     }
     written.map_err(|e| miette::miette!("{}: cannot write: {e}", output.display()))?;
     let csv = !to_clsf && !gcode_out;

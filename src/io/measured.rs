@@ -3,6 +3,7 @@
 //! `Ra_stepover_um`, `Rz_stepover_um`, and `measured_file`, a height map to measure), every
 //! bad cell named by file, line and column.
 
+use super::table_error::TableError;
 use crate::parse::Span;
 use crate::study::measured::{Columns, MeasuredRow, MeasuredTable, Param, Side};
 use std::collections::BTreeMap;
@@ -10,28 +11,10 @@ use std::collections::BTreeMap;
 /// Why a measured table was rejected.
 #[derive(Debug, thiserror::Error, miette::Diagnostic)]
 pub enum MeasuredError {
-    /// A value in the measured table could not be read.
-    #[error("{file}:{}:{}: column `{name}`: {message}", at.line, at.column)]
-    Cell {
-        /// File name as given.
-        file: String,
-        /// Where the field starts.
-        at: Span,
-        /// Column name.
-        name: String,
-        /// What was wrong.
-        message: String,
-    },
-    /// A malformed line in the measured table.
-    #[error("{file}:{}: {message}", at.line)]
-    Line {
-        /// File name as given.
-        file: String,
-        /// The line.
-        at: Span,
-        /// What was wrong.
-        message: String,
-    },
+    /// A malformed line, or a value (or a header's column name) that could not be read,
+    /// its message starting with the column's name (`column `Ra_um`: …`).
+    #[error(transparent)]
+    At(#[from] TableError),
     /// The header lacks required columns.
     #[error(
         "{file}:{}: missing column(s) {missing}; the header must name lead_deg, side, sample and measured_file or at least one of Ra_um, Rz_um, Sa_um, Sz_um, Sq_um, Sdq, Ra_stepover_um, Rz_stepover_um",
@@ -85,6 +68,11 @@ fn line_of_record(text: &str, pos: &csv::Position) -> u64 {
     1 + bytes[..at].iter().filter(|b| **b == b'\n').count() as u64
 }
 
+/// A value (or a header's column name) of column `name` at `at` that could not be read.
+fn bad_cell(file: &str, at: Span, name: &str, message: impl std::fmt::Display) -> MeasuredError {
+    TableError::field(file, at, format!("column `{name}`: {message}")).into()
+}
+
 /// Where field `index` of the raw CSV line `raw` (line `line`) starts (just after the
 /// line's end when it has fewer fields).
 fn field_span(raw: &str, line: u64, index: usize) -> Span {
@@ -128,13 +116,9 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         .trim(csv::Trim::All)
         .flexible(true)
         .from_reader(text.as_bytes());
-    let csv_err = |e: csv::Error| {
+    let csv_err = |e: csv::Error| -> MeasuredError {
         let line = e.position().map(|p| p.line()).unwrap_or(0);
-        MeasuredError::Line {
-            file: file.to_string(),
-            at: Span::line_u64(line),
-            message: format!("not valid CSV: {e}"),
-        }
+        TableError::line(file, line, format!("not valid CSV: {e}")).into()
     };
     let headers = reader.headers().map_err(csv_err)?.clone();
     let header_line = headers
@@ -151,23 +135,23 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
     let mut index: BTreeMap<&str, usize> = BTreeMap::new();
     for (i, h) in headers.iter().enumerate() {
         let Some(known) = KNOWN_COLUMNS.iter().find(|k| **k == h) else {
-            return Err(MeasuredError::Cell {
-                file: file.to_string(),
-                at: field_span(raw_line(header_line), header_line, i),
-                name: h.to_string(),
-                message: format!(
+            return Err(bad_cell(
+                file,
+                field_span(raw_line(header_line), header_line, i),
+                h,
+                format!(
                     "unknown column; expected one of {} (units in the name)",
                     KNOWN_COLUMNS.join(", ")
                 ),
-            });
+            ));
         };
         if index.insert(known, i).is_some() {
-            return Err(MeasuredError::Cell {
-                file: file.to_string(),
-                at: field_span(raw_line(header_line), header_line, i),
-                name: h.to_string(),
-                message: "column given twice".to_string(),
-            });
+            return Err(bad_cell(
+                file,
+                field_span(raw_line(header_line), header_line, i),
+                h,
+                "column given twice",
+            ));
         }
     }
     let mut missing: Vec<&str> = ["lead_deg", "side", "sample"]
@@ -202,25 +186,22 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
             continue;
         }
         if record.len() != headers.len() {
-            return Err(MeasuredError::Line {
-                file: file.to_string(),
-                at: Span::line_u64(line),
-                message: format!(
+            return Err(MeasuredError::At(TableError::line(
+                file,
+                line,
+                format!(
                     "{} field(s) where the header has {}",
                     record.len(),
                     headers.len()
                 ),
-            });
+            )));
         }
         let cell = |name: &str| -> (usize, &str) {
             let i = index[name];
             (i, record.get(i).unwrap_or(""))
         };
-        let bad = |name: &str, i: usize, message: String| MeasuredError::Cell {
-            file: file.to_string(),
-            at: field_span(raw_line(line), line, i),
-            name: name.to_string(),
-            message,
+        let bad = |name: &str, i: usize, message: String| {
+            bad_cell(file, field_span(raw_line(line), line, i), name, message)
         };
         let measured_file = if columns.file {
             let (_, f) = cell("measured_file");
@@ -312,11 +293,9 @@ pub fn parse_measured(text: &str, file: &str) -> Result<MeasuredTable, MeasuredE
         });
     }
     if rows.is_empty() {
-        return Err(MeasuredError::Line {
-            file: file.to_string(),
-            at: Span::line_u64(header_line),
-            message: "the table has a header but no data rows".to_string(),
-        });
+        return Err(
+            TableError::line(file, header_line, "the table has a header but no data rows").into(),
+        );
     }
     Ok(MeasuredTable { columns, rows })
 }

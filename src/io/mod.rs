@@ -52,6 +52,7 @@ pub mod output;
 pub mod profile_csv;
 pub mod samples;
 pub mod series;
+pub mod table_error;
 pub mod tables;
 pub mod text;
 pub mod toolpath;

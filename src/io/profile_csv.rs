@@ -4,6 +4,30 @@
 
 use std::path::Path;
 
+/// Why a measured profile could not be read: each message names the file.
+#[derive(Debug, thiserror::Error, miette::Diagnostic)]
+pub enum ProfileError {
+    /// The file's first bytes could not be read within its budget (shown as one line).
+    #[error("{0}")]
+    Head(super::input::InputError),
+    /// The file could not be read as text.
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Text(#[from] super::text::TextError),
+    /// The two-column table is not one (shown as one line).
+    #[error("{0}")]
+    Table(super::series::SeriesError),
+    /// The table has fewer than two points.
+    #[error("{file}: the profile has fewer than two points")]
+    TooShort {
+        /// File name as given.
+        file: String,
+    },
+}
+
+/// The points of a profile: x in mm, z in µm.
+pub type Points = (Vec<f64>, Vec<f64>);
+
 /// Whether the first line of `head` that is neither blank nor a `#` comment is the header
 /// of a measured profile: two columns, `x_mm` and `z_um` (any case, commas, semicolons,
 /// tabs or blanks between them).
@@ -28,7 +52,7 @@ pub fn is_profile_header(head: &[u8]) -> bool {
 /// The points of `path` when it is a `.csv` whose header names the two columns `x_mm` and
 /// `z_um` (a measured profile, as `runout identify` and `plot profile --measured` read it),
 /// else `None` (a height map); only the first bytes are read to tell.
-pub fn read_if_profile(path: &Path) -> miette::Result<Option<(Vec<f64>, Vec<f64>)>> {
+pub fn read_if_profile(path: &Path) -> Result<Option<Points>, ProfileError> {
     let csv = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
@@ -36,7 +60,7 @@ pub fn read_if_profile(path: &Path) -> miette::Result<Option<(Vec<f64>, Vec<f64>
         return Ok(None);
     }
     let head = super::input::read_staged(path, "profile", |_| super::input::Stage::Stop)
-        .map_err(|e| miette::miette!("{e}"))?;
+        .map_err(ProfileError::Head)?;
     if !is_profile_header(&head) {
         return Ok(None);
     }
@@ -44,19 +68,19 @@ pub fn read_if_profile(path: &Path) -> miette::Result<Option<(Vec<f64>, Vec<f64>
 }
 
 /// Read a profile CSV; errors name the file and line.
-pub fn read_profile_csv(path: &Path) -> miette::Result<(Vec<f64>, Vec<f64>)> {
+pub fn read_profile_csv(path: &Path) -> Result<Points, ProfileError> {
     let text = super::text::read_text(path, "profile", super::input::TABLE)?;
     parse_profile_csv(&text, &path.display().to_string())
 }
 
 /// Parse profile CSV text that came from `file` (the two-column table of
 /// [`super::series`]; a profile needs at least two points).
-pub fn parse_profile_csv(text: &str, file: &str) -> miette::Result<(Vec<f64>, Vec<f64>)> {
-    let (xs, zs) = super::series::two_columns(text, file).map_err(|e| miette::miette!("{e}"))?;
+pub fn parse_profile_csv(text: &str, file: &str) -> Result<Points, ProfileError> {
+    let (xs, zs) = super::series::two_columns(text, file).map_err(ProfileError::Table)?;
     if xs.len() < 2 {
-        return Err(miette::miette!(
-            "{file}: the profile has fewer than two points"
-        ));
+        return Err(ProfileError::TooShort {
+            file: file.to_string(),
+        });
     }
     Ok((xs, zs))
 }

@@ -1,11 +1,12 @@
 //! Series read back for plots: a two-column numeric table (x, y), and the planned feed that
 //! `crest feed -o POSES.csv` writes, so that one command's output is the next one's input.
 
+use super::table_error::TableError;
 use crate::parse::Span;
 use std::collections::HashMap;
 use std::path::Path;
 
-/// A table that could not be read: the message names the file, the line and the column.
+/// A table that could not be read: the message names the file (and the line and the column).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SeriesError {
@@ -20,26 +21,9 @@ pub enum SeriesError {
         /// What is wrong.
         message: String,
     },
-    /// A line of the table.
-    #[error("{file}:{}: {message}", at.line)]
-    Line {
-        /// File name as given.
-        file: String,
-        /// The line.
-        at: Span,
-        /// What is wrong.
-        message: String,
-    },
-    /// A field of a line.
-    #[error("{file}:{}:{}: {message}", at.line, at.column)]
-    Field {
-        /// File name as given.
-        file: String,
-        /// The line and the field's column.
-        at: Span,
-        /// What is wrong.
-        message: String,
-    },
+    /// A line of the table, or a field of a line.
+    #[error(transparent)]
+    At(#[from] TableError),
 }
 
 impl SeriesError {
@@ -51,22 +35,15 @@ impl SeriesError {
     }
 
     fn line(file: &str, line: u64, message: String) -> SeriesError {
-        SeriesError::Line {
-            file: file.to_string(),
-            at: Span::line_u64(line),
-            message,
-        }
+        TableError::line(file, line, message).into()
     }
 
     fn field(file: &str, line: u64, column: usize, message: String) -> SeriesError {
-        SeriesError::Field {
-            file: file.to_string(),
-            at: Span::line_column(
-                u32::try_from(line).unwrap_or(u32::MAX),
-                u32::try_from(column).unwrap_or(u32::MAX),
-            ),
-            message,
-        }
+        let at = Span::line_column(
+            u32::try_from(line).unwrap_or(u32::MAX),
+            u32::try_from(column).unwrap_or(u32::MAX),
+        );
+        TableError::field(file, at, message).into()
     }
 }
 

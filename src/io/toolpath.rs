@@ -173,22 +173,70 @@ pub struct IoFailure {
     pub source: std::io::Error,
 }
 
+/// Why a tool-path file could not be read (or the output its postures streamed into not
+/// written): each message names the file.
+#[derive(Debug, thiserror::Error, Diagnostic)]
+pub enum ReadError {
+    /// A syntax or lowering error at a place in the file, with its code frame.
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Located(Box<InputError>),
+    /// The file could not be opened, or goes on past its budget.
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Budget(#[from] super::input::InputError),
+    /// A read, or a write of the output the postures stream into, failed.
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Io(#[from] IoFailure),
+    /// G-code, but no machine to read it through.
+    #[error("{file}: G-code is read through the machine's kinematics: give ‹machine› MACHINE.toml")]
+    NoMachine {
+        /// File name as given.
+        file: String,
+    },
+    /// The machine's axes cannot be read from G-code.
+    #[error("{file}: {error}")]
+    Letters {
+        /// File name as given.
+        file: String,
+        /// Why (in the message, not repeated as a cause).
+        error: crate::nc::LetterError,
+    },
+    /// The output the postures streamed into could not be written ([`name_output`]).
+    #[error("{output}: cannot write")]
+    Output {
+        /// The output's name as given.
+        output: String,
+        /// The failed write.
+        #[source]
+        source: IoFailure,
+    },
+}
+
+impl From<InputError> for ReadError {
+    fn from(e: InputError) -> ReadError {
+        ReadError::Located(Box::new(e))
+    }
+}
+
 /// Turn a parse error into a diagnostic naming the file.
-pub fn parse_diagnostic(file: &Path, e: ParseError) -> miette::Report {
+pub fn parse_diagnostic(file: &Path, e: ParseError) -> ReadError {
     match e {
-        ParseError::Syntax(s) => miette::Report::new(InputError::new(file, &s)),
+        ParseError::Syntax(s) => InputError::new(file, &s).into(),
         ParseError::Io(io) => read_error(file, io),
     }
 }
 
 /// Turn a lowering error into a diagnostic naming the file.
-pub fn lower_diagnostic(file: &Path, e: LowerError) -> miette::Report {
+pub fn lower_diagnostic(file: &Path, e: LowerError) -> ReadError {
     match e {
-        LowerError::Invalid(s) => miette::Report::new(InputError::new(file, &s)),
-        LowerError::Output(io) => miette::Report::new(IoFailure {
+        LowerError::Invalid(s) => InputError::new(file, &s).into(),
+        LowerError::Output(io) => IoFailure {
             context: OUTPUT_FAILED.into(),
             source: io,
-        }),
+        }
+        .into(),
     }
 }
 
@@ -196,20 +244,20 @@ const OUTPUT_FAILED: &str = "writing the output failed";
 
 /// Name the output in a failure to write it (a full disk, a closed device): the lowering
 /// that streams into it does not know its name.
-pub fn name_output(e: miette::Report, output: &Path) -> miette::Report {
-    if e.downcast_ref::<IoFailure>()
-        .is_some_and(|f| f.context == OUTPUT_FAILED)
-    {
-        e.wrap_err(format!("{}: cannot write", output.display()))
-    } else {
-        e
+pub fn name_output(e: ReadError, output: &Path) -> ReadError {
+    match e {
+        ReadError::Io(f) if f.context == OUTPUT_FAILED => ReadError::Output {
+            output: output.display().to_string(),
+            source: f,
+        },
+        e => e,
     }
 }
 
 /// Open a tool-path file (`-`: standard input) for reading within its budget
 /// ([`super::input::TOOLPATH`]: a line of at most 1 MiB, 8 GiB in all), its line ends made
 /// `\n` or `\r\n` ([`LoneCr`]).
-pub fn open(path: &Path) -> miette::Result<BufReader<LoneCr<Bounded>>> {
+pub fn open(path: &Path) -> Result<BufReader<LoneCr<Bounded>>, ReadError> {
     let f = super::input::open(path, "tool path", super::input::TOOLPATH)?;
     Ok(BufReader::with_capacity(1 << 16, LoneCr::new(f)))
 }
@@ -220,7 +268,7 @@ pub type Opened = BufReader<std::io::Chain<std::io::Cursor<Vec<u8>>, BufReader<L
 
 /// Open `path` ([`open`]) and decide from its first 64 KiB, read once, whether it holds
 /// CLSF, contact12 or G-code; the reader hands on every byte from the first.
-pub fn open_detected(path: &Path) -> miette::Result<(InputKind, Opened)> {
+pub fn open_detected(path: &Path) -> Result<(InputKind, Opened), ReadError> {
     let mut reader = open(path)?;
     let mut head = Vec::with_capacity(1 << 16);
     (&mut reader)
@@ -236,13 +284,14 @@ pub fn open_detected(path: &Path) -> miette::Result<(InputKind, Opened)> {
 
 /// A failed read of `path`: the budget's own error ([`super::input::InputError`]), or the
 /// I/O error with the file named.
-fn read_error(path: &Path, e: std::io::Error) -> miette::Report {
+fn read_error(path: &Path, e: std::io::Error) -> ReadError {
     match super::input::take_error(e) {
-        Ok(budget) => miette::Report::new(budget),
-        Err(io) => miette::Report::new(IoFailure {
+        Ok(budget) => budget.into(),
+        Err(io) => IoFailure {
             context: format!("{}: reading failed", path.display()),
             source: io,
-        }),
+        }
+        .into(),
     }
 }
 
@@ -333,7 +382,7 @@ impl<R: Read> Read for LoneCr<R> {
 
 /// Decide whether `path` holds CLSF, contact12 or G-code, from its first 64 KiB (read
 /// once: standard input or a pipe is replayed to the next reader, see [`super::input`]).
-pub fn detect(path: &Path) -> miette::Result<InputKind> {
+pub fn detect(path: &Path) -> Result<InputKind, ReadError> {
     Ok(open_detected(path)?.0)
 }
 
@@ -344,7 +393,7 @@ pub fn stream_program(
     path: &Path,
     opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
-) -> miette::Result<Program> {
+) -> Result<Program, ReadError> {
     let (kind, reader) = open_detected(path)?;
     stream_from(path, kind, reader, opts, sink)
 }
@@ -356,7 +405,7 @@ pub fn stream_from(
     reader: impl BufRead,
     opts: impl Into<ReadOptions>,
     sink: &mut PostureSink<'_>,
-) -> miette::Result<Program> {
+) -> Result<Program, ReadError> {
     stream_as::<false>(path, kind, reader, opts.into(), &mut |t, p, _| sink(t, p))
 }
 
@@ -374,7 +423,7 @@ pub fn stream_written_from(
     reader: impl BufRead,
     opts: impl Into<ReadOptions>,
     sink: &mut WrittenSink<'_>,
-) -> miette::Result<Program> {
+) -> Result<Program, ReadError> {
     stream_as::<true>(path, kind, reader, opts.into(), sink)
 }
 
@@ -384,7 +433,7 @@ fn stream_as<const WRITTEN: bool>(
     reader: impl BufRead,
     opts: ReadOptions,
     sink: &mut WrittenSink<'_>,
-) -> miette::Result<Program> {
+) -> Result<Program, ReadError> {
     let mut low = Lowerer::new(opts.lower.clone());
     let stem = || {
         path.file_stem()
@@ -397,7 +446,7 @@ fn stream_as<const WRITTEN: bool>(
     // The lowering may hold postures back for their move kind (up to a feed segment's
     // `FEED_HOLD_LIMIT`): the ring keeps that many lines more.
     let mut kept = vec![Written::default(); KEPT];
-    let read = || -> miette::Result<()> {
+    let read = || -> Result<(), ReadError> {
         match kind {
             InputKind::Clsf => {
                 let mut k = 0;
@@ -428,13 +477,16 @@ fn stream_as<const WRITTEN: bool>(
             }
             InputKind::Gcode => {
                 let Some(machine) = opts.machine.as_ref() else {
-                    return Err(miette::miette!(
-                        "{}: G-code is read through the machine's kinematics: give ‹machine› MACHINE.toml",
-                        path.display()
-                    ));
+                    return Err(ReadError::NoMachine {
+                        file: path.display().to_string(),
+                    });
                 };
-                let mut nc = NcReader::new(machine, opts.rtcp, &stem())
-                    .map_err(|e| miette::miette!("{}: {e}", path.display()))?;
+                let mut nc = NcReader::new(machine, opts.rtcp, &stem()).map_err(|error| {
+                    ReadError::Letters {
+                        file: path.display().to_string(),
+                        error,
+                    }
+                })?;
                 for block in GcodeReader::new(reader) {
                     let block = block.map_err(|e| parse_diagnostic(path, e))?;
                     nc.push(&block, &mut low, &mut |t, p| sink(t, p, None))
@@ -475,13 +527,13 @@ fn kept_for<'k>(kept: &'k [Written], p: &Posture) -> Option<&'k Written> {
 }
 
 /// Read and lower a CLSF or contact12 file (chosen by content), MSYS not applied.
-pub fn read_program(path: &Path) -> miette::Result<Program> {
+pub fn read_program(path: &Path) -> Result<Program, ReadError> {
     read_program_with(path, LowerOptions::default())
 }
 
 /// [`read_program`] with options (e.g. `apply_msys` for `--absolute`, the machine for
 /// G-code).
-pub fn read_program_with(path: &Path, opts: impl Into<ReadOptions>) -> miette::Result<Program> {
+pub fn read_program_with(path: &Path, opts: impl Into<ReadOptions>) -> Result<Program, ReadError> {
     let mut sink = |_: &Toolpath, _: &Posture| Ok(());
     stream_program(path, opts, &mut sink)
 }

@@ -15,9 +15,9 @@
 use super::prepare::Prepared;
 use super::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
 use crate::math::{Point3, Vec3};
+use crate::pipeline::{Error, Result};
 use crate::study::atlas::{self, AtlasRow};
 use crate::toolpath::{MotionKind, Program};
-use miette::miette;
 use serde::{Deserialize, Serialize};
 
 /// Everything `crest atlas` is asked (serde data: an atlas task carries it).
@@ -280,18 +280,21 @@ fn shared_request(req: &AtlasRequest) -> SimulateRequest {
 }
 
 /// Check the request and place its patches on the path `prep` read.
-pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placement> {
+pub fn placement(req: &AtlasRequest, prep: &Prepared) -> Result<Placement> {
     let d = req.every_mm;
     if !(d.is_finite() && d > 0.0) {
-        return Err(miette!(
-            "‹every_mm› must be positive, got {}",
-            crate::math::limits::shown(d)
+        return Err(Error::field(
+            "every_mm",
+            format!("must be positive, got {}", crate::math::limits::shown(d)),
         ));
     }
     if let Some((l, w)) = req.patch_mm
         && !(l.is_finite() && l > 0.0 && w.is_finite() && w > 0.0)
     {
-        return Err(miette!("‹patch_mm› must be positive, got {l},{w}"));
+        return Err(Error::field(
+            "patch_mm",
+            format!("must be positive, got {l},{w}"),
+        ));
     }
     let sim = &req.simulate;
     // Regions from the path as read (contacts derived for the simulation taken off again).
@@ -313,9 +316,9 @@ pub fn placement(req: &AtlasRequest, prep: &Prepared) -> miette::Result<Placemen
     }
     let count = regions.iter().map(Vec::len).sum();
     if count == 0 {
-        return Err(miette!(
+        return Err(Error::Input(format!(
             "{file}: no finishing region (no cut moves) to place patches on"
-        ));
+        )));
     }
     let has_contacts = program
         .paths
@@ -460,20 +463,22 @@ pub fn run(
     req: &AtlasRequest,
     shard: Option<(usize, usize)>,
     progress: &dyn super::Progress,
-) -> miette::Result<Atlas> {
+) -> Result<Atlas> {
     let prep = super::prepare::prepare(&shared_request(req), progress)?;
     let placed = placement(req, &prep)?;
     let total = placed.sites.len();
     if total == 0 {
-        return Err(miette!(
+        return Err(Error::Request(format!(
             "{}: no pass of any finishing region is {} mm long: no patch placed; give a smaller ‹every_mm›",
             req.simulate.file.display(),
             req.every_mm
-        ));
+        )));
     }
     let (k, n) = shard.unwrap_or((1, 1));
     if k == 0 || k > n {
-        return Err(miette!("shard {k} of {n}: not a shard K/N with 1 ≤ K ≤ N"));
+        return Err(Error::Tasks(format!(
+            "shard {k} of {n}: not a shard K/N with 1 ≤ K ≤ N"
+        )));
     }
     let mine: Vec<usize> = (k - 1..total).step_by(n).collect();
     progress.phase("simulating patches", "patches");
@@ -508,7 +513,7 @@ pub fn run(
 }
 
 /// An error when no row of a whole atlas has numbers, naming the first reasons.
-pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> miette::Result<()> {
+pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> Result<()> {
     if rows.iter().any(AtlasRow::has_numbers) {
         return Ok(());
     }
@@ -520,7 +525,7 @@ pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> miette::Result<()> {
             }
         }
     }
-    Err(miette!(
+    Err(Error::Result(format!(
         "{file}: none of the {} patches produced numbers; {}",
         rows.len(),
         if why.is_empty() {
@@ -528,7 +533,7 @@ pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> miette::Result<()> {
         } else {
             format!("first reasons: {}", why.join(" | "))
         }
-    ))
+    )))
 }
 
 #[cfg(test)]

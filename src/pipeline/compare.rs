@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use miette::miette;
+use crate::pipeline::{Error, Result};
 
 use crate::io::{ReadOptions, read_heightmap};
 use crate::metrics::{
@@ -18,14 +18,13 @@ pub use crate::report::compare::{
     COMPARED, CompareOptions, Comparison, DEFAULT_TOLERANCE_PCT, JUDGED, Pair,
 };
 
-fn read(path: &Path) -> miette::Result<HeightMap> {
+fn read(path: &Path) -> Result<HeightMap> {
     let name = path.display().to_string();
     read_heightmap(path, &ReadOptions::default()).map_err(|e| {
-        let msg = e.to_string();
-        if msg.contains(&name) {
-            miette!("{msg}")
+        if e.to_string().contains(&name) {
+            Error::stage(e)
         } else {
-            miette!("{name}: {msg}")
+            Error::within(name, e)
         }
     })
 }
@@ -138,11 +137,7 @@ fn compared(vals: &[(Param, f64)]) -> Vec<f64> {
 }
 
 /// Compare the prediction in `predicted` with the measurement in `measured`.
-pub fn compare(
-    predicted: &Path,
-    measured: &Path,
-    opts: &CompareOptions,
-) -> miette::Result<Comparison> {
+pub fn compare(predicted: &Path, measured: &Path, opts: &CompareOptions) -> Result<Comparison> {
     let (pname, mname) = (
         predicted.display().to_string(),
         measured.display().to_string(),
@@ -151,8 +146,8 @@ pub fn compare(
     let pp = preprocess(opts);
     // Both maps' chains for registration and their feed directions, side by side.
     let [prep_p, prep_m] = prepare_pair([&pred_raw, &meas_raw], &pp);
-    let (reg_p, dir_p) = prep_p.map_err(|e| miette!("{pname}: {e}"))?;
-    let (reg_m, dir_m) = prep_m.map_err(|e| miette!("{mname}: {e}"))?;
+    let (reg_p, dir_p) = prep_p.map_err(|e| Error::within(&pname, e))?;
+    let (reg_m, dir_m) = prep_m.map_err(|e| Error::within(&mname, e))?;
     let dirs = [dir_p, dir_m];
     let placement = if opts.register && dirs.iter().all(|d| d.is_finite()) {
         register(&reg_p, &reg_m, dirs)
@@ -161,20 +156,20 @@ pub fn compare(
     };
     let placed = place(&pred_raw, &meas_raw, &placement);
     let (cp, cm) = overlap(&placed, &meas_raw).ok_or_else(|| {
-        miette!("{pname} and {mname}: the prediction, placed on the measurement, overlaps fewer than 8 × 8 of its valid nodes")
+        Error::Result(format!("{pname} and {mname}: the prediction, placed on the measurement, overlaps fewer than 8 × 8 of its valid nodes"))
     })?;
     let pred_dir = if placement == Placement::default() {
         dirs[0]
     } else {
         dirs[1]
     };
-    let set = ParamSet::parse(&COMPARED.join(","), false).map_err(|e| miette!("{e}"))?;
+    let set = ParamSet::parse(&COMPARED.join(","), false).map_err(Error::stage)?;
     // Both overlaps through the chain, their parameters and 1-D spectra, side by side.
     let [eval_p, eval_m] = evaluate_pair([&cp, &cm], &pp, &set, [pred_dir, dirs[1]]);
-    let eval_p = eval_p.map_err(|e| miette!("{pname}: {e}"))?;
-    let eval_m = eval_m.map_err(|e| miette!("{mname}: {e}"))?;
-    let vp = compared(&eval_p.params.map_err(|e| miette!("{pname}: {e}"))?);
-    let vm = compared(&eval_m.params.map_err(|e| miette!("{mname}: {e}"))?);
+    let eval_p = eval_p.map_err(|e| Error::within(&pname, e))?;
+    let eval_m = eval_m.map_err(|e| Error::within(&mname, e))?;
+    let vp = compared(&eval_p.params.map_err(|e| Error::within(&pname, e))?);
+    let vm = compared(&eval_m.params.map_err(|e| Error::within(&mname, e))?);
     let (proc_p, proc_m) = (eval_p.map, eval_m.map);
     let (lay_predicted, lay_measured) = (eval_p.lay, eval_m.lay);
     let mut difference = proc_m.clone();

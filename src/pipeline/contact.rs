@@ -7,6 +7,7 @@ use crate::io::mesh::read_part;
 use crate::math::{Point3, Vec3};
 use crate::part::contact::touch_all;
 use crate::part::derive::Inconsistency;
+use crate::pipeline::{Error, Result};
 use crate::toolpath::{Contact, LowerOptions, MotionKind, Moves, Program};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -57,11 +58,11 @@ pub struct ContactRun {
 }
 
 /// Compute the contact data of `req.file`.
-pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
+pub fn contact(req: &ContactRequest) -> Result<ContactRun> {
     if !(req.tolerance_um.is_finite() && req.tolerance_um >= 0.0) {
-        return Err(miette::miette!(
-            "‹tolerance_um› must be a non-negative number, got {}",
-            req.tolerance_um
+        return Err(Error::field(
+            "tolerance_um",
+            format!("must be a non-negative number, got {}", req.tolerance_um),
         ));
     }
     let lower = LowerOptions {
@@ -97,10 +98,10 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
         .map(|p| (0..p.postures.len()).filter(|&i| is_cut(p, i)).count())
         .sum();
     if postures == 0 {
-        return Err(miette::miette!(
+        return Err(Error::Input(format!(
             "{}: the file has no cutting moves",
             req.file.display()
-        ));
+        )));
     }
     let tol = req.tolerance_um * 1e-3;
     let (mut gouge, mut gap, mut with_contact) = (0.0f64, 0.0f64, 0usize);
@@ -111,11 +112,11 @@ pub fn contact(req: &ContactRequest) -> miette::Result<ContactRun> {
             warnings.extend(f.warnings);
             let part = f.part;
             if !crate::part::contact::touch_supported(&cutter) {
-                return Err(miette::miette!(
+                return Err(Error::Request(format!(
                     "{}: contact points from a part need a ball, torus, flat or round-insert cutter; the {} has no closed-form core (leave out ‹part› to derive the contacts from the path)",
                     part_path.display(),
                     cutter.describe()
-                ));
+                )));
             }
             check_orientation(&part, &program, &cutter, part_path)?;
             for path in &mut program.paths {
@@ -183,7 +184,7 @@ fn check_orientation(
     program: &Program,
     cutter: &crate::tool::Cutter,
     file: &Path,
-) -> miette::Result<()> {
+) -> Result<()> {
     let rc = cutter.corner_radius_mm();
     let (mut out, mut inside) = (0usize, 0usize);
     for p in program
@@ -202,11 +203,11 @@ fn check_orientation(
         }
     }
     if inside > 3 * out.max(1) {
-        return Err(miette::miette!(
+        return Err(Error::Input(format!(
             "{}: the tool lies behind the part's faces at {inside} of {} sampled postures: its triangles face into the material (reverse their winding), or the part is not in the path's frame (crest reads the path in the MCS; ‹absolute› applies MSYS)",
             file.display(),
             inside + out
-        ));
+        )));
     }
     Ok(())
 }

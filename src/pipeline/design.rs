@@ -4,10 +4,10 @@
 
 use crate::io::tables::json_number;
 use crate::io::text::read_text;
+use crate::pipeline::{Error, Result};
 use crate::study::design::{Design, Effects, RunResult, design_effects, run_design};
 use crate::study::run::simulate_run;
 use crate::tool::Cutter;
-use miette::{WrapErr, miette};
 use std::path::Path;
 
 /// A finished designed experiment.
@@ -24,7 +24,7 @@ pub struct DesignRun {
 }
 
 /// Read the design `path` and its tool (without running anything).
-pub fn load_design(path: &Path) -> miette::Result<(Design, Cutter)> {
+pub fn load_design(path: &Path) -> Result<(Design, Cutter)> {
     let t = load_design_texts(path)?;
     let design = crate::config::design::parse_design(&t.design_toml, &t.design_file)?;
     let cutter = tool_of(&t)?;
@@ -47,16 +47,18 @@ pub struct DesignTexts {
 }
 
 /// Read the design `path` and the tool file it names (relative to the design file).
-pub fn load_design_texts(path: &Path) -> miette::Result<DesignTexts> {
+pub fn load_design_texts(path: &Path) -> Result<DesignTexts> {
     let design_toml = read_text(path, "design", crate::io::input::CONFIG)?;
     let design_file = path.display().to_string();
     let design = crate::config::design::parse_design(&design_toml, &design_file)?;
     let tool_path = path.parent().unwrap_or(Path::new(".")).join(&design.tool);
     let tool_file = tool_path.display().to_string();
-    let tool_toml = read_text(&tool_path, "tool file", crate::io::input::CONFIG).wrap_err_with(|| {
-        format!(
-            "{design_file}: cannot read tool file {tool_file} (the path is relative to the design file)"
-        )
+    let tool_toml = read_text(&tool_path, "tool file", crate::io::input::CONFIG).map_err(|e| {
+        Error::DesignTool {
+            design: design_file.clone(),
+            tool: tool_file.clone(),
+            source: Box::new(e.into()),
+        }
     })?;
     Ok(DesignTexts {
         design_file,
@@ -67,12 +69,11 @@ pub fn load_design_texts(path: &Path) -> miette::Result<DesignTexts> {
 }
 
 /// The cutter of a design's tool text.
-pub fn tool_of(t: &DesignTexts) -> miette::Result<Cutter> {
-    super::tool_from_text(&t.tool_toml, &t.tool_file).wrap_err_with(|| {
-        format!(
-            "{}: cannot read tool file {} (the path is relative to the design file)",
-            t.design_file, t.tool_file
-        )
+pub fn tool_of(t: &DesignTexts) -> Result<Cutter> {
+    super::tool_from_text(&t.tool_toml, &t.tool_file).map_err(|e| Error::DesignTool {
+        design: t.design_file.clone(),
+        tool: t.tool_file.clone(),
+        source: Box::new(e),
     })
 }
 
@@ -83,7 +84,7 @@ pub fn run(
     cutter: Cutter,
     file: &str,
     tick: &(dyn Fn() + Sync),
-) -> miette::Result<DesignRun> {
+) -> Result<DesignRun> {
     run_monte_carlo(design, cutter, file, None, tick)
 }
 
@@ -97,9 +98,9 @@ pub fn run_monte_carlo(
     file: &str,
     monte_carlo: Option<(usize, u64)>,
     tick: &(dyn Fn() + Sync),
-) -> miette::Result<DesignRun> {
+) -> Result<DesignRun> {
     if let Some((n, _)) = monte_carlo {
-        crate::study::uncertainty::check_samples(n).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(n).map_err(Error::stage)?;
     }
     check_budget(&design, &cutter, file)?;
     let results = run_design(
@@ -113,8 +114,8 @@ pub fn run_monte_carlo(
 /// Refuse a design any of whose runs is estimated past the budget of a run
 /// ([`crate::study::run::check_runs`]: the grid's nodes, the resampled poses, the memory),
 /// before the first run starts.
-pub fn check_budget(design: &Design, cutter: &Cutter, file: &str) -> miette::Result<()> {
-    crate::study::run::check_runs(design, cutter).map_err(|e| miette!("{file}: {e}"))
+pub fn check_budget(design: &Design, cutter: &Cutter, file: &str) -> Result<()> {
+    crate::study::run::check_runs(design, cutter).map_err(|e| Error::within(file, e))
 }
 
 /// Evaluate run `p` of `design`: [`simulate_run`], or with `monte_carlo` = (N, S)
@@ -138,7 +139,7 @@ pub fn finish(
     results: Vec<RunResult>,
     file: &str,
     monte_carlo: Option<(usize, u64)>,
-) -> miette::Result<DesignRun> {
+) -> Result<DesignRun> {
     let failed: Vec<String> = results
         .iter()
         .filter_map(|r| {
@@ -148,12 +149,12 @@ pub fn finish(
         })
         .collect();
     if !failed.is_empty() {
-        return Err(miette!(
+        return Err(Error::Result(format!(
             "{file}: {} of {} runs failed, nothing written:\n  {}",
             failed.len(),
             results.len(),
             failed.join("\n  ")
-        ));
+        )));
     }
     let effects = design_effects(&design, &results);
     Ok(DesignRun {
@@ -168,16 +169,16 @@ pub fn finish(
 /// order: `runs.csv`, `effects.csv`, `effects.svg` (when it has a series), `bands.svg`
 /// (with Monte Carlo bands) and `effects-<factor>.svg` for each factor with more than two
 /// levels.
-pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>> {
+pub fn render_outputs(done: &DesignRun) -> Result<Vec<(String, Vec<u8>)>> {
     use crate::io::tables::{write_effects_csv, write_runs_csv};
     use crate::plot::effects::{effects_chart, level_chart};
     let (design, results, effects) = (&done.design, &done.results, &done.effects);
     let mut files: Vec<(String, Vec<u8>)> = Vec::new();
     let mut table = |name: &str, f: &dyn Fn(&mut Vec<u8>) -> std::io::Result<()>| {
         let mut buf = Vec::new();
-        f(&mut buf).map_err(|e| miette!("cannot write {name}: {e}"))?;
+        f(&mut buf).map_err(|e| Error::output(format_args!("write {name}"), e))?;
         files.push((name.to_string(), buf));
-        Ok::<(), miette::Report>(())
+        Ok::<(), Error>(())
     };
     table("runs.csv", &|w| write_runs_csv(design, results, w))?;
     table("effects.csv", &|w| write_effects_csv(design, effects, w))?;
@@ -187,7 +188,7 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
         files.push((
             "effects.svg".to_string(),
             crate::plot::effects::bar_chart_svg(&chart)
-                .map_err(|e| miette!("cannot draw effects.svg: {e}"))?,
+                .map_err(|e| Error::output("draw effects.svg", e))?,
         ));
     }
     if let Some(c) =
@@ -195,10 +196,9 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
     {
         let svg = c
             .check_finite()
-            .map_err(|e| miette!("cannot draw bands.svg: {e}"))
+            .map_err(|e| Error::output("draw bands.svg", e))
             .and_then(|()| {
-                crate::plot::chart::render_svg(&c)
-                    .map_err(|e| miette!("cannot draw bands.svg: {e}"))
+                crate::plot::chart::render_svg(&c).map_err(|e| Error::output("draw bands.svg", e))
             })?;
         files.push(("bands.svg".to_string(), svg.into_bytes()));
     }
@@ -210,10 +210,10 @@ pub fn render_outputs(done: &DesignRun) -> miette::Result<Vec<(String, Vec<u8>)>
             let name = format!("effects-{}.svg", f.name);
             let svg = c
                 .check_finite()
-                .map_err(|e| miette!("cannot draw {name}: {e}"))
+                .map_err(|e| Error::output(format_args!("draw {name}"), e))
                 .and_then(|()| {
                     crate::plot::chart::render_svg(&c)
-                        .map_err(|e| miette!("cannot draw {name}: {e}"))
+                        .map_err(|e| Error::output(format_args!("draw {name}"), e))
                 })?;
             files.push((name, svg.into_bytes()));
         }

@@ -3,6 +3,7 @@
 
 use crate::kinematics::{FeedPlan, Level, Machine, PlanInput, plan_input, plan_poses};
 use crate::nc::Rtcp;
+use crate::pipeline::{Error, Result};
 use std::path::Path;
 
 /// One tool path of the file, planned.
@@ -26,7 +27,7 @@ pub fn plan_file(
     level: Level,
     absolute: bool,
     rtcp: Rtcp,
-) -> miette::Result<Vec<PlannedPath>> {
+) -> Result<Vec<PlannedPath>> {
     let read = crate::io::toolpath::ReadOptions {
         lower: crate::toolpath::LowerOptions {
             apply_msys: absolute,
@@ -63,10 +64,10 @@ pub fn plan_file(
                 }
                 _ => String::new(),
             };
-            miette::miette!(
+            Error::Input(format!(
                 "{name}:{line}:1: {msg} (tool path \"{}\"){hint}",
                 path.name
-            )
+            ))
         })?;
         plans.push(PlannedPath {
             name: path.name.clone(),

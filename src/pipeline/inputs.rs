@@ -6,6 +6,7 @@ use crate::config::{ConfigError, MachineError, ProcessConfig, ToolConfigError};
 use crate::io::text::read_text;
 use crate::kinematics::Machine;
 use crate::parse::{Located, Span};
+use crate::pipeline::{Error, Result};
 use crate::tool::Cutter;
 use std::path::{Path, PathBuf};
 
@@ -31,7 +32,7 @@ pub(crate) fn located_in(file: &str, text: &str, span: Span, message: String) ->
 }
 
 /// Read `path` as a `tool.toml`.
-pub fn load_tool(path: &Path) -> miette::Result<Cutter> {
+pub fn load_tool(path: &Path) -> Result<Cutter> {
     let text = read_text(path, "tool file", crate::io::input::CONFIG)?;
     tool_from_text(&text, &path.display().to_string())
 }
@@ -61,7 +62,7 @@ impl ToolSource {
     }
 
     /// The cutter it describes.
-    pub fn load(&self) -> miette::Result<Cutter> {
+    pub fn load(&self) -> Result<Cutter> {
         match self {
             ToolSource::File(p) => load_tool(p),
             ToolSource::Text { name, text } => tool_from_text(text, name),
@@ -69,7 +70,7 @@ impl ToolSource {
     }
 
     /// The minimum chip thickness its `edge_radius_um` gives (mm), or None.
-    pub fn min_chip(&self) -> miette::Result<Option<f64>> {
+    pub fn min_chip(&self) -> Result<Option<f64>> {
         match self {
             ToolSource::File(p) => tool_min_chip(Some(p)),
             ToolSource::Text { name, text } => crate::config::load_tool_min_chip(text)
@@ -79,12 +80,12 @@ impl ToolSource {
 }
 
 /// Read `tool.toml` text that came from `file`.
-pub fn tool_from_text(text: &str, file: &str) -> miette::Result<Cutter> {
+pub fn tool_from_text(text: &str, file: &str) -> Result<Cutter> {
     crate::config::load_tool_toml(text).map_err(|e| ToolFileError::new(file, text, &e).into())
 }
 
 /// Read `path` as a machine description.
-pub fn load_machine(path: &Path) -> miette::Result<Machine> {
+pub fn load_machine(path: &Path) -> Result<Machine> {
     let text = read_text(path, "machine file", crate::io::input::CONFIG)?;
     let file = path.display().to_string();
     Machine::from_toml_str(&text).map_err(|e| {
@@ -113,7 +114,7 @@ pub fn load_machine(path: &Path) -> miette::Result<Machine> {
 
 /// The minimum chip thickness a tool file gives through `edge_radius_um` (mm), or None
 /// (no file or no edge radius).
-pub fn tool_min_chip(path: Option<&Path>) -> miette::Result<Option<f64>> {
+pub fn tool_min_chip(path: Option<&Path>) -> Result<Option<f64>> {
     let Some(path) = path else { return Ok(None) };
     let text = read_text(path, "tool file", crate::io::input::CONFIG)?;
     crate::config::load_tool_min_chip(&text)
@@ -121,7 +122,7 @@ pub fn tool_min_chip(path: Option<&Path>) -> miette::Result<Option<f64>> {
 }
 
 /// Read `path` as a `process.toml`.
-pub fn load_process(path: &Path) -> miette::Result<ProcessConfig> {
+pub fn load_process(path: &Path) -> Result<ProcessConfig> {
     let text = read_text(path, "process file", crate::io::input::CONFIG)?;
     Ok(ProcessConfig::parse(&text, &path.display().to_string())?)
 }
@@ -139,7 +140,7 @@ pub fn resolve_cutter(
     file: &Path,
     teeth: Option<usize>,
     helix_deg: Option<f64>,
-) -> miette::Result<(Cutter, String, Vec<String>)> {
+) -> Result<(Cutter, String, Vec<String>)> {
     use crate::tool::Shape;
     let tldata = program.paths.iter().find_map(|p| p.tool.clone());
     if let Some(source) = tool {
@@ -165,38 +166,42 @@ pub fn resolve_cutter(
         return Ok((cutter, source.name(), warnings));
     }
     let Some(t) = tldata else {
-        return Err(miette::miette!(
+        return Err(Error::Input(format!(
             "{} has no TLDATA to take the tool from: give ‹tool› tool.toml",
             file.display()
-        ));
+        )));
     };
     let r = 0.5 * t.diameter_mm;
     if !(r.is_finite() && r > 0.0 && t.corner_radius_mm.is_finite() && t.corner_radius_mm >= 0.0) {
-        return Err(miette::miette!(
+        return Err(Error::Input(format!(
             "{}: TLDATA gives diameter {} mm and corner radius {} mm, which describe no milling cutter: give ‹tool› tool.toml",
             file.display(),
             t.diameter_mm,
             t.corner_radius_mm
-        ));
+        )));
     }
     let Some(teeth) = teeth else {
-        return Err(miette::miette!(
+        return Err(Error::Request(format!(
             "the tool comes from {}'s TLDATA (D {} mm, corner radius {} mm), which has no tooth count: give ‹teeth› N (or ‹tool› tool.toml)",
             file.display(),
             t.diameter_mm,
             t.corner_radius_mm
-        ));
+        )));
     };
     if !(1..=crate::config::MAX_TEETH as usize).contains(&teeth) {
-        return Err(miette::miette!(
-            "‹teeth› must be between 1 and {}, got {teeth}",
-            crate::config::MAX_TEETH
+        return Err(Error::field(
+            "teeth",
+            format!(
+                "must be between 1 and {}, got {teeth}",
+                crate::config::MAX_TEETH
+            ),
         ));
     }
     let helix = helix_deg.unwrap_or(TLDATA_HELIX_DEG);
     if !(helix.is_finite() && helix.abs() < 89.0) {
-        return Err(miette::miette!(
-            "‹helix_deg› must lie within ±89°, got {helix}"
+        return Err(Error::field(
+            "helix_deg",
+            format!("must lie within ±89°, got {helix}"),
         ));
     }
     let helix_note = if helix_deg.is_none() {
@@ -216,10 +221,10 @@ pub fn resolve_cutter(
             p[6],
         ];
         let (m, warning) = crate::tool::meridian::apt(deg).map_err(|e| {
-            miette::miette!(
+            Error::Input(format!(
                 "{}: the tool's APT parameters describe no cutter: {e}; give ‹tool› tool.toml",
                 file.display()
-            )
+            ))
         })?;
         let cutter = Cutter::from_meridian(m, teeth, helix.to_radians());
         let what = format!(
@@ -254,13 +259,13 @@ pub fn resolve_cutter(
 
 /// The tool paths `path` (1-based, as users count them) selects among the `n` of `file`,
 /// 0-based: that one, or all of them.
-pub fn select_paths(file: &Path, path: Option<usize>, n: usize) -> miette::Result<Vec<usize>> {
+pub fn select_paths(file: &Path, path: Option<usize>, n: usize) -> Result<Vec<usize>> {
     match path {
         Some(k) if k >= 1 && k <= n => Ok(vec![k - 1]),
-        Some(k) => Err(miette::miette!(
+        Some(k) => Err(Error::Request(format!(
             "{}: tool path {k} is out of range: the file has {n} tool path(s)",
             file.display()
-        )),
+        ))),
         None => Ok((0..n).collect()),
     }
 }
@@ -273,7 +278,7 @@ pub fn path_extent(
     read: impl Into<crate::io::toolpath::ReadOptions>,
     only: Option<usize>,
     moves: crate::toolpath::Moves,
-) -> miette::Result<crate::resample::PathExtent> {
+) -> Result<crate::resample::PathExtent> {
     use crate::toolpath::{Posture, Toolpath};
     let mut runs = 0usize;
     let mut in_run = false;
@@ -328,12 +333,12 @@ pub const RESAMPLE_ROW_BYTES: f64 = 200.0;
 
 /// Refuse an output estimated beyond `max_gb` unless `force`: the message gives the
 /// estimate and the options that lift the cap.
-pub fn check_output_budget(what: &str, bytes: f64, max_gb: f64, force: bool) -> miette::Result<()> {
+pub fn check_output_budget(what: &str, bytes: f64, max_gb: f64, force: bool) -> Result<()> {
     if force || bytes <= max_gb * 1e9 {
         return Ok(());
     }
-    Err(miette::miette!(
+    Err(Error::Result(format!(
         "{what} would write about {:.2} GB, more than ‹max_output_gb› {max_gb}: check the inputs (a typo in a coordinate or a tiny step?), or raise ‹max_output_gb› / give ‹force›",
         bytes / 1e9
-    ))
+    )))
 }

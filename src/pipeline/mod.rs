@@ -3,7 +3,10 @@
 //! speed, resample, simulate and measure. Files are read through [`crate::io`]; nothing
 //! here prints.
 
+pub mod error;
 pub mod inputs;
+
+pub use error::{Error, Result};
 
 pub use inputs::{
     ToolFileError, ToolSource, load_machine, load_process, load_tool, tool_from_text, tool_min_chip,

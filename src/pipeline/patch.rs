@@ -5,10 +5,10 @@
 
 use super::prepare::Prepared;
 use crate::math::{Frame, Point3, Vec3};
+use crate::pipeline::{Error, Result};
 use crate::resample::Sample;
 use crate::surface::{GridFrame, GridSpec};
 use crate::toolpath::Moves;
-use miette::miette;
 
 /// A placed patch.
 #[derive(Debug, Clone)]
@@ -29,7 +29,7 @@ pub fn place(
     point: [f64; 3],
     length_mm: f64,
     width_mm: f64,
-) -> miette::Result<Placed> {
+) -> Result<Placed> {
     let file = &prep.file;
     let cutter = &prep.cutter;
     let q = Point3::new(point[0], point[1], point[2]);
@@ -53,7 +53,7 @@ pub fn place(
         // `--moves all` simulates as crest did before (a patch reached by engage or
         // retract moves only is then a failed check, below).
         if d > tol && moves == Moves::Cut {
-            return Err(miette!(
+            return Err(Error::Request(format!(
                 "{file}: ‹patch_near› {},{},{} is {d:.3} mm from the surface the cut moves define (off it along its normal; nearest point {:.4},{:.4},{:.4}), more than the tolerance {tol:.3} mm (the larger of {} mm and {} × the local stepover{}): the point is in the air, on an approach, engage or retract move or a rapid; pick a point on a finishing region (`crest inspect ‹regions›` lists them), or simulate every feed move with ‹moves› all",
                 point[0],
                 point[1],
@@ -70,7 +70,7 @@ pub fn place(
                     ),
                     |s| format!(" {s:.3} mm")
                 ),
-            ));
+            )));
         }
     }
     let (centre, normal) = match &prep.part {
@@ -84,12 +84,10 @@ pub fn place(
                 .filter_map(|s| Some((s.contact?, s.normal?)))
                 .min_by(|a, b| (a.0 - q).norm().total_cmp(&(b.0 - q).norm()));
             let Some(b) = best else {
-                return Err(miette!(
+                return Err(Error::Request(format!(
                     "{file}: no contact point near {},{},{}",
-                    point[0],
-                    point[1],
-                    point[2]
-                ));
+                    point[0], point[1], point[2]
+                )));
             };
             b
         }
@@ -124,13 +122,10 @@ pub fn place(
         .map(|s| ((s.position + s.axis * rc) - centre).norm() - rc)
         .fold(f64::INFINITY, f64::min);
     if near > cutter.radius_mm {
-        return Err(miette!(
+        return Err(Error::Request(format!(
             "{file}: the patch centre {:.4},{:.4},{:.4} is {near:.3} mm from the nearest cutter position, farther than the tool radius {} mm: the path does not cut there",
-            centre.x,
-            centre.y,
-            centre.z,
-            cutter.radius_mm
-        ));
+            centre.x, centre.y, centre.z, cutter.radius_mm
+        )));
     }
     let feed = samples
         .iter()

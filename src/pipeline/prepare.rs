@@ -12,9 +12,9 @@ use super::request::{
 use crate::config::ProcessConfig;
 use crate::kinematics::Machine;
 use crate::part::Part;
+use crate::pipeline::{Error, Result};
 use crate::tool::Cutter;
 use crate::toolpath::{LowerOptions, MotionKind, Program};
-use miette::miette;
 
 /// Everything a simulation reads and resolves before it knows its grid.
 #[derive(Debug)]
@@ -124,7 +124,7 @@ pub fn check_request(req: &SimulateRequest) -> Result<(), RequestError> {
 }
 
 /// Read and resolve everything of `req` but its grid (after [`check_request`]).
-pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette::Result<Prepared> {
+pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> Result<Prepared> {
     check_request(req)?;
     let mut warnings = Vec::new();
     let part = match &req.part {
@@ -137,8 +137,8 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
         None => None,
     };
     if matches!(req.grid, GridRequest::Map { .. }) && part.is_none() {
-        return Err(miette!(
-            "‹map_mm› maps the design surface of a part: give ‹part› PART.stl"
+        return Err(Error::Request(
+            "‹map_mm› maps the design surface of a part: give ‹part› PART.stl".into(),
         ));
     }
     let process = match &req.process {
@@ -174,7 +174,10 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
     };
     let ap_mm = req.ap_mm.or(process.ap_mm).unwrap_or(0.5);
     if !(ap_mm.is_finite() && ap_mm > 0.0) {
-        return Err(miette!("‹ap_mm› must be positive, got {ap_mm}"));
+        return Err(Error::field(
+            "ap_mm",
+            format!("must be positive, got {ap_mm}"),
+        ));
     }
     let file = req.file.display().to_string();
     let (reference, derived) = reference(req, part.is_some(), &mut program, &cutter, progress)?;
@@ -187,10 +190,13 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
         let path = &program.paths[i];
         posture_feeds.push(match &machine {
             Some(m) => Some(predicted_feed(path, m, cutting.feed_mm_min).map_err(|e| {
-                miette!(
-                    "{file}: tool path {} ({}): feed prediction: {e}",
-                    i + 1,
-                    path.name
+                Error::within(
+                    format_args!(
+                        "{file}: tool path {} ({}): feed prediction",
+                        i + 1,
+                        path.name
+                    ),
+                    e,
                 )
             })?),
             None => None,
@@ -225,7 +231,7 @@ pub fn prepare(req: &SimulateRequest, progress: &dyn super::Progress) -> miette:
 fn read_program(
     req: &SimulateRequest,
     progress: &dyn super::Progress,
-) -> miette::Result<(Program, Option<Machine>, bool)> {
+) -> Result<(Program, Option<Machine>, bool)> {
     let gcode = crate::io::toolpath::detect(&req.file)? == crate::io::toolpath::InputKind::Gcode;
     let read = crate::io::toolpath::ReadOptions {
         lower: LowerOptions {
@@ -252,7 +258,7 @@ fn reference(
     program: &mut Program,
     cutter: &Cutter,
     progress: &dyn super::Progress,
-) -> miette::Result<(ReferenceSource, Option<DerivedContacts>)> {
+) -> Result<(ReferenceSource, Option<DerivedContacts>)> {
     let patch_at = matches!(req.grid, GridRequest::PatchAt { .. });
     let map = matches!(req.grid, GridRequest::Map { .. });
     if has_part && !patch_at {
@@ -276,9 +282,9 @@ fn reference(
     }
     match req.grid {
         GridRequest::Window { .. } => Ok((ReferenceSource::None, Some(found))),
-        _ => Err(miette!(
+        _ => Err(Error::Request(format!(
             "{}: the path has no contact data and none can be derived from it (a single pass has no neighbour to fit the surface to); give ‹part› PART.stl",
             req.file.display()
-        )),
+        ))),
     }
 }

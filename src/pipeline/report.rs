@@ -4,9 +4,9 @@
 //! predicted and held against its measurement.
 
 use crate::io::text::read_text;
+use crate::pipeline::{Error, Result};
 use crate::study::calibrate::{Calibration, Free};
 use crate::study::compare::{Provenance, Regression, regress};
-use miette::{WrapErr, miette};
 use std::path::Path;
 
 /// Why a measured file a table names cannot be used: the table, the row's line and the file
@@ -92,7 +92,7 @@ pub struct Inputs {
 
 /// Read the measured table and the study and load the study's tool (relative to the study
 /// file) with the study's run-out.
-pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
+pub fn load(measured: &Path, study_path: &Path) -> Result<Inputs> {
     let measured_name = measured.display().to_string();
     let study_name = study_path.display().to_string();
     let mut table = crate::io::measured::parse_measured(
@@ -108,8 +108,11 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
         .parent()
         .unwrap_or(Path::new("."))
         .join(&study.tool);
-    let mut cutter = super::load_tool(&tool_path)
-        .wrap_err_with(|| format!("{study_name}: tool = \"{}\"", study.tool))?;
+    let mut cutter = super::load_tool(&tool_path).map_err(|e| Error::StudyTool {
+        study: study_name.clone(),
+        tool: study.tool.clone(),
+        source: Box::new(e),
+    })?;
     if study.process.min_chip_mm == 0.0
         && let Some(h) = super::tool_min_chip(Some(&tool_path))?
     {
@@ -118,10 +121,10 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
     if let Some(r) = &study.runout {
         let n = r.tooth_radius_dev_mm.len();
         if n != 0 && n != cutter.teeth() {
-            return Err(miette!(
+            return Err(Error::Input(format!(
                 "{study_name}: [runout] tooth_radius_deviation_um has {n} values for {} teeth",
                 cutter.teeth()
-            ));
+            )));
         }
         cutter.runout = r.clone();
     }
@@ -135,11 +138,12 @@ pub fn load(measured: &Path, study_path: &Path) -> miette::Result<Inputs> {
 }
 
 /// Calibrate the comma-separated `free` parameters of the inputs' study.
-pub fn calibrate(inputs: &Inputs, free: &str) -> miette::Result<Calibration> {
-    let free = Free::parse_list(free, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?;
+pub fn calibrate(inputs: &Inputs, free: &str) -> Result<Calibration> {
+    let free =
+        Free::parse_list(free, inputs.cutter.teeth()).map_err(|e| Error::within("‹free›", e))?;
     let measured = crate::study::measured::summarize(&inputs.table);
     crate::study::calibrate::calibrate(&measured, &inputs.study, &inputs.cutter, &free)
-        .map_err(|e| miette!("{}: {e}", inputs.study_name))
+        .map_err(|e| Error::within(&inputs.study_name, e))
 }
 
 /// Options of a report beyond the files.
@@ -162,10 +166,11 @@ pub fn regression(
     tolerance_pct: f64,
     command: String,
     opts: &ReportOptions,
-) -> miette::Result<Regression> {
+) -> Result<Regression> {
     if !(tolerance_pct.is_finite() && tolerance_pct >= 0.0) {
-        return Err(miette!(
-            "‹tolerance_pct› must be a non-negative number, found {tolerance_pct}"
+        return Err(Error::field(
+            "tolerance_pct",
+            format!("must be a non-negative number, found {tolerance_pct}"),
         ));
     }
     let inputs = load(measured, study_path)?;
@@ -177,8 +182,8 @@ pub fn regression(
     };
     let (study, cutter) = match (&calibration, &opts.free) {
         (Some(cal), Some(f)) => {
-            let free =
-                Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?;
+            let free = Free::parse_list(f, inputs.cutter.teeth())
+                .map_err(|e| Error::within("‹free›", e))?;
             let (process, cutter) = crate::study::calibrate::apply(
                 &free,
                 &cal.values(),
@@ -203,9 +208,9 @@ pub fn regression(
         },
     )?;
     let free = match &opts.free {
-        Some(f) => {
-            Some(Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| miette!("‹free›: {e}"))?)
-        }
+        Some(f) => Some(
+            Free::parse_list(f, inputs.cutter.teeth()).map_err(|e| Error::within("‹free›", e))?,
+        ),
         None => None,
     };
     if let Some(cal) = calibration {
@@ -219,7 +224,7 @@ pub fn regression(
             n,
             seed,
         )
-        .map_err(|e| miette!("{}: Monte Carlo: {e}", inputs.study_name))?;
+        .map_err(|e| Error::within(format_args!("{}: Monte Carlo", inputs.study_name), e))?;
         reg.monte_carlo = Some(bands);
     }
     Ok(reg)

@@ -5,9 +5,9 @@
 
 use crate::config::ProcessConfig;
 use crate::kinematics::Machine;
+use crate::pipeline::{Error, Result};
 use crate::surface::ModelKind;
 use crate::toolpath::{MotionKind, Moves, Posture, Program, Toolpath};
-use miette::miette;
 use std::path::{Path, PathBuf};
 
 /// A request whose field is out of range: the field as the request names it (`grid_um`),
@@ -50,15 +50,15 @@ pub enum FeedSource {
 pub fn resolve_feed_source(
     feed: Option<FeedSource>,
     machine: Option<&Path>,
-) -> miette::Result<Option<Machine>> {
+) -> Result<Option<Machine>> {
     match (feed, machine) {
-        (Some(FeedSource::Predicted), None) => Err(miette!(
-            "‹feed› predicted needs the machine: add ‹machine› MACHINE.toml"
+        (Some(FeedSource::Predicted), None) => Err(Error::Request(
+            "‹feed› predicted needs the machine: add ‹machine› MACHINE.toml".into(),
         )),
-        (Some(FeedSource::Programmed), Some(m)) => Err(miette!(
+        (Some(FeedSource::Programmed), Some(m)) => Err(Error::Request(format!(
             "‹machine› {} is only used with ‹feed› predicted (drop ‹feed› programmed or ‹machine›)",
             m.display()
-        )),
+        ))),
         (Some(FeedSource::Predicted) | None, Some(m)) => Ok(Some(super::load_machine(m)?)),
         (Some(FeedSource::Programmed) | None, None) => Ok(None),
     }
@@ -316,18 +316,18 @@ pub fn resolve_cutting(
     process: &ProcessConfig,
     program: &Program,
     teeth: usize,
-) -> miette::Result<Cutting> {
+) -> Result<Cutting> {
     for (name, v) in [
         ("rpm", req.rpm),
-        ("feed-mm-min", req.feed_mm_min),
-        ("fz-mm", req.fz_mm),
+        ("feed_mm_min", req.feed_mm_min),
+        ("fz_mm", req.fz_mm),
     ] {
         if let Some(v) = v
             && !(v.is_finite() && v > 0.0)
         {
-            return Err(miette!(
-                "--{name} must be positive, got {}",
-                crate::math::limits::shown(v)
+            return Err(Error::field(
+                name,
+                format!("must be positive, got {}", crate::math::limits::shown(v)),
             ));
         }
     }
@@ -339,10 +339,10 @@ pub fn resolve_cutting(
     let fz_user = req.fz_mm.or(process.fz_mm);
     let feed_file = first_in_cut(program, |p| p.feed_mm_min.filter(|f| *f > 0.0));
     let Some(rpm) = rpm else {
-        return Err(miette!(
+        return Err(Error::Request(format!(
             "no spindle speed: {} has no SPINDL; add ‹rpm› N (or rpm in ‹process› process.toml)",
             req.file.display()
-        ));
+        )));
     };
     let z = teeth as f64;
     let (feed_mm_min, feed_nominal, fz_mm) = match (feed_user, fz_user, feed_file) {
@@ -357,14 +357,14 @@ pub fn resolve_cutting(
                 p.feed_mm_min.filter(|f| *f == 0.0).map(|_| p.line)
             });
             return Err(match zero {
-                Some(line) => miette!(
+                Some(line) => Error::Request(format!(
                     "{}:{line}: the cutting moves run at FEDRAT 0 mm/min; add ‹feed_mm_min› V or ‹fz_mm› F",
                     req.file.display()
-                ),
-                None => miette!(
+                )),
+                None => Error::Request(format!(
                     "no feed: {} has no FEDRAT; add ‹feed_mm_min› V or ‹fz_mm› F (or feed_mm_min / fz_mm in ‹process› process.toml)",
                     req.file.display()
-                ),
+                )),
             });
         }
     };

@@ -10,12 +10,12 @@ use super::simulate::{FeedSource, resolve_feed_source};
 use crate::io::samples::SampleCsv;
 use crate::io::toolpath::{InputKind, ReadOptions, detect, stream_from};
 use crate::kinematics::Machine;
+use crate::pipeline::{Error, Result};
 use crate::resample::{
     AxisInterpolation, Mode, Options, ResampleError, Resampler, Sample, SpindleScan, SpindleSource,
     Stats, resample_with,
 };
 use crate::toolpath::{LowerOptions, MoveCounts, Moves, Posture, Program, Toolpath};
-use miette::miette;
 use std::path::{Path, PathBuf};
 
 /// Everything `crest resample` is asked but where the output goes.
@@ -81,20 +81,19 @@ pub struct ResampleRun {
 /// The resampling options of `req` (checked): the feed per tooth and teeth are needed for
 /// the fz spacing; for Δθ only to derive the spindle speed from the feed, which otherwise
 /// comes from `rpm` or the file's SPINDL.
-pub fn options(req: &ResampleRequest) -> miette::Result<Options> {
+pub fn options(req: &ResampleRequest) -> Result<Options> {
     let dtheta = matches!(req.mode, Mode::SpindleStep { .. });
     let (fz_mm, teeth, spindle_from_path) = match (dtheta, req.fz_mm, req.teeth) {
         (_, Some(f), Some(z)) => (f, z, false),
         (true, None, None) => (1.0, 1, req.rpm.is_none()),
         (false, _, _) => {
-            return Err(miette!(
+            return Err(Error::Request(
                 "‹mode› fz spaces the samples every feed per tooth: give ‹fz_mm› and ‹teeth›"
+                    .into(),
             ));
         }
         (true, _, _) => {
-            return Err(miette!(
-                "‹fz_mm› and ‹teeth› go together (they derive the spindle speed from the feed); give both, or neither to take ‹rpm› or the file's SPINDL"
-            ));
+            return Err(Error::Request("‹fz_mm› and ‹teeth› go together (they derive the spindle speed from the feed); give both, or neither to take ‹rpm› or the file's SPINDL".into()));
         }
     };
     let mut opts = Options::new(req.mode, fz_mm, teeth)
@@ -104,18 +103,18 @@ pub fn options(req: &ResampleRequest) -> miette::Result<Options> {
     opts.feed_mm_min = req.feed_mm_min;
     opts.spindle_from_path = spindle_from_path;
     // Invalid options are reported before anything is read.
-    Resampler::new(&opts).map_err(|e| miette!("{}: {e}", req.file.display()))?;
+    Resampler::new(&opts).map_err(|e| Error::within(req.file.display(), e))?;
     Ok(opts)
 }
 
 /// How the file is read: the machine (for G-code) and whether the feed is planned on it,
 /// which needs the whole path in memory.
-fn reading(req: &ResampleRequest) -> miette::Result<(InputKind, ReadOptions, bool)> {
+fn reading(req: &ResampleRequest) -> Result<(InputKind, ReadOptions, bool)> {
     let kind = detect(&req.file)?;
     let gcode = kind == InputKind::Gcode;
     if !gcode && req.machine.is_some() && req.feed_mm_min.is_some() {
-        return Err(miette!(
-            "‹machine› (the predicted feed) cannot be used with ‹feed_mm_min›"
+        return Err(Error::Request(
+            "‹machine› (the predicted feed) cannot be used with ‹feed_mm_min›".into(),
         ));
     }
     let machine = match (gcode, &req.machine) {
@@ -138,7 +137,7 @@ fn feed_machine(
     req: &ResampleRequest,
     kind: InputKind,
     read: &ReadOptions,
-) -> miette::Result<Option<Machine>> {
+) -> Result<Option<Machine>> {
     if kind == InputKind::Gcode {
         return Ok(match req.feed {
             Some(FeedSource::Predicted) => read.machine.clone(),
@@ -153,7 +152,7 @@ fn feed_machine(
 pub fn resample_each(
     req: &ResampleRequest,
     sink: impl FnMut(usize, &Sample),
-) -> miette::Result<ResampleRun> {
+) -> Result<ResampleRun> {
     let opts = options(req)?;
     let (kind, read, _) = reading(req)?;
     resample_read(req, opts, kind, &read, sink)
@@ -166,7 +165,7 @@ fn resample_read(
     kind: InputKind,
     read: &ReadOptions,
     mut sink: impl FnMut(usize, &Sample),
-) -> miette::Result<ResampleRun> {
+) -> Result<ResampleRun> {
     let mut program = crate::io::toolpath::read_program_with(&req.file, read.clone())?;
     req.moves.apply(&mut program);
     let selected = select_paths(&req.file, req.path, program.paths.len())?;
@@ -177,10 +176,13 @@ fn resample_read(
         let mut o = opts.clone();
         if let Some(machine) = &machine {
             let feeds = crate::kinematics::predict_posture_feed(path, machine).map_err(|e| {
-                miette!(
-                    "{}: tool path {}: feed prediction: {e}",
-                    req.file.display(),
-                    path.name
+                Error::within(
+                    format_args!(
+                        "{}: tool path {}: feed prediction",
+                        req.file.display(),
+                        path.name
+                    ),
+                    e,
                 )
             })?;
             o.posture_feed_mm_min = Some(feeds);
@@ -211,12 +213,13 @@ pub fn resample_to_csv(
     output: &Path,
     max_output_gb: f64,
     force: bool,
-) -> miette::Result<ResampleRun> {
+) -> Result<ResampleRun> {
     let opts = options(req)?;
     let (kind, read, in_memory) = reading(req)?;
     if !(max_output_gb.is_finite() && max_output_gb > 0.0) {
-        return Err(miette!(
-            "‹max_output_gb› must be positive, got {max_output_gb}"
+        return Err(Error::field(
+            "max_output_gb",
+            format!("must be positive, got {max_output_gb}"),
         ));
     }
     // The budget: estimate the samples (one pass over the file) before any work.
@@ -267,12 +270,12 @@ pub fn resample_to_csv(
     if let Some(e) = failure {
         return Err(e);
     }
-    written.map_err(|e| miette!("{}: {e}", output.display()))?;
+    written.map_err(|e| Error::within(output.display(), e))?;
     run.ok_or_else(|| {
-        miette!(
+        Error::Internal(format!(
             "{}: resampling did not finish (internal error)",
             req.file.display()
-        )
+        ))
     })
 }
 
@@ -321,9 +324,9 @@ fn resample_streaming(
     output: &Path,
     opts: &Options,
     read: &ReadOptions,
-) -> miette::Result<Vec<PathReport>> {
+) -> Result<Vec<PathReport>> {
     // Invalid options are reported before anything is read.
-    Resampler::new(opts).map_err(|e| miette!("{}: {e}", req.file.display()))?;
+    Resampler::new(opts).map_err(|e| Error::within(req.file.display(), e))?;
     let first = Pass {
         target: req.path.map(|n| Some(n.saturating_sub(1))),
         spindles: None,
@@ -337,10 +340,10 @@ fn resample_streaming(
             };
             match stream_pass(req, output, opts, read, &again)? {
                 PassResult::Done(reports) => Ok(reports),
-                PassResult::Again(..) => Err(miette!(
+                PassResult::Again(..) => Err(Error::Internal(format!(
                     "{}: resampling did not settle (internal error)",
                     req.file.display()
-                )),
+                ))),
             }
         }
     }
@@ -352,7 +355,7 @@ fn stream_pass(
     opts: &Options,
     read: &ReadOptions,
     pass: &Pass<'_>,
-) -> miette::Result<PassResult> {
+) -> Result<PassResult> {
     let file = &req.file;
     let moves = req.moves;
     let (kind, reader) = crate::io::toolpath::open_detected(file)?;
@@ -365,7 +368,7 @@ fn stream_pass(
     };
     let lazy = pass.spindles.is_none() && opts.rpm.is_none();
 
-    let mut failure: Option<miette::Report> = None;
+    let mut failure: Option<Error> = None;
     let mut outcome: Option<PassResult> = None;
     let written = crate::io::write_atomic(output, |w| {
         let mut out = SampleCsv::new(w)?;
@@ -435,7 +438,7 @@ fn stream_pass(
             Err(e) => {
                 failure = Some(match error.take() {
                     Some((name, e)) => path_error(file, &name, e),
-                    None => e,
+                    None => e.into(),
                 });
                 return Err(std::io::Error::other("resampling failed"));
             }
@@ -471,16 +474,16 @@ fn stream_pass(
         }
     });
     if let Some(e) = failure {
-        return Err(crate::io::toolpath::name_output(e, output));
+        return Err(e.name_output(output));
     }
     match (written, outcome) {
         (Ok(()), Some(done @ PassResult::Done(_))) => Ok(done),
         (Err(_), Some(again @ PassResult::Again(..))) => Ok(again),
-        (Err(e), _) => Err(miette!("{}: {e}", output.display())),
-        (Ok(()), _) => Err(miette!(
+        (Err(e), _) => Err(Error::within(output.display(), e)),
+        (Ok(()), _) => Err(Error::Internal(format!(
             "{}: resampling did not finish (internal error)",
             file.display()
-        )),
+        ))),
     }
 }
 
@@ -533,7 +536,7 @@ fn conclude(
     lazy: bool,
     program: &Program,
     finished: &[Finished],
-) -> miette::Result<PassResult> {
+) -> Result<PassResult> {
     // Which tool paths were streamed (those with postures), by ordinal.
     let streamed_paths: Vec<usize> = (0..program.paths.len())
         .filter(|&i| program.paths[i].stats.postures > 0)
@@ -598,10 +601,13 @@ fn conclude(
     Ok(PassResult::Done(reports))
 }
 
-fn path_error(file: &Path, name: &str, e: ResampleError) -> miette::Report {
-    miette!(
-        "{}: tool path {}: {e}",
-        file.display(),
-        if name.is_empty() { "(unnamed)" } else { name }
+fn path_error(file: &Path, name: &str, e: ResampleError) -> Error {
+    Error::within(
+        format_args!(
+            "{}: tool path {}",
+            file.display(),
+            if name.is_empty() { "(unnamed)" } else { name }
+        ),
+        e,
     )
 }

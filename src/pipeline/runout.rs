@@ -5,6 +5,7 @@
 
 use crate::io::text::read_text;
 use crate::parse::Located;
+use crate::pipeline::{Error, Result};
 use crate::study::runout::{LateralCurve, RunoutRow, Study, lateral_curves, run_study};
 use crate::tool::Cutter;
 use std::path::{Path, PathBuf};
@@ -64,13 +65,13 @@ pub struct Prepared {
     pub cutter: Cutter,
 }
 
-fn parse(text: &str, file: &str) -> miette::Result<Study> {
+fn parse(text: &str, file: &str) -> Result<Study> {
     Ok(crate::config::runout::parse_study(text)
         .map_err(|e| StudyFileError(super::inputs::located_in(file, text, e.at, e.message)))?)
 }
 
 /// Read the study `path` and the tool file it names (relative to the study file).
-pub fn load_runout_texts(path: &Path) -> miette::Result<RunoutTexts> {
+pub fn load_runout_texts(path: &Path) -> Result<RunoutTexts> {
     let study_toml = read_text(path, "study file", crate::io::input::CONFIG)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     runout_texts(&path.display().to_string(), study_toml, dir)
@@ -78,11 +79,7 @@ pub fn load_runout_texts(path: &Path) -> miette::Result<RunoutTexts> {
 
 /// The texts of the study `study_toml` (named `study_file`) and of the tool file it names,
 /// read relative to `dir`.
-pub fn runout_texts(
-    study_file: &str,
-    study_toml: String,
-    dir: &Path,
-) -> miette::Result<RunoutTexts> {
+pub fn runout_texts(study_file: &str, study_toml: String, dir: &Path) -> Result<RunoutTexts> {
     let study = parse(&study_toml, study_file)?;
     let tool_path = dir.join(&study.tool);
     let tool_toml = read_text(&tool_path, "tool file", crate::io::input::CONFIG)?;
@@ -95,7 +92,7 @@ pub fn runout_texts(
 }
 
 /// Parse the study and its tool from their texts.
-pub fn prepare(t: &RunoutTexts) -> miette::Result<Prepared> {
+pub fn prepare(t: &RunoutTexts) -> Result<Prepared> {
     let study = parse(&t.study_toml, &t.study_file)?;
     let cutter = super::tool_from_text(&t.tool_toml, &t.tool_file)?;
     Ok(Prepared {
@@ -118,22 +115,22 @@ pub fn finish(p: Prepared, rows: Vec<RunoutRow>) -> RunoutRun {
 }
 
 /// Read and run the study `path`.
-pub fn runout(path: &Path) -> miette::Result<RunoutRun> {
+pub fn runout(path: &Path) -> Result<RunoutRun> {
     let p = prepare(&load_runout_texts(path)?)?;
-    let rows = run_study(&p.cutter, &p.study).map_err(|e| miette::miette!("{e}"))?;
+    let rows = run_study(&p.cutter, &p.study).map_err(Error::stage)?;
     Ok(finish(p, rows))
 }
 
 /// The files `crest runout` writes, in order: `runout.csv`, then each chart as SVG and PNG.
-pub fn render_outputs(run: &RunoutRun) -> miette::Result<Vec<(String, Vec<u8>)>> {
+pub fn render_outputs(run: &RunoutRun) -> Result<Vec<(String, Vec<u8>)>> {
     let teeth = run.cutter.teeth();
     let mut csv = Vec::new();
     crate::io::tables::write_runout_csv(&run.rows, teeth, &mut csv)
-        .map_err(|e| miette::miette!("cannot write runout.csv: {e}"))?;
+        .map_err(|e| Error::output("write runout.csv", e))?;
     let mut files = vec![("runout.csv".to_string(), csv)];
     files.extend(
         crate::plot::runout::figures(&run.rows, &run.study, teeth, &run.lateral, &run.tool_name())
-            .map_err(|e| miette::miette!("cannot draw the run-out charts: {e}"))?,
+            .map_err(|e| Error::output("draw the run-out charts", e))?,
     );
     Ok(files)
 }

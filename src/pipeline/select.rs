@@ -7,10 +7,10 @@
 use super::prepare::Prepared;
 use super::request::{GridRequest, SimulateRequest};
 use crate::math::Point3;
+use crate::pipeline::{Error, Result};
 use crate::resample::{self, Mode, Streamed};
 use crate::surface::cull::{Reach, Subset};
 use crate::toolpath::Moves;
-use miette::miette;
 
 /// The samples kept for the grid, and figures of the whole resampling.
 #[derive(Debug, Clone)]
@@ -81,7 +81,7 @@ pub fn select(
     reach: Option<&Reach>,
     margin: f64,
     progress: &dyn super::Progress,
-) -> miette::Result<Selected> {
+) -> Result<Selected> {
     let (cutting, cutter, file) = (&prep.cutting, &prep.cutter, &prep.file);
     let mut ropts =
         resample::Options::new(mode, cutting.fz_mm, cutter.teeth()).with_rpm(cutting.rpm);
@@ -124,7 +124,12 @@ pub fn select(
                 progress.advance(streamed, (estimated as u64).max(streamed));
             }
         })
-        .map_err(|e| miette!("{file}: tool path {} ({}): {e}", i + 1, path.name))?;
+        .map_err(|e| {
+            Error::within(
+                format_args!("{file}: tool path {} ({})", i + 1, path.name),
+                e,
+            )
+        })?;
         run_base = last_run + 1;
         let (cut, (lo, hi, mean)) = figures.finish();
         let n = all.0 + figures.n;
@@ -141,7 +146,9 @@ pub fn select(
         all.1 += cut;
     }
     if subset.seen == 0 {
-        return Err(miette!("{file}: no cutting moves to simulate"));
+        return Err(Error::Input(format!(
+            "{file}: no cutting moves to simulate"
+        )));
     }
     if subset.samples.is_empty() {
         return Err(nothing_in_reach(req, prep, margin));
@@ -155,7 +162,7 @@ pub fn select(
 }
 
 /// The samples the resampling streams (before culling), refused beyond the budget.
-fn estimate(prep: &Prepared, mode: Mode) -> miette::Result<f64> {
+fn estimate(prep: &Prepared, mode: Mode) -> Result<f64> {
     let mut extent = crate::resample::PathExtent::default();
     for &i in &prep.paths {
         let p = &prep.program.paths[i];
@@ -171,26 +178,24 @@ fn estimate(prep: &Prepared, mode: Mode) -> miette::Result<f64> {
     );
     let cap = crate::math::limits::MAX_SAMPLES as f64;
     if est > cap {
-        return Err(miette!(
+        return Err(Error::Result(format!(
             "{}: {:.1} mm of cutting moves would be resampled into about {est:.3e} poses (more than {cap:.0e}): check the feed per tooth ({} mm) and Δθ",
-            prep.file,
-            extent.cutting_mm,
-            prep.cutting.fz_mm
-        ));
+            prep.file, extent.cutting_mm, prep.cutting.fz_mm
+        )));
     }
     Ok(est)
 }
 
 /// The error when no sample can reach the grid: for a patch near a point, how far the
 /// point is from the cut surface.
-fn nothing_in_reach(req: &SimulateRequest, prep: &Prepared, margin: f64) -> miette::Report {
+fn nothing_in_reach(req: &SimulateRequest, prep: &Prepared, margin: f64) -> Error {
     let file = &prep.file;
     if let GridRequest::PatchNear { point, .. } = req.grid {
         let q = Point3::new(point[0], point[1], point[2]);
         let far = 2.0 * prep.cutter.radius_mm;
         let is_cut = |pi: usize, i: usize| prep.is_cut(pi, i);
         if let Some(n) = super::air::nearest(&prep.program, &prep.paths, &q, far, true, is_cut) {
-            return miette!(
+            return Error::Request(format!(
                 "{file}: ‹patch_near› {},{},{} is {:.3} mm from the surface the {} moves define (nearest point {:.4},{:.4},{:.4}): no cutting move comes within reach of the patch; pick a point on a finishing region (`crest inspect ‹regions›` lists them)",
                 point[0],
                 point[1],
@@ -204,10 +209,10 @@ fn nothing_in_reach(req: &SimulateRequest, prep: &Prepared, margin: f64) -> miet
                 n.point.x,
                 n.point.y,
                 n.point.z
-            );
+            ));
         }
     }
-    miette!(
+    Error::Result(format!(
         "{file}: no cutting move comes within reach of the grid (tool radius + depth of cut {margin:.3} mm); check the coordinates and the frame (‹absolute› applies MSYS)"
-    )
+    ))
 }

@@ -11,12 +11,12 @@ pub use super::request::{
 };
 use super::select::Selected;
 use crate::math::Point3;
+use crate::pipeline::{Error, Result};
 use crate::resample::Sample;
 use crate::surface::cull::Reach;
 use crate::surface::{self, GridSpec, PartMap, Reference, Simulation};
 use crate::tool::Cutter;
 use crate::toolpath::Moves;
-use miette::miette;
 
 /// What was simulated.
 #[derive(Debug, Clone)]
@@ -71,10 +71,7 @@ pub struct SimulateRun {
 /// Run a simulation, reporting each phase to `progress` (the simulation itself counts
 /// tiles of the grid, or cells of a map, out of a total fixed when it starts). Runs on the
 /// current rayon pool.
-pub fn simulate(
-    req: &SimulateRequest,
-    progress: &dyn super::Progress,
-) -> miette::Result<SimulateRun> {
+pub fn simulate(req: &SimulateRequest, progress: &dyn super::Progress) -> Result<SimulateRun> {
     simulate_shard(req, None, progress)
 }
 
@@ -85,10 +82,11 @@ pub fn simulate_shard(
     req: &SimulateRequest,
     shard: Option<(usize, usize)>,
     progress: &dyn super::Progress,
-) -> miette::Result<SimulateRun> {
+) -> Result<SimulateRun> {
     if shard.is_some() && !matches!(req.grid, GridRequest::Map { .. }) {
-        return Err(miette!(
+        return Err(Error::Request(
             "‹shard› splits a part map (‹map_mm›) into its cells; a window or patch is one task"
+                .into(),
         ));
     }
     let prepared = prepare(req, progress)?;
@@ -187,7 +185,7 @@ pub fn simulate_prepared(
     prep: &Prepared,
     shard: Option<(usize, usize)>,
     progress: &dyn super::Progress,
-) -> miette::Result<SimulateRun> {
+) -> Result<SimulateRun> {
     let tiles = |done: usize, total: usize| progress.advance(done as u64, total as u64);
     let tiles: &(dyn Fn(usize, usize) + Sync) = &tiles;
     let (file, cutter) = (&prep.file, &prep.cutter);
@@ -221,7 +219,7 @@ pub fn simulate_prepared(
             let m = surface::map_part(
                 samples, cutter, &sopts, p, spacing_mm, tile, region, shard, tiles,
             )
-            .map_err(|e| miette!("{file}: {e}"))?;
+            .map_err(|e| Error::within(file, e))?;
             return finish(
                 req,
                 prep,
@@ -250,8 +248,9 @@ pub fn simulate_prepared(
         GridRequest::PatchAt { s_mm, .. } => {
             let last = samples.last().map_or(0.0, |s| s.s_mm);
             if !(0.0..=last + 1e-9).contains(&s_mm) {
-                return Err(miette!(
-                    "‹patch_at› {s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"
+                return Err(Error::field(
+                    "patch_at",
+                    format!("{s_mm}: the path has {last:.3} mm of cutting moves (0 to {last:.3})"),
                 ));
             }
             progress.phase("simulating", "tiles");
@@ -262,7 +261,7 @@ pub fn simulate_prepared(
             surface::simulate_with(samples, cutter, &sopts, reference, tiles)
         }
     };
-    let sim = simulated.map_err(|e| miette!("{file}: {e}"))?;
+    let sim = simulated.map_err(|e| Error::within(file, e))?;
     // Derived contacts left out as inconsistent fail the run where their cutter touches it.
     if let Some(w) = prep
         .derived
@@ -344,7 +343,7 @@ fn finish(
     patch_distance_mm: Option<(f64, f64)>,
     warnings: Vec<String>,
     failed_checks: Vec<String>,
-) -> miette::Result<SimulateRun> {
+) -> Result<SimulateRun> {
     let (nodes, nodes_cut) = match &output {
         Output::Grid(sim) => (sim.map.nx * sim.map.ny, sim.nodes_cut),
         Output::Map(m) => (m.points.len(), m.nodes_cut),

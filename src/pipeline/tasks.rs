@@ -18,9 +18,9 @@ pub mod map;
 pub mod runout;
 
 use super::design::{DesignRun, DesignTexts, finish, tool_of};
+use crate::pipeline::{Error, Result};
 use crate::study::design::{Design, RunResult};
 use crate::study::uncertainty::Band;
-use miette::miette;
 use serde::{Deserialize, Serialize};
 
 /// The `kind` of a designed-experiment run.
@@ -130,7 +130,7 @@ fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
-fn parse(t: &DesignTexts) -> miette::Result<Design> {
+fn parse(t: &DesignTexts) -> Result<Design> {
     Ok(crate::config::design::parse_design(
         &t.design_toml,
         &t.design_file,
@@ -140,19 +140,16 @@ fn parse(t: &DesignTexts) -> miette::Result<Design> {
 /// The tasks of a design (its texts as [`super::design::load_design_texts`] reads them), one
 /// per run in run order. The design and its tool are checked here, so a task fails only in
 /// its run.
-pub fn design_tasks(t: &DesignTexts) -> miette::Result<Vec<Task>> {
+pub fn design_tasks(t: &DesignTexts) -> Result<Vec<Task>> {
     design_tasks_with(t, None)
 }
 
 /// [`design_tasks`] with Monte Carlo bands of `monte_carlo` samples (checked here).
-pub fn design_tasks_with(
-    t: &DesignTexts,
-    monte_carlo: Option<MonteCarlo>,
-) -> miette::Result<Vec<Task>> {
+pub fn design_tasks_with(t: &DesignTexts, monte_carlo: Option<MonteCarlo>) -> Result<Vec<Task>> {
     let design = parse(t)?;
     tool_of(t)?;
     if let Some(m) = monte_carlo {
-        crate::study::uncertainty::check_samples(m.samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(m.samples).map_err(Error::stage)?;
     }
     let runs = design.runs().len();
     Ok((1..=runs)
@@ -172,12 +169,12 @@ pub fn design_tasks_with(
 /// Evaluate one task. A run that fails comes back with its `error` (as in `crest study`'s
 /// `runs.csv`); a task that is not valid (unknown kind, a design or tool that does not
 /// parse, a run number out of range) is an error.
-pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
+pub fn run_task(task: &Task) -> Result<TaskResult> {
     if task.kind != DESIGN_RUN {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{DESIGN_RUN}')",
             task.kind
-        ));
+        )));
     }
     let texts = DesignTexts {
         design_file: task.design_file.clone(),
@@ -189,19 +186,19 @@ pub fn run_task(task: &Task) -> miette::Result<TaskResult> {
     let cutter = tool_of(&texts)?;
     let points = design.runs();
     if points.len() != task.runs || task.run == 0 || task.run > points.len() {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{}: task for run {} of {}, but the design has {} runs",
             task.design_file,
             task.run,
             task.runs,
             points.len()
-        ));
+        )));
     }
     let point = &points[task.run - 1];
     let n = design.responses.len();
     let mc = MonteCarlo::pair(task.monte_carlo);
     if let Some((samples, _)) = mc {
-        crate::study::uncertainty::check_samples(samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(samples).map_err(Error::stage)?;
     }
     let out = super::design::evaluate(&design, &cutter, point, mc);
     let (responses, fz_mm, stepover_mm, error, bands) = match out {
@@ -243,7 +240,7 @@ pub fn run_shard(
     k: usize,
     n: usize,
     tick: &(dyn Fn() + Sync),
-) -> miette::Result<Vec<TaskResult>> {
+) -> Result<Vec<TaskResult>> {
     run_shard_with(t, k, n, None, tick)
 }
 
@@ -254,12 +251,12 @@ pub fn run_shard_with(
     n: usize,
     monte_carlo: Option<MonteCarlo>,
     tick: &(dyn Fn() + Sync),
-) -> miette::Result<Vec<TaskResult>> {
+) -> Result<Vec<TaskResult>> {
     let design = parse(t)?;
     let cutter = tool_of(t)?;
     let mc = MonteCarlo::pair(monte_carlo);
     if let Some((samples, _)) = mc {
-        crate::study::uncertainty::check_samples(samples).map_err(|e| miette!("{e}"))?;
+        crate::study::uncertainty::check_samples(samples).map_err(Error::stage)?;
     }
     // Every run of the design, as `crest study` checks them: a shard is refused like the
     // whole.
@@ -316,24 +313,30 @@ pub(crate) fn check_shards(
     total: usize,
     items: impl IntoIterator<Item = (usize, Vec<usize>)>,
     what: &str,
-) -> miette::Result<()> {
+) -> Result<()> {
     let mut seen = vec![false; shards];
     for (shard, got) in items {
         let slot = shard
             .checked_sub(1)
             .and_then(|i| seen.get_mut(i))
-            .ok_or_else(|| miette!("{file}: shard {shard} is out of range 1..={shards}"))?;
+            .ok_or_else(|| {
+                Error::Tasks(format!(
+                    "{file}: shard {shard} is out of range 1..={shards}"
+                ))
+            })?;
         if *slot {
-            return Err(miette!("{file}: shard {shard} of {shards} is given twice"));
+            return Err(Error::Tasks(format!(
+                "{file}: shard {shard} of {shards} is given twice"
+            )));
         }
         *slot = true;
         let want: Vec<usize> = (0..total).filter(|i| i % shards + 1 == shard).collect();
         if got != want {
-            return Err(miette!(
+            return Err(Error::Tasks(format!(
                 "{file}: shard {shard} of {shards} does not hold its {what} ({} of {} expected)",
                 got.len(),
                 want.len()
-            ));
+            )));
         }
     }
     let missing: Vec<String> = seen
@@ -343,11 +346,11 @@ pub(crate) fn check_shards(
         .map(|(i, _)| (i + 1).to_string())
         .collect();
     if !missing.is_empty() {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{file}: {} of {shards} shards are missing: {}",
             missing.len(),
             missing.join(", ")
-        ));
+        )));
     }
     Ok(())
 }
@@ -372,15 +375,15 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), BadShard> {
 /// Assemble the results of every task of one design (in any order) into the finished
 /// design `crest study` renders. Fails if the results are of different designs, if a run
 /// is missing or given twice, or (as `crest study`) if a run failed, naming every one.
-pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
+pub fn merge(results: Vec<TaskResult>) -> Result<DesignRun> {
     let first = results
         .first()
-        .ok_or_else(|| miette!("no task results to merge"))?;
+        .ok_or_else(|| Error::Tasks("no task results to merge".into()))?;
     if let Some(r) = results.iter().find(|r| r.kind != DESIGN_RUN) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{DESIGN_RUN}')",
             r.kind
-        ));
+        )));
     }
     let (file, text, runs, monte_carlo) = (
         first.design_file.clone(),
@@ -392,12 +395,10 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
         .iter()
         .find(|r| r.design_toml != text || r.runs != runs)
     {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "the results are of different designs: run {} of {} ({}) is not of the design of {file}",
-            r.run,
-            r.design_file,
-            r.runs
-        ));
+            r.run, r.design_file, r.runs
+        )));
     }
     if let Some(r) = results.iter().find(|r| r.monte_carlo != monte_carlo) {
         let say = |m: Option<MonteCarlo>| {
@@ -405,21 +406,21 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
                 format!("‹monte_carlo› {} ‹seed› {}", m.samples, m.seed)
             })
         };
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{file}: the results were run with different Monte Carlo settings: run {} with {}, run {} with {}",
             first.run,
             say(monte_carlo),
             r.run,
             say(r.monte_carlo)
-        ));
+        )));
     }
     let design = crate::config::design::parse_design(&text, &file)?;
     let points = design.runs();
     if points.len() != runs {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{file}: the results count {runs} runs, but the design has {}",
             points.len()
-        ));
+        )));
     }
     let mut slots: Vec<Option<TaskResult>> = vec![None; runs];
     for r in results {
@@ -427,9 +428,9 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
         let slot = run
             .checked_sub(1)
             .and_then(|i| slots.get_mut(i))
-            .ok_or_else(|| miette!("{file}: run {run} is out of range 1..={runs}"))?;
+            .ok_or_else(|| Error::Tasks(format!("{file}: run {run} is out of range 1..={runs}")))?;
         if slot.is_some() {
-            return Err(miette!("{file}: run {run} is given twice"));
+            return Err(Error::Tasks(format!("{file}: run {run} is given twice")));
         }
         *slot = Some(r);
     }
@@ -440,11 +441,11 @@ pub fn merge(results: Vec<TaskResult>) -> miette::Result<DesignRun> {
         .map(|(i, _)| (i + 1).to_string())
         .collect();
     if !missing.is_empty() {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{file}: {} of {runs} runs are missing: {}",
             missing.len(),
             missing.join(", ")
-        ));
+        )));
     }
     let n = design.responses.len();
     let results: Vec<RunResult> = slots
@@ -500,8 +501,8 @@ fn kind_of(v: &serde_json::Value) -> &str {
 
 /// Run one task given as JSON (a design run, a part-map shard or a run-out shard, by its
 /// `kind`); the result as JSON.
-pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
-    let bad = |e: serde_json::Error| miette!("not a crest task: {e}");
+pub fn run_any(task: serde_json::Value) -> Result<serde_json::Value> {
+    let bad = |e: serde_json::Error| Error::within("not a crest task", e);
     let out = match kind_of(&task) {
         map::MAP_TILES => serde_json::to_value(map::run_map_task(
             &serde_json::from_value(task).map_err(bad)?,
@@ -514,7 +515,7 @@ pub fn run_any(task: serde_json::Value) -> miette::Result<serde_json::Value> {
         )?),
         _ => serde_json::to_value(run_task(&serde_json::from_value(task).map_err(bad)?)?),
     };
-    out.map_err(|e| miette!("cannot encode the task result: {e}"))
+    out.map_err(|e| Error::output("encode the task result", e))
 }
 
 /// The group a result of this `kind` merges with: a part map, a run-out study, or else a
@@ -531,21 +532,22 @@ fn group_of(v: &serde_json::Value) -> &'static str {
 /// Assemble task results given as JSON, each with where it comes from (`file:line`, for
 /// messages): all of one design ([`merge`]), all of one part map ([`map::merge_map`]) or
 /// all of one run-out study ([`runout::merge_runout`]).
-pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> miette::Result<Merged> {
+pub fn merge_any(results: Vec<(String, serde_json::Value)>) -> Result<Merged> {
     let group = results.first().map_or(DESIGN_RUN, |(_, v)| group_of(v));
     if let Some((at, v)) = results.iter().find(|(_, v)| group_of(v) != group) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{at}: a result of kind '{}' among results of kind '{group}': merge the results of one study, one run-out study, one part map or one atlas",
             kind_of(v),
-        ));
+        )));
     }
     fn parse<T: serde::de::DeserializeOwned>(
         results: Vec<(String, serde_json::Value)>,
-    ) -> miette::Result<Vec<T>> {
+    ) -> Result<Vec<T>> {
         results
             .into_iter()
             .map(|(at, v)| {
-                serde_json::from_value(v).map_err(|e| miette!("{at}: not a task result: {e}"))
+                serde_json::from_value(v)
+                    .map_err(|e| Error::within(format_args!("{at}: not a task result"), e))
             })
             .collect()
     }

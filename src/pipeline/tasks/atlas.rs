@@ -7,8 +7,8 @@
 //! JSON as shortest round-trip decimals, a missing number as `null`.
 
 use crate::pipeline::atlas::{Atlas, AtlasRequest};
+use crate::pipeline::{Error, Result};
 use crate::study::atlas::AtlasRow;
-use miette::miette;
 use serde::{Deserialize, Serialize};
 
 /// The `kind` of an atlas task and of its result.
@@ -51,9 +51,9 @@ pub struct AtlasResult {
 }
 
 /// The `n` tasks of an atlas request (task k: patches k, k + n, …).
-pub fn atlas_tasks(req: &AtlasRequest, n: usize) -> miette::Result<Vec<AtlasTask>> {
+pub fn atlas_tasks(req: &AtlasRequest, n: usize) -> Result<Vec<AtlasTask>> {
     if n == 0 {
-        return Err(miette!("an atlas needs at least one task"));
+        return Err(Error::Request("an atlas needs at least one task".into()));
     }
     Ok((1..=n)
         .map(|shard| AtlasTask {
@@ -69,12 +69,12 @@ pub fn atlas_tasks(req: &AtlasRequest, n: usize) -> miette::Result<Vec<AtlasTask
 pub fn run_atlas_task_with(
     task: &AtlasTask,
     progress: &dyn crate::pipeline::Progress,
-) -> miette::Result<AtlasResult> {
+) -> Result<AtlasResult> {
     if task.kind != ATLAS_PATCHES {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{ATLAS_PATCHES}')",
             task.kind
-        ));
+        )));
     }
     let atlas =
         crate::pipeline::atlas::run(&task.request, Some((task.shard, task.shards)), progress)?;
@@ -91,22 +91,22 @@ pub fn run_atlas_task_with(
 }
 
 /// Run one task (no progress).
-pub fn run_atlas_task(task: &AtlasTask) -> miette::Result<AtlasResult> {
+pub fn run_atlas_task(task: &AtlasTask) -> Result<AtlasResult> {
     run_atlas_task_with(task, &crate::pipeline::Silent)
 }
 
 /// Assemble the results of every task of one atlas (any order) into the atlas of the single
 /// process. Fails if the results are of different requests, if a shard is missing or given
 /// twice, or if a shard does not hold exactly its patches.
-pub fn merge_atlas(results: Vec<AtlasResult>) -> miette::Result<Atlas> {
+pub fn merge_atlas(results: Vec<AtlasResult>) -> Result<Atlas> {
     let first = results
         .first()
-        .ok_or_else(|| miette!("no task results to merge"))?;
+        .ok_or_else(|| Error::Tasks("no task results to merge".into()))?;
     if let Some(r) = results.iter().find(|r| r.kind != ATLAS_PATCHES) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{ATLAS_PATCHES}')",
             r.kind
-        ));
+        )));
     }
     let (request, shards, total) = (first.request.clone(), first.shards, first.patches_total);
     let regions = first.regions;
@@ -115,12 +115,10 @@ pub fn merge_atlas(results: Vec<AtlasResult>) -> miette::Result<Atlas> {
         .iter()
         .find(|r| r.request != request || r.shards != shards || r.patches_total != total)
     {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "the results are of different atlases: shard {} of {} is not of the atlas of shard {} of {shards} ({file})",
-            r.shard,
-            r.shards,
-            first.shard
-        ));
+            r.shard, r.shards, first.shard
+        )));
     }
     super::check_shards(
         &file,

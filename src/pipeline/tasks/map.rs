@@ -10,8 +10,8 @@
 //! (NaN) as `null`.
 
 use crate::pipeline::simulate::{GridRequest, Output, SimulateRequest, SimulateRun};
+use crate::pipeline::{Error, Result};
 use crate::surface::{MapPoint, PartMap};
-use miette::miette;
 use serde::{Deserialize, Serialize};
 
 /// The `kind` of a part-map task and of its result.
@@ -61,20 +61,21 @@ pub struct MapResult {
     pub cells: Vec<MapCell>,
 }
 
-fn check_map(req: &SimulateRequest) -> miette::Result<()> {
+fn check_map(req: &SimulateRequest) -> Result<()> {
     if !matches!(req.grid, GridRequest::Map { .. }) {
-        return Err(miette!(
+        return Err(Error::Request(
             "only a part map (‹map_mm›) splits into tile tasks; a window or patch is one task"
+                .into(),
         ));
     }
     Ok(())
 }
 
 /// The `n` tasks of a part-map request (task k: cells k, k+n, …).
-pub fn map_tasks(req: &SimulateRequest, n: usize) -> miette::Result<Vec<MapTask>> {
+pub fn map_tasks(req: &SimulateRequest, n: usize) -> Result<Vec<MapTask>> {
     check_map(req)?;
     if n == 0 {
-        return Err(miette!("a part map needs at least one task"));
+        return Err(Error::Request("a part map needs at least one task".into()));
     }
     Ok((1..=n)
         .map(|shard| MapTask {
@@ -91,20 +92,19 @@ pub fn map_tasks(req: &SimulateRequest, n: usize) -> miette::Result<Vec<MapTask>
 pub fn run_map_task_with(
     task: &MapTask,
     progress: &dyn crate::pipeline::Progress,
-) -> miette::Result<(MapResult, SimulateRun)> {
+) -> Result<(MapResult, SimulateRun)> {
     if task.kind != MAP_TILES {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{MAP_TILES}')",
             task.kind
-        ));
+        )));
     }
     check_map(&task.request)?;
     if task.shard == 0 || task.shard > task.shards {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "task for shard {} of {}: not a shard K/N with 1 ≤ K ≤ N",
-            task.shard,
-            task.shards
-        ));
+            task.shard, task.shards
+        )));
     }
     let run = crate::pipeline::simulate::simulate_shard(
         &task.request,
@@ -147,22 +147,22 @@ pub fn run_map_task_with(
 }
 
 /// Run one task (no progress).
-pub fn run_map_task(task: &MapTask) -> miette::Result<MapResult> {
+pub fn run_map_task(task: &MapTask) -> Result<MapResult> {
     Ok(run_map_task_with(task, &crate::pipeline::Silent)?.0)
 }
 
 /// Assemble the results of every task of one part map (any order) into the map of the
 /// single process. Fails if the results are of different requests, if a shard is missing
 /// or given twice, or if a shard does not hold exactly its cells.
-pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
+pub fn merge_map(results: Vec<MapResult>) -> Result<PartMap> {
     let first = results
         .first()
-        .ok_or_else(|| miette!("no task results to merge"))?;
+        .ok_or_else(|| Error::Tasks("no task results to merge".into()))?;
     if let Some(r) = results.iter().find(|r| r.kind != MAP_TILES) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{MAP_TILES}')",
             r.kind
-        ));
+        )));
     }
     let (request, shards, total) = (first.request.clone(), first.shards, first.cells_total);
     let file = request.file.display().to_string();
@@ -170,12 +170,10 @@ pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
         .iter()
         .find(|r| r.request != request || r.shards != shards || r.cells_total != total)
     {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "the results are of different part maps: shard {} of {} is not of the map of shard {} of {shards} ({file})",
-            r.shard,
-            r.shards,
-            first.shard
-        ));
+            r.shard, r.shards, first.shard
+        )));
     }
     super::check_shards(
         &file,
@@ -188,12 +186,12 @@ pub fn merge_map(results: Vec<MapResult>) -> miette::Result<PartMap> {
     )?;
     for r in &results {
         if let Some(c) = r.cells.iter().find(|c| c.points.len() != c.height_um.len()) {
-            return Err(miette!(
+            return Err(Error::Tasks(format!(
                 "{file}: cell {} has {} points but {} heights",
                 c.cell,
                 c.points.len(),
                 c.height_um.len()
-            ));
+            )));
         }
     }
     let mut cells: Vec<MapCell> = results.into_iter().flat_map(|r| r.cells).collect();

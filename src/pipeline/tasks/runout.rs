@@ -10,8 +10,8 @@
 //! `"NaN"`, `"inf"` or `"-inf"`.
 
 use crate::pipeline::runout::{RunoutRun, RunoutTexts, finish, prepare};
+use crate::pipeline::{Error, Result};
 use crate::study::runout::{RunoutRow, run_cases};
-use miette::miette;
 use serde::{Deserialize, Serialize};
 
 /// The `kind` of a run-out task and of its result.
@@ -149,10 +149,14 @@ fn texts_of(t: &RunoutTask) -> RunoutTexts {
 /// The tasks of a run-out study (its texts as [`crate::pipeline::runout::load_runout_texts`]
 /// reads them): `n` tasks (task k: cases k-1, k-1+n, …), or one per case when `n` is
 /// `None`. The study and its tool are checked here.
-pub fn runout_tasks(t: &RunoutTexts, n: Option<usize>) -> miette::Result<Vec<RunoutTask>> {
+pub fn runout_tasks(t: &RunoutTexts, n: Option<usize>) -> Result<Vec<RunoutTask>> {
     let p = prepare(t)?;
     let n = match n {
-        Some(0) => return Err(miette!("a run-out study needs at least one task")),
+        Some(0) => {
+            return Err(Error::Request(
+                "a run-out study needs at least one task".into(),
+            ));
+        }
         Some(n) => n,
         None => p.study.cases(&p.cutter).len(),
     };
@@ -171,19 +175,18 @@ pub fn runout_tasks(t: &RunoutTexts, n: Option<usize>) -> miette::Result<Vec<Run
 
 /// Evaluate one task (its cases in parallel on the current rayon pool). A case that cannot
 /// be evaluated fails the task, as it fails `crest runout`.
-pub fn run_runout_task(task: &RunoutTask) -> miette::Result<RunoutResult> {
+pub fn run_runout_task(task: &RunoutTask) -> Result<RunoutResult> {
     if task.kind != RUNOUT_CASES {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{RUNOUT_CASES}')",
             task.kind
-        ));
+        )));
     }
     if task.shard == 0 || task.shard > task.shards {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "task for shard {} of {}: not a shard K/N with 1 ≤ K ≤ N",
-            task.shard,
-            task.shards
-        ));
+            task.shard, task.shards
+        )));
     }
     let p = prepare(&texts_of(task))?;
     let all = p.study.cases(&p.cutter);
@@ -192,7 +195,7 @@ pub fn run_runout_task(task: &RunoutTask) -> miette::Result<RunoutResult> {
         .into_iter()
         .filter(|c| c.case % task.shards + 1 == task.shard)
         .collect();
-    let rows = run_cases(&p.cutter, &p.study, &mine).map_err(|e| miette!("{e}"))?;
+    let rows = run_cases(&p.cutter, &p.study, &mine).map_err(Error::stage)?;
     Ok(RunoutResult {
         kind: RUNOUT_CASES.to_string(),
         study_file: task.study_file.clone(),
@@ -226,15 +229,15 @@ pub fn run_runout_task(task: &RunoutTask) -> miette::Result<RunoutResult> {
 /// single process finishes. Fails if the results are of different studies (or of its files
 /// at other paths: the tool file's name titles the charts), if a shard is missing or given
 /// twice, or if a shard does not hold exactly its cases.
-pub fn merge_runout(results: Vec<RunoutResult>) -> miette::Result<RunoutRun> {
+pub fn merge_runout(results: Vec<RunoutResult>) -> Result<RunoutRun> {
     let first = results
         .first()
-        .ok_or_else(|| miette!("no task results to merge"))?;
+        .ok_or_else(|| Error::Tasks("no task results to merge".into()))?;
     if let Some(r) = results.iter().find(|r| r.kind != RUNOUT_CASES) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "unknown task kind '{}' (expected '{RUNOUT_CASES}')",
             r.kind
-        ));
+        )));
     }
     let file = first.study_file.clone();
     let (shards, total) = (first.shards, first.cases_total);
@@ -245,15 +248,10 @@ pub fn merge_runout(results: Vec<RunoutResult>) -> miette::Result<RunoutRun> {
             || r.shards != shards
             || r.cases_total != total
     }) {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "the results are of different run-out studies: shard {} of {} ({}, tool {}) is not of the study of shard {} of {shards} ({file}, tool {})",
-            r.shard,
-            r.shards,
-            r.study_file,
-            r.tool_file,
-            first.shard,
-            first.tool_file
-        ));
+            r.shard, r.shards, r.study_file, r.tool_file, first.shard, first.tool_file
+        )));
     }
     let texts = RunoutTexts {
         study_file: file.clone(),
@@ -264,10 +262,10 @@ pub fn merge_runout(results: Vec<RunoutResult>) -> miette::Result<RunoutRun> {
     let p = prepare(&texts)?;
     let cases = p.study.cases(&p.cutter);
     if cases.len() != total {
-        return Err(miette!(
+        return Err(Error::Tasks(format!(
             "{file}: the results count {total} cases, but the study has {}",
             cases.len()
-        ));
+        )));
     }
     super::check_shards(
         &file,
