@@ -86,10 +86,25 @@ fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) 
     for v in buf.iter_mut() {
         *v = Complex64::new(v.norm_sqr(), 0.0);
     }
-    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
-    inv.columns(&mut buf);
-    inv.rows(&mut buf);
+    inverse_exact_rows(&mut buf, ny, px, py);
     buf
+}
+
+/// The inverse transform of a padded `py × px` spectrum, columns then rows; below the full
+/// padding (`py < 2ny − 1`) only the rows of lags `|ty| ≤ py − ny` (those [`Lags::exact`]
+/// lets be read: the others wrap) are transformed back along x, the rest are left as they
+/// are.
+fn inverse_exact_rows(buf: &mut [Complex64], ny: usize, px: usize, py: usize) {
+    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
+    inv.columns(buf);
+    if py >= 2 * ny - 1 {
+        inv.rows(buf);
+    } else {
+        let w = py - ny;
+        let (low, high) = buf.split_at_mut((w + 1) * px);
+        inv.rows(low);
+        inv.rows(&mut high[(py - w - (w + 1)) * px..]);
+    }
 }
 
 /// [`linear_autocorr`] of two real fields at once: one complex field `a + i·b`, whose
@@ -125,9 +140,7 @@ fn linear_autocorr_pair(
             buf[m] = Complex64::new(pa, pb);
         }
     }
-    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
-    inv.columns(&mut buf);
-    inv.rows(&mut buf);
+    inverse_exact_rows(&mut buf, ny, px, py);
     buf
 }
 
