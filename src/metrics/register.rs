@@ -1079,7 +1079,13 @@ mod tests {
                 .map(|k| ((k * seed % 101) as f64 - 50.0) * 0.013)
                 .collect();
             let v: Vec<f64> = (0..nx * ny)
-                .map(|k| if (k + seed) % 7 == 0 { 0.0 } else { 1.0 })
+                .map(|k| {
+                    if (k + seed).is_multiple_of(7) {
+                        0.0
+                    } else {
+                        1.0
+                    }
+                })
                 .collect();
             let z = z.iter().zip(&v).map(|(z, v)| z * v).collect();
             (z, v)
