@@ -15,7 +15,7 @@
 use rustfft::FftDirection;
 use rustfft::num_complex::Complex64;
 
-use super::fft::Fft2;
+use super::fft::{Fft2, padded};
 use crate::surface::HeightMap;
 
 /// Decay lengths of the ACF.
@@ -31,8 +31,8 @@ pub struct AcfLengths {
     pub decays_everywhere: bool,
 }
 
-/// Mean-removed heights with missing nodes as 0, and whether any was missing.
-fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
+/// The mean of the valid heights (0 without any), and whether any height was missing.
+fn valid_mean(map: &HeightMap) -> (f64, bool) {
     let (mut sum, mut n) = (0.0, 0usize);
     for &v in &map.z_um {
         if v.is_finite() {
@@ -41,7 +41,13 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
         }
     }
     let mean = if n > 0 { sum / n as f64 } else { 0.0 };
-    let missing = n < map.z_um.len();
+    (mean, n < map.z_um.len())
+}
+
+/// Mean-removed heights with missing nodes as 0, and whether any was missing.
+#[cfg(test)]
+fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
+    let (mean, missing) = valid_mean(map);
     let e = map
         .z_um
         .iter()
@@ -50,36 +56,22 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
     (e, missing)
 }
 
-/// The `py × px` lattice with `value(r·nx + c)` at the field's nodes (row r < ny, column
-/// c < nx) and zero elsewhere, written once in order (no zeroing pass first).
-fn padded(
-    nx: usize,
-    ny: usize,
-    px: usize,
-    py: usize,
-    value: impl Fn(usize) -> Complex64,
-) -> Vec<Complex64> {
-    let mut buf = Vec::with_capacity(px * py);
-    for r in 0..ny {
-        buf.extend((r * nx..(r + 1) * nx).map(&value));
-        buf.resize((r + 1) * px, Complex64::default());
-    }
-    buf.resize(px * py, Complex64::default());
-    buf
-}
-
 /// Linear autocorrelation of a `ny × nx` field on the padded `py × px` lattice, unscaled
 /// (the real parts times `1 / (px·py)` are the correlation sums).
 ///
 /// One complex buffer of the padded lattice (16 bytes per lattice node), transformed in
 /// place: rows then columns forward, columns then rows back (the order of the 1-D FFTs of
 /// the former transposing form, so the same values bit for bit). The forward rows past the
-/// field's are zero and stay so (their transforms are left out). `field` is dropped once
-/// copied in.
-fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
-    let buf = padded(nx, ny, px, py, |k| Complex64::new(field[k], 0.0));
-    drop(field);
-    let mut buf = buf;
+/// field's are zero and stay so (their transforms are left out). The field is `value(k)`
+/// at node k (real), written straight into the buffer.
+fn linear_autocorr(
+    value: impl Fn(usize) -> Complex64,
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+) -> Vec<Complex64> {
+    let mut buf = padded(nx, ny, px, py, value);
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
     fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
@@ -110,16 +102,16 @@ fn inverse_exact_rows(buf: &mut [Complex64], ny: usize, px: usize, py: usize) {
 /// [`linear_autocorr`] of two real fields at once: one complex field `a + i·b`, whose
 /// spectrum gives both power spectra by its conjugate symmetry, and one inverse transform of
 /// `|A|² + i·|B|²` (both even and real, so the real and imaginary parts of the result are
-/// the two autocorrelations, unscaled). Half the transforms of two separate calls.
+/// the two autocorrelations, unscaled). Half the transforms of two separate calls. The
+/// fields are `value(k) = a[k] + i·b[k]` at node k.
 fn linear_autocorr_pair(
-    a: &[f64],
-    b: &[f64],
+    value: impl Fn(usize) -> Complex64,
     nx: usize,
     ny: usize,
     px: usize,
     py: usize,
 ) -> Vec<Complex64> {
-    let mut buf = padded(nx, ny, px, py, |k| Complex64::new(a[k], b[k]));
+    let mut buf = padded(nx, ny, px, py, value);
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
     fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
@@ -199,19 +191,24 @@ fn full_padding(map: &HeightMap) -> (usize, usize) {
 /// [`Lags::exact`].
 fn lags(map: &HeightMap, (px, py): (usize, usize)) -> Lags {
     let (nx, ny) = (map.nx, map.ny);
-    let (e, missing) = centred(map);
+    let (mean, missing) = valid_mean(map);
+    let z = &map.z_um;
     let scale = 1.0 / (px * py) as f64;
     // The sums (real parts) and, with missing nodes, the counts of valid pairs (imaginary
-    // parts), scaled as they are read.
+    // parts), scaled as they are read. The mean-removed heights (missing as 0) and the
+    // validity mask go straight into the transform's buffer (no field of either).
     let sums = if missing {
-        let mask: Vec<f64> = map
-            .z_um
-            .iter()
-            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
-            .collect();
-        linear_autocorr_pair(&e, &mask, nx, ny, px, py)
+        let value = |k: usize| {
+            let v = z[k];
+            if v.is_finite() {
+                Complex64::new(v - mean, 1.0)
+            } else {
+                Complex64::default()
+            }
+        };
+        linear_autocorr_pair(value, nx, ny, px, py)
     } else {
-        linear_autocorr(e, nx, ny, px, py)
+        linear_autocorr(|k| Complex64::new(z[k] - mean, 0.0), nx, ny, px, py)
     };
     // Collected in place (the same allocation); lags beyond ±(n − 1) have no pair.
     let r = sums
@@ -511,9 +508,12 @@ pub struct Spectrum {
 /// Std and Ssw of the mean-removed map (missing nodes set to the mean, no window).
 pub fn spectrum_direction(map: &HeightMap) -> Spectrum {
     let (nx, ny) = (map.nx, map.ny);
-    let (e, _) = centred(map);
-    let mut buf: Vec<Complex64> = e.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-    drop(e);
+    let (mean, _) = valid_mean(map);
+    let mut buf: Vec<Complex64> = map
+        .z_um
+        .iter()
+        .map(|&v| Complex64::new(if v.is_finite() { v - mean } else { 0.0 }, 0.0))
+        .collect();
     let mut fwd = Fft2::new(ny, nx, FftDirection::Forward);
     fwd.rows(&mut buf);
     fwd.columns(&mut buf);
