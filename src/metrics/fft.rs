@@ -36,6 +36,24 @@ pub(crate) fn fast_len(n: usize) -> usize {
     best
 }
 
+/// The `py × px` lattice with `value(r·nx + c)` at the field's nodes (row r < ny, column
+/// c < nx) and zero elsewhere, written once in order (no zeroing pass first).
+pub(crate) fn padded(
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+    value: impl Fn(usize) -> Complex64,
+) -> Vec<Complex64> {
+    let mut buf = Vec::with_capacity(px * py);
+    for r in 0..ny {
+        buf.extend((r * nx..(r + 1) * nx).map(&value));
+        buf.resize((r + 1) * px, Complex64::default());
+    }
+    buf.resize(px * py, Complex64::default());
+    buf
+}
+
 /// The 1-D FFTs of one direction over a `rows × cols` row-major buffer.
 pub(crate) struct Fft2 {
     f_row: std::sync::Arc<dyn Fft<f64>>,

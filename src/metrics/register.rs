@@ -107,12 +107,7 @@ fn centred(map: &HeightMap, window: bool) -> Vec<f64> {
 /// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)` (the padding rows are zero
 /// and stay so: only the field's rows are transformed along).
 fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
-    let mut buf = vec![Complex64::default(); px * py];
-    for r in 0..ny {
-        for c in 0..nx {
-            buf[r * px + c] = Complex64::new(w[r * nx + c], 0.0);
-        }
-    }
+    let mut buf = super::fft::padded(nx, ny, px, py, |k| Complex64::new(w[k], 0.0));
     let mut f = Fft2::new(py, px, FftDirection::Forward);
     f.rows(&mut buf[..ny * px]);
     f.columns(&mut buf);
@@ -432,9 +427,54 @@ fn whole_lag(measured: &HeightMap, placed: &HeightMap) -> Option<(i64, i64)> {
     Some((lag(k % px, px), lag(k / px, py)))
 }
 
+/// [`lagged_sums`] of the lags (tx, ty) for each tx of `txs`, in one pass over the row pairs
+/// of `ty` (each row of the four fields read once for all of them, where a pass per lag read
+/// it once per lag): every lag's rows are summed in the same order, so the same bits.
+fn lagged_sums_row(
+    (a, va): (&[f64], &[f64]),
+    (b, vb): (&[f64], &[f64]),
+    (nx, ny): (usize, usize),
+    ty: i64,
+    txs: &[i64],
+) -> Vec<[f64; 6]> {
+    let mut out = vec![[0.0; 6]; txs.len()];
+    let ay = ty.unsigned_abs() as usize;
+    if ay >= ny {
+        return out;
+    }
+    let (ra0, rb0) = if ty >= 0 { (ay, 0) } else { (0, ay) };
+    for i in 0..ny - ay {
+        let (ra, rb) = ((ra0 + i) * nx, (rb0 + i) * nx);
+        for (s, &tx) in out.iter_mut().zip(txs) {
+            let ax = tx.unsigned_abs() as usize;
+            if ax >= nx {
+                continue;
+            }
+            let w = nx - ax;
+            let (ca, cb) = if tx >= 0 { (ax, 0) } else { (0, ax) };
+            let (ka, kb) = (ra + ca, rb + cb);
+            let mut t = [0.0; 6];
+            for l in 0..w {
+                let (x, y, p, q) = (a[ka + l], b[kb + l], va[ka + l], vb[kb + l]);
+                t[0] += x * y;
+                t[1] += x * q;
+                t[2] += y * p;
+                t[3] += x * x * q;
+                t[4] += y * y * p;
+                t[5] += p * q;
+            }
+            for (s, t) in s.iter_mut().zip(t) {
+                *s += t;
+            }
+        }
+    }
+    out
+}
+
 /// The sums of a whole lag t = (tx, ty) over the nodes valid in both maps (`a`, `b`
 /// mean-removed with missing nodes as 0, `va`, `vb` 1 where valid), `a` taken at n + t:
 /// [Σ a·b, Σ a, Σ b, Σ a², Σ b², count].
+#[cfg(test)]
 fn lagged_sums(
     (a, va): (&[f64], &[f64]),
     (b, vb): (&[f64], &[f64]),
@@ -469,7 +509,7 @@ fn lagged_sums(
 }
 
 /// The correlation coefficient of the two maps over their common valid nodes at a lag,
-/// from its [`lagged_sums`] (`NaN` below 64 nodes).
+/// from its sums ([`lagged_sums_row`]; `NaN` below 64 nodes).
 fn zncc(s: [f64; 6]) -> f64 {
     let n = s[5];
     if n < 64.0 {
@@ -503,7 +543,8 @@ fn coarse_to_fine(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2],
             .collect()
     };
     let (va, vb) = (valid(measured), valid(placed));
-    let at = |t: (i64, i64)| lagged_sums((&a, &va), (&b, &vb), (nx, ny), t);
+    // The lags of one row of lags (one ty) in one pass over its row pairs.
+    let at_row = |ty: i64, txs: &[i64]| lagged_sums_row((&a, &va), (&b, &vb), (nx, ny), ty, txs);
     // Climb the unbiased correlation (sum over count) from the coarse peak, a 3 × 3
     // neighbourhood at a time (in parallel), until its centre is the highest.
     let mut seen: std::collections::BTreeMap<(i64, i64), f64> = Default::default();
@@ -513,8 +554,18 @@ fn coarse_to_fine(measured: &HeightMap, placed: &HeightMap) -> Option<([f64; 2],
             .flat_map(|y| (tx - 1..=tx + 1).map(move |x| (x, y)))
             .filter(|t| !seen.contains_key(t))
             .collect();
-        let r: Vec<f64> = around.par_iter().map(|&t| zncc(at(t))).collect();
-        seen.extend(around.into_iter().zip(r));
+        let mut rows: Vec<(i64, Vec<i64>)> = Vec::new();
+        for &(x, y) in &around {
+            match rows.last_mut() {
+                Some((ry, xs)) if *ry == y => xs.push(x),
+                _ => rows.push((y, vec![x])),
+            }
+        }
+        let r: Vec<Vec<f64>> = rows
+            .par_iter()
+            .map(|(y, xs)| at_row(*y, xs).into_iter().map(zncc).collect())
+            .collect();
+        seen.extend(around.into_iter().zip(r.into_iter().flatten()));
         let best = (ty - 1..=ty + 1)
             .flat_map(|y| (tx - 1..=tx + 1).map(move |x| (x, y)))
             .fold(((tx, ty), f64::NEG_INFINITY), |b, t| {
@@ -1012,5 +1063,36 @@ mod tests {
         let big = stripes(800, 800, 30.0, 40.0);
         let d = feed_direction_deg(&big).unwrap();
         assert!((d - 30.0).abs() < 0.1, "{d}");
+    }
+
+    /// The lags of one row of lags in one pass: each the single lag's sums, bit for bit.
+    #[test]
+    fn lagged_sums_of_a_row_are_each_lags() {
+        let (nx, ny) = (37, 23);
+        let field = |seed: usize| -> (Vec<f64>, Vec<f64>) {
+            let z: Vec<f64> = (0..nx * ny)
+                .map(|k| ((k * seed % 101) as f64 - 50.0) * 0.013)
+                .collect();
+            let v: Vec<f64> = (0..nx * ny)
+                .map(|k| {
+                    if (k + seed).is_multiple_of(7) {
+                        0.0
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            let z = z.iter().zip(&v).map(|(z, v)| z * v).collect();
+            (z, v)
+        };
+        let ((a, va), (b, vb)) = (field(31), field(57));
+        let txs = [-40, -36, -5, -1, 0, 1, 2, 9, 36, 37];
+        for ty in [-23, -22, -7, -1, 0, 1, 3, 22, 23] {
+            let row = lagged_sums_row((&a, &va), (&b, &vb), (nx, ny), ty, &txs);
+            for (&tx, got) in txs.iter().zip(row) {
+                let one = lagged_sums((&a, &va), (&b, &vb), (nx, ny), (tx, ty));
+                assert_eq!(got.map(f64::to_bits), one.map(f64::to_bits), "{tx} {ty}");
+            }
+        }
     }
 }

@@ -8,12 +8,14 @@
 //! centre to each pixel of its outer boundary, R is interpolated bilinearly along each ray and
 //! the first crossing of the threshold gives the decay length in that direction; Sal is the
 //! shortest, Str = shortest / longest, and `NaN` when the region reaches the border of the lag
-//! field (the ACF does not decay in some direction).
+//! field (the ACF does not decay in some direction). The region and its rays read only lags
+//! near it: the ACF is taken on a smaller padding where that padding's exact lags hold them
+//! (guessed from the map's block means, checked, else the full padding).
 
 use rustfft::FftDirection;
 use rustfft::num_complex::Complex64;
 
-use super::fft::Fft2;
+use super::fft::{Fft2, padded};
 use crate::surface::HeightMap;
 
 /// Decay lengths of the ACF.
@@ -29,8 +31,8 @@ pub struct AcfLengths {
     pub decays_everywhere: bool,
 }
 
-/// Mean-removed heights with missing nodes as 0, and whether any was missing.
-fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
+/// The mean of the valid heights (0 without any), and whether any height was missing.
+fn valid_mean(map: &HeightMap) -> (f64, bool) {
     let (mut sum, mut n) = (0.0, 0usize);
     for &v in &map.z_um {
         if v.is_finite() {
@@ -39,7 +41,13 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
         }
     }
     let mean = if n > 0 { sum / n as f64 } else { 0.0 };
-    let missing = n < map.z_um.len();
+    (mean, n < map.z_um.len())
+}
+
+/// Mean-removed heights with missing nodes as 0, and whether any was missing.
+#[cfg(test)]
+fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
+    let (mean, missing) = valid_mean(map);
     let e = map
         .z_um
         .iter()
@@ -48,61 +56,62 @@ fn centred(map: &HeightMap) -> (Vec<f64>, bool) {
     (e, missing)
 }
 
-/// The `py × px` lattice with `value(r·nx + c)` at the field's nodes (row r < ny, column
-/// c < nx) and zero elsewhere, written once in order (no zeroing pass first).
-fn padded(
-    nx: usize,
-    ny: usize,
-    px: usize,
-    py: usize,
-    value: impl Fn(usize) -> Complex64,
-) -> Vec<Complex64> {
-    let mut buf = Vec::with_capacity(px * py);
-    for r in 0..ny {
-        buf.extend((r * nx..(r + 1) * nx).map(&value));
-        buf.resize((r + 1) * px, Complex64::default());
-    }
-    buf.resize(px * py, Complex64::default());
-    buf
-}
-
 /// Linear autocorrelation of a `ny × nx` field on the padded `py × px` lattice, unscaled
 /// (the real parts times `1 / (px·py)` are the correlation sums).
 ///
 /// One complex buffer of the padded lattice (16 bytes per lattice node), transformed in
 /// place: rows then columns forward, columns then rows back (the order of the 1-D FFTs of
 /// the former transposing form, so the same values bit for bit). The forward rows past the
-/// field's are zero and stay so (their transforms are left out). `field` is dropped once
-/// copied in.
-fn linear_autocorr(field: Vec<f64>, nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
-    let buf = padded(nx, ny, px, py, |k| Complex64::new(field[k], 0.0));
-    drop(field);
-    let mut buf = buf;
+/// field's are zero and stay so (their transforms are left out). The field is `value(k)`
+/// at node k (real), written straight into the buffer.
+fn linear_autocorr(
+    value: impl Fn(usize) -> Complex64,
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+) -> Vec<Complex64> {
+    let mut buf = padded(nx, ny, px, py, value);
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
     fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
     for v in buf.iter_mut() {
         *v = Complex64::new(v.norm_sqr(), 0.0);
     }
-    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
-    inv.columns(&mut buf);
-    inv.rows(&mut buf);
+    inverse_exact_rows(&mut buf, ny, px, py);
     buf
+}
+
+/// The inverse transform of a padded `py × px` spectrum, columns then rows; below the full
+/// padding (`py < 2ny − 1`) only the rows of lags `|ty| ≤ py − ny` (those [`Lags::exact`]
+/// lets be read: the others wrap) are transformed back along x, the rest are left as they
+/// are.
+fn inverse_exact_rows(buf: &mut [Complex64], ny: usize, px: usize, py: usize) {
+    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
+    inv.columns(buf);
+    if py >= 2 * ny - 1 {
+        inv.rows(buf);
+    } else {
+        let w = py - ny;
+        let (low, high) = buf.split_at_mut((w + 1) * px);
+        inv.rows(low);
+        inv.rows(&mut high[(py - w - (w + 1)) * px..]);
+    }
 }
 
 /// [`linear_autocorr`] of two real fields at once: one complex field `a + i·b`, whose
 /// spectrum gives both power spectra by its conjugate symmetry, and one inverse transform of
 /// `|A|² + i·|B|²` (both even and real, so the real and imaginary parts of the result are
-/// the two autocorrelations, unscaled). Half the transforms of two separate calls.
+/// the two autocorrelations, unscaled). Half the transforms of two separate calls. The
+/// fields are `value(k) = a[k] + i·b[k]` at node k.
 fn linear_autocorr_pair(
-    a: &[f64],
-    b: &[f64],
+    value: impl Fn(usize) -> Complex64,
     nx: usize,
     ny: usize,
     px: usize,
     py: usize,
 ) -> Vec<Complex64> {
-    let mut buf = padded(nx, ny, px, py, |k| Complex64::new(a[k], b[k]));
+    let mut buf = padded(nx, ny, px, py, value);
     let mut fwd = Fft2::new(py, px, FftDirection::Forward);
     fwd.rows(&mut buf[..ny * px]);
     fwd.columns(&mut buf);
@@ -123,9 +132,7 @@ fn linear_autocorr_pair(
             buf[m] = Complex64::new(pa, pb);
         }
     }
-    let mut inv = Fft2::new(py, px, FftDirection::Inverse);
-    inv.columns(&mut buf);
-    inv.rows(&mut buf);
+    inverse_exact_rows(&mut buf, ny, px, py);
     buf
 }
 
@@ -155,26 +162,53 @@ impl Lags {
         };
         self.r[ry * self.px + rx]
     }
+
+    /// The largest `|ty|` and `|tx|` that a node of the decay region may have for the region,
+    /// its boundary and the rays to it (bilinear, one node further) to read only exact lags:
+    /// every lag on the full padding, `p − n − 2` below it.
+    fn exact(&self) -> (usize, usize) {
+        let lim = |p: usize, n: usize| {
+            if p >= 2 * n - 1 {
+                n - 1
+            } else {
+                p.saturating_sub(n + 2)
+            }
+        };
+        (lim(self.py, self.ny), lim(self.px, self.nx))
+    }
 }
 
-/// The normalised ACF of a map ([`Lags`]).
-fn lags(map: &HeightMap) -> Lags {
+/// The padding of the whole lag field: any padding to 2n − 1 or more gives the linear ACF;
+/// lengths of factors 2, 3, 5 are fast.
+fn full_padding(map: &HeightMap) -> (usize, usize) {
+    use super::fft::fast_len;
+    (fast_len(2 * map.nx), fast_len(2 * map.ny))
+}
+
+/// The normalised ACF of a map ([`Lags`]) on the padded `py × px` lattice (`py ≥ ny + 2`,
+/// `px ≥ nx + 2`). A circular correlation of period `p` is the linear one at every lag
+/// `|t| ≤ p − n`; below the full padding the lags beyond are wrong (wrapped), see
+/// [`Lags::exact`].
+fn lags(map: &HeightMap, (px, py): (usize, usize)) -> Lags {
     let (nx, ny) = (map.nx, map.ny);
-    // Any padding to 2n − 1 or more gives the linear ACF; lengths of factors 2, 3, 5 are fast.
-    let (px, py) = (super::fft::fast_len(2 * nx), super::fft::fast_len(2 * ny));
-    let (e, missing) = centred(map);
+    let (mean, missing) = valid_mean(map);
+    let z = &map.z_um;
     let scale = 1.0 / (px * py) as f64;
     // The sums (real parts) and, with missing nodes, the counts of valid pairs (imaginary
-    // parts), scaled as they are read.
+    // parts), scaled as they are read. The mean-removed heights (missing as 0) and the
+    // validity mask go straight into the transform's buffer (no field of either).
     let sums = if missing {
-        let mask: Vec<f64> = map
-            .z_um
-            .iter()
-            .map(|v| if v.is_finite() { 1.0 } else { 0.0 })
-            .collect();
-        linear_autocorr_pair(&e, &mask, nx, ny, px, py)
+        let value = |k: usize| {
+            let v = z[k];
+            if v.is_finite() {
+                Complex64::new(v - mean, 1.0)
+            } else {
+                Complex64::default()
+            }
+        };
+        linear_autocorr_pair(value, nx, ny, px, py)
     } else {
-        linear_autocorr(e, nx, ny, px, py)
+        linear_autocorr(|k| Complex64::new(z[k] - mean, 0.0), nx, ny, px, py)
     };
     // Collected in place (the same allocation); lags beyond ±(n − 1) have no pair.
     let r = sums
@@ -207,7 +241,7 @@ fn lags(map: &HeightMap) -> Lags {
 /// `(ny−1, nx−1)`.
 #[cfg(test)]
 pub(crate) fn acf(map: &HeightMap) -> Vec<f64> {
-    let l = lags(map);
+    let l = lags(map, full_padding(map));
     let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
     (0..wy)
         .flat_map(|i| (0..wx).map(move |j| (i, j)))
@@ -230,38 +264,41 @@ fn round_count(c: f64) -> f64 {
     }
 }
 
-/// Sal, Str (threshold `s`, normally 0.2) of a height map.
-pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
-    let undefined = AcfLengths {
-        sal: f64::NAN,
-        longest: f64::NAN,
-        str_ratio: f64::NAN,
-        decays_everywhere: false,
-    };
-    if map.nx < 2 || map.ny < 2 {
-        return undefined;
-    }
-    let r = lags(map);
-    let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
-    let (cy, cx) = (map.ny - 1, map.nx - 1);
-    let r0 = r.at(cy, cx);
-    if r0.is_nan() || r0 <= 0.0 {
-        return undefined;
-    }
-    let thr = s * r0;
-    // Flood fill of the 4-connected region above the threshold.
-    let mut region = vec![false; wy * wx];
+/// The 4-connected region around zero lag where R > `thr`, on the centred lag field.
+struct Region {
+    /// Membership, `(2ny−1) × (2nx−1)` row-major.
+    inside: Vec<bool>,
+    /// The first and last row of the field holding a node of the region.
+    rows: (usize, usize),
+    /// Whether the region reaches the border of the field.
+    touches: bool,
+}
+
+/// The decay region of `r` (flood fill from zero lag), or `None` when it holds a node
+/// beyond `r`'s exact lags ([`Lags::exact`]): then the region and its rays need a larger
+/// padding.
+fn decay_region(r: &Lags, thr: f64) -> Option<Region> {
+    let (wy, wx) = (2 * r.ny - 1, 2 * r.nx - 1);
+    let (cy, cx) = (r.ny - 1, r.nx - 1);
+    let (ly, lx) = r.exact();
+    let mut inside = vec![false; wy * wx];
     let mut stack = vec![(cy, cx)];
-    region[cy * wx + cx] = true;
+    inside[cy * wx + cx] = true;
+    let (mut top, mut bottom) = (cy, cy);
     let mut touches = false;
     while let Some((i, j)) = stack.pop() {
+        if i.abs_diff(cy) > ly || j.abs_diff(cx) > lx {
+            return None;
+        }
+        top = top.min(i);
+        bottom = bottom.max(i);
         if i == 0 || j == 0 || i == wy - 1 || j == wx - 1 {
             touches = true;
         }
         let mut visit = |a: usize, b: usize| {
             let k = a * wx + b;
-            if !region[k] && r.at(a, b) > thr {
-                region[k] = true;
+            if !inside[k] && r.at(a, b) > thr {
+                inside[k] = true;
                 stack.push((a, b));
             }
         };
@@ -278,6 +315,109 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
             visit(i, j + 1);
         }
     }
+    Some(Region {
+        inside,
+        rows: (top, bottom),
+        touches,
+    })
+}
+
+/// Nodes averaged along each side of a block for [`padding_guess`].
+const COARSE: usize = 8;
+
+/// A padding for the ACF of a map of at least `32·COARSE` nodes a side that probably holds
+/// its decay region at threshold `s` exactly, from the region of the ACF of the map's
+/// `COARSE × COARSE` block means (a cheap guess, checked by [`decay_region`]); `None` when
+/// the guess is the full padding or there is none.
+fn padding_guess(map: &HeightMap, s: f64) -> Option<(usize, usize)> {
+    use super::fft::fast_len;
+    let (nx, ny) = (map.nx, map.ny);
+    if nx.min(ny) < 32 * COARSE {
+        return None;
+    }
+    let (bx, by) = (nx / COARSE, ny / COARSE);
+    let mut sums = vec![(0.0, 0usize); bx * by];
+    for (y, row) in map.z_um.chunks_exact(nx).take(by * COARSE).enumerate() {
+        let blocks = &mut sums[(y / COARSE) * bx..][..bx];
+        for (b, cells) in blocks.iter_mut().zip(row.chunks_exact(COARSE)) {
+            for &v in cells {
+                if v.is_finite() {
+                    b.0 += v;
+                    b.1 += 1;
+                }
+            }
+        }
+    }
+    let z = sums
+        .into_iter()
+        .map(|(sum, n)| if n > 0 { sum / n as f64 } else { f64::NAN })
+        .collect();
+    let d = COARSE as f64;
+    let coarse = HeightMap::from_rows(bx, by, map.dx_um * d, map.dy_um * d, z)?;
+    let r = lags(&coarse, full_padding(&coarse));
+    let r0 = r.at(by - 1, bx - 1);
+    if r0.is_nan() || r0 <= 0.0 {
+        return None;
+    }
+    let region = decay_region(&r, s * r0)?;
+    let (mut ey, mut ex) = (0, 0);
+    for (k, _) in region.inside.iter().enumerate().filter(|(_, v)| **v) {
+        let (i, j) = (k / (2 * bx - 1), k % (2 * bx - 1));
+        ey = ey.max(i.abs_diff(by - 1));
+        ex = ex.max(j.abs_diff(bx - 1));
+    }
+    // Three blocks beyond the coarse region, then the margin of `Lags::exact`.
+    let pad = |n: usize, e: usize| {
+        let p = fast_len(n + (e + 3) * COARSE + 2);
+        if p >= 2 * n - 1 { fast_len(2 * n) } else { p }
+    };
+    let guess = (pad(nx, ex), pad(ny, ey));
+    (guess != full_padding(map)).then_some(guess)
+}
+
+/// Sal, Str (threshold `s`, normally 0.2) of a height map.
+///
+/// The ACF is first taken on the padding of [`padding_guess`], whose exact lags (those of
+/// the linear ACF) usually hold the decay region and the rays to it; where they do not,
+/// on the full padding. The lengths are those of the full lag field either way, up to the
+/// rounding of the transforms' lengths.
+pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
+    acf_lengths_from(map, s, padding_guess(map, s))
+}
+
+/// [`acf_lengths`] with the ACF first taken on the padding `first` (the full padding where
+/// its exact lags do not hold the decay region, or without one).
+fn acf_lengths_from(map: &HeightMap, s: f64, first: Option<(usize, usize)>) -> AcfLengths {
+    let undefined = AcfLengths {
+        sal: f64::NAN,
+        longest: f64::NAN,
+        str_ratio: f64::NAN,
+        decays_everywhere: false,
+    };
+    if map.nx < 2 || map.ny < 2 {
+        return undefined;
+    }
+    let (wy, wx) = (2 * map.ny - 1, 2 * map.nx - 1);
+    let (cy, cx) = (map.ny - 1, map.nx - 1);
+    let with_padding = |p: (usize, usize)| -> Option<(Lags, f64, Option<Region>)> {
+        let r = lags(map, p);
+        let r0 = r.at(cy, cx);
+        if r0.is_nan() || r0 <= 0.0 {
+            return None;
+        }
+        let region = decay_region(&r, s * r0);
+        Some((r, r0, region))
+    };
+    let found = match first.map(with_padding) {
+        Some(Some((r, r0, Some(region)))) => Some((r, r0, region)),
+        _ => with_padding(full_padding(map))
+            .map(|(r, r0, region)| (r, r0, region.expect("the full padding has every lag"))),
+    };
+    let Some((r, r0, region)) = found else {
+        return undefined;
+    };
+    let thr = s * r0;
+    let (touches, inside) = (region.touches, &region.inside);
     // y, x ≥ 0 (on the rays from the centre to nodes of the field): truncation is the floor.
     let at = |y: f64, x: f64| -> f64 {
         let (i, j) = (y as usize, x as usize);
@@ -297,13 +437,13 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
     let row_rays = |i: usize| -> (f64, f64) {
         let (mut shortest, mut longest) = (f64::INFINITY, f64::NEG_INFINITY);
         for j in 0..wx {
-            if region[i * wx + j] {
+            if inside[i * wx + j] {
                 continue;
             }
-            let adjacent = (i > 0 && region[(i - 1) * wx + j])
-                || (i + 1 < wy && region[(i + 1) * wx + j])
-                || (j > 0 && region[i * wx + j - 1])
-                || (j + 1 < wx && region[i * wx + j + 1]);
+            let adjacent = (i > 0 && inside[(i - 1) * wx + j])
+                || (i + 1 < wy && inside[(i + 1) * wx + j])
+                || (j > 0 && inside[i * wx + j - 1])
+                || (j + 1 < wx && inside[i * wx + j + 1]);
             if !adjacent {
                 continue;
             }
@@ -334,7 +474,9 @@ pub fn acf_lengths(map: &HeightMap, s: f64) -> AcfLengths {
         }
         (shortest, longest)
     };
-    let (shortest, longest) = (0..wy).into_par_iter().map(row_rays).reduce(
+    // The boundary nodes lie in the region's rows and the rows next to them.
+    let rows = region.rows.0.saturating_sub(1)..(region.rows.1 + 2).min(wy);
+    let (shortest, longest) = rows.into_par_iter().map(row_rays).reduce(
         || (f64::INFINITY, f64::NEG_INFINITY),
         |a, b| (a.0.min(b.0), a.1.max(b.1)),
     );
@@ -366,9 +508,12 @@ pub struct Spectrum {
 /// Std and Ssw of the mean-removed map (missing nodes set to the mean, no window).
 pub fn spectrum_direction(map: &HeightMap) -> Spectrum {
     let (nx, ny) = (map.nx, map.ny);
-    let (e, _) = centred(map);
-    let mut buf: Vec<Complex64> = e.iter().map(|&v| Complex64::new(v, 0.0)).collect();
-    drop(e);
+    let (mean, _) = valid_mean(map);
+    let mut buf: Vec<Complex64> = map
+        .z_um
+        .iter()
+        .map(|&v| Complex64::new(if v.is_finite() { v - mean } else { 0.0 }, 0.0))
+        .collect();
     let mut fwd = Fft2::new(ny, nx, FftDirection::Forward);
     fwd.rows(&mut buf);
     fwd.columns(&mut buf);
@@ -526,5 +671,77 @@ mod tests {
         // Zero lag: mean of squares over valid nodes (the mean changes slightly).
         let c = 7 * 15 + 7;
         assert!(r_part[c].is_finite() && r_full[c] > 0.0);
+    }
+
+    /// A lay tilted by 4° (the region runs out of the field along it) and box-smoothed
+    /// noise (it decays everywhere), each whole and with missing nodes: `acf_lengths` on the
+    /// guessed padding gives the full padding's lengths up to rounding, and a padding too
+    /// small for the region falls back to the full one (the same bits).
+    #[test]
+    fn smaller_padding_gives_the_full_lengths() {
+        let (nx, ny) = (300, 264);
+        let noise = |k: usize| {
+            // splitmix64
+            let mut h = (k as u64)
+                .wrapping_add(1)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            h = (h ^ (h >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            h = (h ^ (h >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            h ^= h >> 31;
+            ((h >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let lay: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                let (x, y) = ((k % nx) as f64, (k / nx) as f64);
+                let (s, c) = 4f64.to_radians().sin_cos();
+                (std::f64::consts::TAU * (y * c - x * s) / 40.0).sin() + 0.2 * noise(k)
+            })
+            .collect();
+        let smooth: Vec<f64> = (0..nx * ny)
+            .map(|k| {
+                let (x, y) = (k % nx, k / nx);
+                let mut sum = 0.0;
+                for dy in 0..9 {
+                    for dx in 0..9 {
+                        sum += noise((y + dy) * (nx + 9) + x + dx);
+                    }
+                }
+                sum
+            })
+            .collect();
+        for (name, z, decays) in [("lay", lay, false), ("smooth", smooth, true)] {
+            for holes in [false, true] {
+                let mut z = z.clone();
+                if holes {
+                    for k in (0..z.len()).step_by(47) {
+                        z[k] = f64::NAN;
+                    }
+                }
+                let m = HeightMap::from_rows(nx, ny, 1.0, 1.5, z).unwrap();
+                let guess = padding_guess(&m, 0.2).expect("a padding below the full one");
+                assert!(guess.0 * guess.1 < full_padding(&m).0 * full_padding(&m).1);
+                let r = lags(&m, guess);
+                let r0 = r.at(ny - 1, nx - 1);
+                assert!(
+                    decay_region(&r, 0.2 * r0).is_some(),
+                    "{name} {holes}: {guess:?}"
+                );
+                let full = acf_lengths_from(&m, 0.2, None);
+                let got = acf_lengths(&m, 0.2);
+                assert_eq!(got.decays_everywhere, decays, "{name} {holes}");
+                assert_eq!(full.decays_everywhere, decays, "{name} {holes}");
+                let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+                assert!(close(got.sal, full.sal), "{name} {holes}: {got:?} {full:?}");
+                assert!(close(got.longest, full.longest), "{name} {holes}");
+                assert_eq!(got.str_ratio.is_nan(), !decays, "{name} {holes}");
+                if decays {
+                    assert!(close(got.str_ratio, full.str_ratio), "{name} {holes}");
+                }
+                let small = acf_lengths_from(&m, 0.2, Some((nx + 4, ny + 4)));
+                assert_eq!(small.sal.to_bits(), full.sal.to_bits(), "{name} {holes}");
+                assert_eq!(small.longest.to_bits(), full.longest.to_bits());
+                assert_eq!(small.str_ratio.to_bits(), full.str_ratio.to_bits());
+            }
+        }
     }
 }
