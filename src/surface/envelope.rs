@@ -91,8 +91,10 @@ impl<'a> DomeSweep<'a> {
 /// Of a dome strip (mesh angles `a..=b` of `step`, body points `body`, pose `m`, `bz`), the
 /// angles and the levels (indices into `body`) of the quads that have a corner at or below
 /// `cull`: every other quad's triangles lie wholly above `cull`, which the rasteriser skips
-/// anyway. `None` when no corner is that low. Corners are judged from the closed form with
-/// a slack for rounding, so the ranges hold every quad the mesh would find low.
+/// anyway. `None` when no corner is that low. The first `face` points of `body` lie on the
+/// end face with the one after them, at growing radii (0 when there are none). Corners are
+/// judged from the closed form with a slack for rounding, so the ranges hold every quad the
+/// mesh would find low.
 pub(crate) fn dome_low(
     m: &Matrix3<f64>,
     bz: f64,
@@ -100,6 +102,7 @@ pub(crate) fn dome_low(
     (a, b): (i64, i64),
     step: f64,
     cull: f64,
+    face: usize,
 ) -> Option<((i64, i64), (usize, usize))> {
     let (ma, mb) = (m[(2, 0)], m[(2, 1)]);
     let amp = ma.hypot(mb);
@@ -115,7 +118,14 @@ pub(crate) fn dome_low(
         if c - ra > cull {
             continue;
         }
+        // Levels `0..face` share `c` with level `face` and their radii grow: those below
+        // the cull form a run whose half-widths lie between its ends' (the first, and the
+        // rim or the last level), so only the ends need one.
+        let inner = levels.is_some() && i < face && i + 1 < body.len();
         levels = Some(levels.map_or((i, i), |(lo, _)| (lo, i)));
+        if inner {
+            continue;
+        }
         let h = if c + ra <= cull || ra < 1e-12 {
             PI
         } else {
@@ -196,14 +206,45 @@ mod tests {
         }
     }
 
+    /// [`body`] behind an end face: 12 points at its height, radii 0 to 1.
+    fn faced() -> (Vec<Vec3>, usize) {
+        let tail = body();
+        let mut face: Vec<Vec3> = (0..12)
+            .map(|i| Vec3::new(0.0, i as f64 / 12.0, tail[0].z))
+            .collect();
+        let n = face.len();
+        face.extend(tail);
+        (face, n)
+    }
+
     #[test]
     fn every_low_corner_is_in_the_low_ranges() {
         let (m, b) = pose();
-        let body = body();
         let step = TAU / 284.0;
+        let (with_face, n) = faced();
+        let bodies = [
+            (body(), 0),
+            (with_face.clone(), n),
+            // A strip that starts inside the end face, and one that ends there.
+            (with_face[5..].to_vec(), n - 5),
+            (with_face[..8].to_vec(), 8),
+        ];
+        for (body, face) in bodies {
+            low_corners_in_the_low_ranges(&m, &b, &body, face, step);
+        }
+    }
+
+    fn low_corners_in_the_low_ranges(
+        m: &Matrix3<f64>,
+        b: &Vec3,
+        body: &[Vec3],
+        face: usize,
+        step: f64,
+    ) {
+        let (m, b) = (*m, *b);
         for cull in [0.3, 0.4, 0.6, 1.0, 3.0] {
             for (a, z) in [(-40i64, -8i64), (0, 32), (250, 282), (100, 132), (-3, 29)] {
-                let got = dome_low(&m, b.z, &body, (a, z), step, cull);
+                let got = dome_low(&m, b.z, body, (a, z), step, cull, face);
                 for k in a..=z {
                     for (i, e) in body.iter().enumerate() {
                         if point(&m, &b, e, k as f64 * step).z <= cull {
