@@ -33,6 +33,12 @@ pub fn init_fonts() {
 /// Every PNG of crest is its SVG rasterised here (resvg), so both show the same picture and
 /// text is laid out by a text shaper (plotters' own bitmap text ran glyphs into each other).
 pub fn svg_to_png(svg: &str) -> std::io::Result<Vec<u8>> {
+    svg_pixmap(svg)?.encode_png().map_err(std::io::Error::other)
+}
+
+/// Rasterise an SVG document drawn by this module (see [`svg_to_png`]) into pixels, for a
+/// caller that paints more onto them before encoding.
+pub(crate) fn svg_pixmap(svg: &str) -> std::io::Result<resvg::tiny_skia::Pixmap> {
     use resvg::{tiny_skia, usvg};
     use std::sync::{Arc, OnceLock};
     static FONTS: OnceLock<(Arc<usvg::fontdb::Database>, String)> = OnceLock::new();
@@ -58,7 +64,7 @@ pub fn svg_to_png(svg: &str) -> std::io::Result<Vec<u8>> {
         .ok_or_else(|| std::io::Error::other("picture has no pixels"))?;
     pixmap.fill(tiny_skia::Color::WHITE);
     resvg::render(&tree, tiny_skia::Transform::default(), &mut pixmap.as_mut());
-    pixmap.encode_png().map_err(std::io::Error::other)
+    Ok(pixmap)
 }
 
 /// Output kind chosen from a file name.

@@ -246,9 +246,15 @@ fn facts(c: &Comparison) -> Vec<String> {
     ]
 }
 
-/// The figures: (file, caption, SVG). The height maps (`.png`) are rasterised from their SVG
-/// by [`outputs`] (a map's thousands of cells make a large SVG); the line charts stay SVG.
-fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, crate::plot::PlotError> {
+/// A figure's content: a height map as PNG (a map's thousands of cells would make a large
+/// SVG), a line chart as SVG.
+enum Body {
+    Png(Vec<u8>),
+    Svg(String),
+}
+
+/// The figures: (file, caption, content).
+fn figures(c: &Comparison) -> Result<Vec<(String, String, Body)>, crate::plot::PlotError> {
     use crate::plot::compare as pc;
     let (both, diff) = pc::ranges(&c.predicted, &c.measured, &c.difference);
     let label = "height [µm]";
@@ -256,29 +262,35 @@ fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, crate::plot:
         (
             "predicted.png".to_string(),
             "Predicted height map (processed, on the measured grid)".to_string(),
-            pc::map_svg(
+            Body::Png(pc::map_png(
                 &c.predicted,
                 "Predicted (processed, placed on the measured grid)",
                 both,
                 label,
                 false,
-            )?,
+            )?),
         ),
         (
             "measured.png".to_string(),
             "Measured height map (processed), same colour scale (dark grey = missing)".to_string(),
-            pc::map_svg(&c.measured, "Measured (processed)", both, label, false)?,
+            Body::Png(pc::map_png(
+                &c.measured,
+                "Measured (processed)",
+                both,
+                label,
+                false,
+            )?),
         ),
         (
             "difference.png".to_string(),
             "Difference predicted − measured (white = equal, red = prediction higher, dark grey = missing)".to_string(),
-            pc::map_svg(
+            Body::Png(pc::map_png(
                 &c.difference,
                 "Difference: predicted − measured",
                 diff,
                 "difference [µm]",
                 true,
-            )?,
+            )?),
         ),
     ];
     if let (Some(p), Some(m)) = (&c.lay_predicted, &c.lay_measured) {
@@ -286,19 +298,19 @@ fn figures(c: &Comparison) -> Result<Vec<(String, String, String)>, crate::plot:
             out.push((
                 format!("profiles-{what}.svg"),
                 format!("Profiles through the centre {what} the feed"),
-                pc::profiles_svg(p, m, along)?,
+                Body::Svg(pc::profiles_svg(p, m, along)?),
             ));
             out.push((
                 format!("spectrum-{what}.svg"),
                 format!("1-D spectra {what} the feed"),
-                pc::spectra_svg(p, m, along)?,
+                Body::Svg(pc::spectra_svg(p, m, along)?),
             ));
         }
     }
     Ok(out)
 }
 
-fn render_markdown(c: &Comparison, figs: &[(String, String, String)], command: &str) -> String {
+fn render_markdown(c: &Comparison, figs: &[(String, String, Body)], command: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Prediction against measurement\n");
     let _ = writeln!(s, "Regenerate with\n\n```\n{command}\n```\n");
@@ -321,12 +333,7 @@ fn render_markdown(c: &Comparison, figs: &[(String, String, String)], command: &
     s
 }
 
-fn render_html(
-    c: &Comparison,
-    figs: &[(String, String, String)],
-    pngs: &[Option<Vec<u8>>],
-    command: &str,
-) -> String {
+fn render_html(c: &Comparison, figs: &[(String, String, Body)], command: &str) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -354,9 +361,9 @@ fn render_html(
         let _ = writeln!(s, "<tr>{cells}</tr>");
     }
     let _ = writeln!(s, "</table>");
-    for ((file, caption, svg), png) in figs.iter().zip(pngs) {
-        let body = match png {
-            Some(bytes) => {
+    for (file, caption, body) in figs {
+        let body = match body {
+            Body::Png(bytes) => {
                 use base64::Engine;
                 format!(
                     "<img alt=\"{}\" src=\"data:image/png;base64,{}\">",
@@ -364,7 +371,7 @@ fn render_html(
                     base64::engine::general_purpose::STANDARD.encode(bytes)
                 )
             }
-            None => svg
+            Body::Svg(svg) => svg
                 .find("<svg")
                 .map_or(svg.as_str(), |k| &svg[k..])
                 .to_string(),
@@ -387,24 +394,14 @@ pub fn outputs(
     command: &str,
 ) -> Result<Vec<(String, Vec<u8>)>, crate::plot::PlotError> {
     let figs = figures(c)?;
-    let pngs = figs
-        .iter()
-        .map(|(f, _, svg)| {
-            if f.ends_with(".png") {
-                crate::plot::svg_to_png(svg)
-                    .map(Some)
-                    .map_err(|e| crate::plot::PlotError::Draw(e.to_string()))
-            } else {
-                Ok(None)
-            }
-        })
-        .collect::<Result<Vec<_>, _>>()?;
     let md = render_markdown(c, &figs, command);
-    let html = render_html(c, &figs, &pngs, command);
+    let html = render_html(c, &figs, command);
     let mut out: Vec<(String, Vec<u8>)> = figs
         .into_iter()
-        .zip(pngs)
-        .map(|((f, _, svg), png)| (f, png.unwrap_or_else(|| svg.into_bytes())))
+        .map(|(f, _, body)| match body {
+            Body::Png(bytes) => (f, bytes),
+            Body::Svg(svg) => (f, svg.into_bytes()),
+        })
         .collect();
     out.push(("compare.md".to_string(), md.into_bytes()));
     out.push(("compare.html".to_string(), html.into_bytes()));
