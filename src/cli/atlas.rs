@@ -78,10 +78,12 @@ pub struct Args {
     /// Spindle step of the ICE model, degrees.
     #[arg(long, value_name = "D", default_value_t = 1.0)]
     pub dtheta_deg: f64,
-    /// Chord tolerance of the meshes, µm (as `crest simulate`).
+    /// Chord tolerance of the meshes, µm (as `crest simulate`; default a hundredth of each
+    /// patch's closed-form scallop, between 0.01 and 1 µm).
     #[arg(long, value_name = "T")]
     pub chord_tol_um: Option<f64>,
-    /// First rasterised band above the reference, µm (speed only, as `crest simulate`).
+    /// First rasterised band above the reference, µm (speed only, as `crest simulate`;
+    /// default 1.5 × each patch's closed-form scallop, at least 5 µm).
     #[arg(long, value_name = "B")]
     pub band_um: Option<f64>,
     /// Depth of cut ap, mm (default process.toml, else 0.5).

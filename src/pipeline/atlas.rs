@@ -349,6 +349,53 @@ pub fn placement(req: &AtlasRequest, prep: &Prepared) -> Result<Placement> {
     })
 }
 
+/// The band a patch starts with, over its closed-form scallop and feed mark.
+const BAND_OVER_SCALLOP: f64 = 1.5;
+
+/// The smallest starting band, µm (the simulation's own default).
+const BAND_MIN_UM: f64 = 5.0;
+
+/// A patch's default chord tolerance over its closed-form scallop.
+const CHORD_OVER_SCALLOP: f64 = 0.01;
+
+/// The default chord tolerance's bounds, µm (the lower one is the simulation's default).
+const CHORD_MIN_UM: f64 = 0.01;
+const CHORD_MAX_UM: f64 = 1.0;
+
+/// Whether nodes `grid_um` apart resolve feed marks `fz_mm` apart: at least two nodes a
+/// mark (grid ≤ fz / 2).
+pub fn marks_resolved(grid_um: f64, fz_mm: f64) -> bool {
+    grid_um <= 0.5 * fz_mm * 1e3
+}
+
+/// `v` to four decimals, printed without trailing zeros.
+fn round4(v: f64) -> f64 {
+    (v * 1e4).round() / 1e4
+}
+
+/// The note of a run whose grid does not resolve the feed marks, or `None`.
+fn marks_note(grid_um: f64, fz_mm: f64) -> Option<String> {
+    (!marks_resolved(grid_um, fz_mm)).then(|| {
+        format!(
+            "the feed marks are not resolved: the grid is {grid_um} µm, the feed per tooth {} µm (at most {} µm resolves them, ‹grid_um›); feed_mark_um is left empty, feed_mark_closed_um is the closed form",
+            round4(fz_mm * 1e3),
+            round4(0.5 * fz_mm * 1e3)
+        )
+    })
+}
+
+/// The size (along, across the feed, mm) and grid spacing (µm) of the patch at `site`.
+fn patch_grid(req: &AtlasRequest, placed: &Placement, site: &Site) -> ((f64, f64), f64) {
+    let size = req
+        .patch_mm
+        .unwrap_or_else(|| default_patch_mm(site.region_stepover_mm));
+    let grid = req
+        .simulate
+        .grid_um
+        .unwrap_or_else(|| default_grid_um(placed.fz_mm, size));
+    (size, grid)
+}
+
 /// Simulate and measure the patch at `site` (patch number `patch`, 1-based).
 pub fn run_patch(
     req: &AtlasRequest,
@@ -357,18 +404,14 @@ pub fn run_patch(
     patch: usize,
     site: &Site,
 ) -> (AtlasRow, Option<SimulateRun>) {
-    let (length, width) = req
-        .patch_mm
-        .unwrap_or_else(|| default_patch_mm(site.region_stepover_mm));
+    let ((length, width), grid_um) = patch_grid(req, placed, site);
     let mut sim = req.simulate.clone();
     sim.grid = GridRequest::PatchNear {
         point: [site.point.x, site.point.y, site.point.z],
         length_mm: length,
         width_mm: width,
     };
-    if sim.grid_um.is_none() {
-        sim.grid_um = Some(default_grid_um(placed.fz_mm, (length, width)));
-    }
+    sim.grid_um = Some(grid_um);
     let paths = [site.path - 1];
     let is_cut =
         |pi: usize, i: usize| placed.program.paths[pi].postures[i].motion == MotionKind::Cut;
@@ -384,6 +427,24 @@ pub fn run_patch(
     .and_then(|n| n.stepover_mm);
     let lt = atlas::lead_tilt(&site.axis, &site.normal, &site.feed);
     let closed = |v: f64| (r > 0.0).then_some(v);
+    let scallop_closed_um = stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3));
+    let feed_mark_closed_um = closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3);
+    if sim.chord_tol_um.is_none()
+        && let Some(s) = scallop_closed_um
+    {
+        // The meshes' chord error is the heights' error: a hundredth of this patch's
+        // scallop, within the simulation's default 0.01 µm and 1 µm.
+        sim.chord_tol_um = Some((CHORD_OVER_SCALLOP * s).clamp(CHORD_MIN_UM, CHORD_MAX_UM));
+    }
+    if sim.band_um.is_none()
+        && let Some(s) = scallop_closed_um
+    {
+        // The band is for speed only (a tile with a node above it is recomputed wider, the
+        // heights are the same): start it above the heights this patch can have, so that
+        // a coarse finish (scallops of hundreds of µm) is rasterised once, not five times.
+        sim.band_um =
+            Some((BAND_OVER_SCALLOP * (s + feed_mark_closed_um.unwrap_or(0.0))).max(BAND_MIN_UM));
+    }
     let mut row = AtlasRow {
         patch,
         path: site.path,
@@ -397,8 +458,8 @@ pub fn run_patch(
         sz_um: None,
         scallop_um: None,
         feed_mark_um: None,
-        scallop_closed_um: stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3)),
-        feed_mark_closed_um: closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3),
+        scallop_closed_um,
+        feed_mark_closed_um,
         stepover_mm: stepover,
         curvature_along_per_mm: site.curvature_along,
         curvature_across_per_mm: site.curvature_across,
@@ -425,7 +486,10 @@ pub fn run_patch(
                 }
                 let (s, m) = atlas::scallop_and_feed_marks(&g.map);
                 row.scallop_um = s;
-                row.feed_mark_um = m;
+                // Marks fz apart are not seen by nodes more than fz / 2 apart (the sampling
+                // theorem): what such nodes show is aliasing and mesh error, not marks.
+                row.feed_mark_um =
+                    m.filter(|_| marks_resolved(g.map.dx_um.max(g.map.dy_um), placed.fz_mm));
             }
             row.nodes = run.nodes;
             row.nodes_cut = run.nodes_cut;
@@ -493,6 +557,10 @@ pub fn run(
         (row, run.map(|r| (r.warnings, r.failed_checks)))
     });
     for (row, run) in runs {
+        let grid_um = patch_grid(req, &placed, &placed.sites[row.patch - 1]).1;
+        if let Some(note) = marks_note(grid_um, placed.fz_mm).filter(|n| !warnings.contains(n)) {
+            warnings.push(note);
+        }
         if let Some((run_warnings, failed)) = run {
             for w in run_warnings {
                 if !failed.contains(&w) && !warnings.contains(&w) {
@@ -539,6 +607,14 @@ pub fn check_numbers(file: &str, rows: &[AtlasRow]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn marks_need_two_nodes_a_feed_per_tooth() {
+        assert!(marks_resolved(7.8125, 0.015625));
+        assert!(!marks_resolved(7.9, 0.015625));
+        assert!(marks_note(20.0, 0.015625).is_some_and(|n| n.contains("7.8125 µm")));
+        assert!(marks_note(5.0, 0.015625).is_none());
+    }
 
     #[test]
     fn default_patch_and_grid() {
