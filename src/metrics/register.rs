@@ -427,6 +427,29 @@ fn whole_lag(measured: &HeightMap, placed: &HeightMap) -> Option<(i64, i64)> {
     Some((lag(k % px, px), lag(k / px, py)))
 }
 
+/// The sums of one row pair, `w` nodes from `ka` in `a` and `kb` in `b`:
+/// [Σ a·b, Σ a·vb, Σ b·va, Σ a²·vb, Σ b²·va, Σ va·vb].
+#[inline]
+fn row_sums(
+    (a, va): (&[f64], &[f64]),
+    (b, vb): (&[f64], &[f64]),
+    ka: usize,
+    kb: usize,
+    w: usize,
+) -> [f64; 6] {
+    let mut t = [0.0; 6];
+    for l in 0..w {
+        let (x, y, p, q) = (a[ka + l], b[kb + l], va[ka + l], vb[kb + l]);
+        t[0] += x * y;
+        t[1] += x * q;
+        t[2] += y * p;
+        t[3] += x * x * q;
+        t[4] += y * y * p;
+        t[5] += p * q;
+    }
+    t
+}
+
 /// [`lagged_sums`] of the lags (tx, ty) for each tx of `txs`, in one pass over the row pairs
 /// of `ty` (each row of the four fields read once for all of them, where a pass per lag read
 /// it once per lag): every lag's rows are summed in the same order, so the same bits.
@@ -453,16 +476,7 @@ fn lagged_sums_row(
             let w = nx - ax;
             let (ca, cb) = if tx >= 0 { (ax, 0) } else { (0, ax) };
             let (ka, kb) = (ra + ca, rb + cb);
-            let mut t = [0.0; 6];
-            for l in 0..w {
-                let (x, y, p, q) = (a[ka + l], b[kb + l], va[ka + l], vb[kb + l]);
-                t[0] += x * y;
-                t[1] += x * q;
-                t[2] += y * p;
-                t[3] += x * x * q;
-                t[4] += y * y * p;
-                t[5] += p * q;
-            }
+            let t = row_sums((a, va), (b, vb), ka, kb, w);
             for (s, t) in s.iter_mut().zip(t) {
                 *s += t;
             }
@@ -491,16 +505,7 @@ fn lagged_sums(
     let (ra0, rb0) = if ty >= 0 { (ay, 0) } else { (0, ay) };
     for i in 0..ny - ay {
         let (ka, kb) = ((ra0 + i) * nx + ca, (rb0 + i) * nx + cb);
-        let mut t = [0.0; 6];
-        for l in 0..w {
-            let (x, y, p, q) = (a[ka + l], b[kb + l], va[ka + l], vb[kb + l]);
-            t[0] += x * y;
-            t[1] += x * q;
-            t[2] += y * p;
-            t[3] += x * x * q;
-            t[4] += y * y * p;
-            t[5] += p * q;
-        }
+        let t = row_sums((a, va), (b, vb), ka, kb, w);
         for (s, t) in s.iter_mut().zip(t) {
             *s += t;
         }

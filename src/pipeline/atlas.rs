@@ -429,15 +429,21 @@ pub fn run_patch(
     let closed = |v: f64| (r > 0.0).then_some(v);
     let scallop_closed_um = stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3));
     let feed_mark_closed_um = closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3);
+    // The defaults below take the region's median stepover where the patch has no
+    // neighbouring pass of its own (a region's edge).
+    let scallop_for_defaults = scallop_closed_um.or_else(|| {
+        site.region_stepover_mm
+            .and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3))
+    });
     if sim.chord_tol_um.is_none()
-        && let Some(s) = scallop_closed_um
+        && let Some(s) = scallop_for_defaults
     {
         // The meshes' chord error is the heights' error: a hundredth of this patch's
         // scallop, within the simulation's default 0.01 µm and 1 µm.
         sim.chord_tol_um = Some((CHORD_OVER_SCALLOP * s).clamp(CHORD_MIN_UM, CHORD_MAX_UM));
     }
     if sim.band_um.is_none()
-        && let Some(s) = scallop_closed_um
+        && let Some(s) = scallop_for_defaults
     {
         // The band is for speed only (a tile with a node above it is recomputed wider, the
         // heights are the same): start it above the heights this patch can have, so that
