@@ -54,6 +54,22 @@ pub(crate) fn padded(
     buf
 }
 
+/// [`padded`], transformed forward: rows then columns, the rows past the field's left out
+/// (zero, they stay so).
+pub(crate) fn padded_forward(
+    nx: usize,
+    ny: usize,
+    px: usize,
+    py: usize,
+    value: impl Fn(usize) -> Complex64,
+) -> Vec<Complex64> {
+    let mut buf = padded(nx, ny, px, py, value);
+    let mut fwd = Fft2::new(py, px, FftDirection::Forward);
+    fwd.rows(&mut buf[..ny * px]);
+    fwd.columns(&mut buf);
+    buf
+}
+
 /// The 1-D FFTs of one direction over a `rows × cols` row-major buffer.
 pub(crate) struct Fft2 {
     f_row: std::sync::Arc<dyn Fft<f64>>,

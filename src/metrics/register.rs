@@ -107,11 +107,7 @@ fn centred(map: &HeightMap, window: bool) -> Vec<f64> {
 /// The 2-D FFT of `w` (`ny × nx`) zero-padded to `(py, px)` (the padding rows are zero
 /// and stay so: only the field's rows are transformed along).
 fn fft2_padded(w: &[f64], nx: usize, ny: usize, px: usize, py: usize) -> Vec<Complex64> {
-    let mut buf = super::fft::padded(nx, ny, px, py, |k| Complex64::new(w[k], 0.0));
-    let mut f = Fft2::new(py, px, FftDirection::Forward);
-    f.rows(&mut buf[..ny * px]);
-    f.columns(&mut buf);
-    buf
+    super::fft::padded_forward(nx, ny, px, py, |k| Complex64::new(w[k], 0.0))
 }
 
 /// `ln |DTFT|²` of the windowed field at the frequency (fx, fy), cycles/µm.

@@ -15,7 +15,7 @@
 use rustfft::FftDirection;
 use rustfft::num_complex::Complex64;
 
-use super::fft::{Fft2, padded};
+use super::fft::{Fft2, padded_forward};
 use crate::surface::HeightMap;
 
 /// Decay lengths of the ACF.
@@ -71,27 +71,11 @@ fn linear_autocorr(
     px: usize,
     py: usize,
 ) -> Vec<Complex64> {
-    let mut buf = forward(value, nx, ny, px, py);
+    let mut buf = padded_forward(nx, ny, px, py, value);
     for v in buf.iter_mut() {
         *v = Complex64::new(v.norm_sqr(), 0.0);
     }
     inverse_exact_rows(&mut buf, ny, px, py);
-    buf
-}
-
-/// The field `value` padded to `py × px` and transformed forward, rows then columns (the
-/// rows past the field's are zero and stay so: their transforms are left out).
-fn forward(
-    value: impl Fn(usize) -> Complex64,
-    nx: usize,
-    ny: usize,
-    px: usize,
-    py: usize,
-) -> Vec<Complex64> {
-    let mut buf = padded(nx, ny, px, py, value);
-    let mut fwd = Fft2::new(py, px, FftDirection::Forward);
-    fwd.rows(&mut buf[..ny * px]);
-    fwd.columns(&mut buf);
     buf
 }
 
@@ -124,7 +108,7 @@ fn linear_autocorr_pair(
     px: usize,
     py: usize,
 ) -> Vec<Complex64> {
-    let mut buf = forward(value, nx, ny, px, py);
+    let mut buf = padded_forward(nx, ny, px, py, value);
     // A = (Z[k] + conj Z[−k]) / 2, B = (Z[k] − conj Z[−k]) / 2i: |A|² and |B|² at k and −k
     // (the same values), written in place pair by pair.
     for ky in 0..py {

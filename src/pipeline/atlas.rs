@@ -427,20 +427,18 @@ pub fn run_patch(
     .and_then(|n| n.stepover_mm);
     let lt = atlas::lead_tilt(&site.axis, &site.normal, &site.feed);
     let closed = |v: f64| (r > 0.0).then_some(v);
-    let scallop_closed_um = stepover.and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3));
+    let scallop_um = |s: f64| closed(super::sanity::scallop_mm(s, r) * 1e3);
+    let scallop_closed_um = stepover.and_then(scallop_um);
     let feed_mark_closed_um = closed(placed.fz_mm * placed.fz_mm / (8.0 * r) * 1e3);
     // The defaults below take the larger of the local and the region's scallop: a patch is
     // two of the region's stepovers wide, so it holds the region's scallops even where its
     // own pass runs close to the next (a local stepover of 0.65 mm in a region of 14.6 mm
     // gave a chord of 0.035 µm and a patch of more than 4 minutes), and a patch without a
     // neighbouring pass of its own (a region's edge) still has defaults.
-    let region_scallop_um = site
-        .region_stepover_mm
-        .and_then(|s| closed(super::sanity::scallop_mm(s, r) * 1e3));
-    let scallop_for_defaults = match (scallop_closed_um, region_scallop_um) {
-        (Some(a), Some(b)) => Some(a.max(b)),
-        (a, b) => a.or(b),
-    };
+    let scallop_for_defaults = scallop_closed_um
+        .into_iter()
+        .chain(site.region_stepover_mm.and_then(scallop_um))
+        .reduce(f64::max);
     if sim.chord_tol_um.is_none()
         && let Some(s) = scallop_for_defaults
     {
@@ -500,8 +498,7 @@ pub fn run_patch(
                 row.scallop_um = s;
                 // Marks fz apart are not seen by nodes more than fz / 2 apart (the sampling
                 // theorem): what such nodes show is aliasing and mesh error, not marks.
-                row.feed_mark_um =
-                    m.filter(|_| marks_resolved(g.map.dx_um.max(g.map.dy_um), placed.fz_mm));
+                row.feed_mark_um = m.filter(|_| marks_resolved(grid_um, placed.fz_mm));
             }
             row.nodes = run.nodes;
             row.nodes_cut = run.nodes_cut;
